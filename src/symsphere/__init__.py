@@ -1,0 +1,33 @@
+"""symsphere: exactly uniform, symmetric Monte Carlo and quasi-Monte Carlo sampling of directions.
+
+The sphere is cut into 48 congruent orthogonal spherical triangles (the
+hemisphere into 24) by the coordinate and bisector planes (Dimov, Penzov &
+Stoilova, *Parallel Monte Carlo Sampling Scheme for Sphere and Hemisphere*).
+One point of the fundamental triangle T0 = {z >= x >= y >= 0} gives 48 (24)
+directions by signed coordinate permutations.  The paper's two maps from the
+unit square onto T0 are shipped as printed, with their exact (non-uniform)
+densities; the default map, ``'equal_area'``, is exactly uniform.
+"""
+
+from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
+from .points import POINT_SETS
+from .sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
+from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "HEMISPHERE_MAPS",
+    "METHODS",
+    "POINT_SETS",
+    "SPHERE_MAPS",
+    "fold",
+    "hemisphere_pdf",
+    "orbit",
+    "sample_hemisphere",
+    "sample_sphere",
+    "sphere_pdf",
+    "square_to_triangle",
+    "triangle_pdf",
+    "triangle_to_square",
+]

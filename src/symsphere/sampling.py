@@ -1,0 +1,172 @@
+"""The paper's parallel sampling scheme: one point of T0, 48 (24) directions.
+
+``n / 48`` base points are drawn in T0 by a map from the unit square; each is
+replaced by its orbit under the 48 signed permutations of Table 2 (the
+hemisphere: 24, Table 1).  Rows ``48 i ... 48 i + 47`` of the output are the
+orbit of base point ``i``, in table order.  If the map is uniform on T0, every
+row is uniform on the sphere; the rows of one orbit are not independent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import frames
+from ._validation import check_count, check_directions, check_dtype, check_normal, check_out
+from .maps import get_map
+from .points import check_points, unit_square_points
+from .symmetry import _fold, _orbit
+
+__all__ = ["sample_sphere", "sample_hemisphere", "sphere_pdf", "hemisphere_pdf"]
+
+
+def sample_sphere(n, *, method="equal_area", points="random", rng=None, dtype=np.float64, out=None):
+    """Directions on the unit sphere by the 48-fold symmetric scheme.
+
+    Parameters
+    ----------
+    n : int
+        Number of directions, a positive multiple of 48.
+    method : {'equal_area', 'paper1', 'paper2'}
+        Map from the unit square onto T0.  Only ``'equal_area'`` gives uniform
+        directions; the paper's maps have density :func:`sphere_pdf`.
+    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
+        The ``n/48`` base points of the unit square (``'stratified'`` needs
+        ``n/48`` to be a square; ``'sobol'`` warns unless it is a power of 2).
+    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Seeds the points (or their scrambling).  The same seed gives the same output.
+    dtype : {numpy.float64, numpy.float32}
+    out : ndarray, optional
+        Output array of shape (n, 3) and the given dtype, C-contiguous.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Row ``48 i + k`` is ``orbit(base_i)[k]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import sample_sphere
+    >>> d = sample_sphere(96, rng=1)
+    >>> d.shape
+    (96, 3)
+    >>> bool(np.allclose(np.linalg.norm(d, axis=1), 1.0))
+    True
+    >>> bool(np.allclose(d[:48].mean(axis=0), 0.0))   # an orbit is symmetric about 0
+    True
+    """
+    return _sample(n, 48, None, method, points, rng, dtype, out)
+
+
+def sample_hemisphere(n, *, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64, out=None):
+    """Directions on the unit hemisphere by the 24-fold symmetric scheme.
+
+    Parameters
+    ----------
+    n : int
+        Number of directions, a positive multiple of 24.
+    normal : array_like of 3 floats, optional
+        Pole of the hemisphere (normalised; default (0, 0, 1)).  The
+        hemisphere about (0, 0, 1) is carried onto it by the frame of
+        :func:`symsphere.frames.frame` (Duff et al. 2017).
+    method, points, rng, dtype, out
+        As in :func:`sample_sphere`.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Row ``24 i + k`` is ``orbit(base_i, 'hemisphere')[k]``, rotated onto *normal*.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import sample_hemisphere
+    >>> d = sample_hemisphere(48, normal=[1.0, 0.0, 0.0], rng=2)
+    >>> bool(np.all(d[:, 0] >= 0))
+    True
+    """
+    normal = check_normal(normal)
+    return _sample(n, 24, normal, method, points, rng, dtype, out)
+
+
+def sphere_pdf(d, method="equal_area"):
+    """Density (solid angle) of each direction that :func:`sample_sphere` returns.
+
+    Parameters
+    ----------
+    d : array_like, shape (..., 3)
+        Unit directions.
+    method : {'equal_area', 'paper1', 'paper2'}
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``triangle_pdf(base, method) / 48`` where ``base`` is the fold of *d*
+        into T0: ``1/(4 pi)`` for ``'equal_area'``.  The paper's maps diverge
+        (``inf``) at the six images of the vertex (0, 0, 1): the axes.
+
+    Examples
+    --------
+    >>> from symsphere import sphere_pdf
+    >>> float(sphere_pdf([0.0, 0.6, -0.8])) * 4 * 3.141592653589793
+    1.0
+    """
+    d = check_directions(d, "d")
+    triangle_map = get_map(method)
+    _, base = _fold(d.astype(np.float64))
+    return (triangle_map.pdf(base) / 48).astype(d.dtype, copy=False)
+
+
+def hemisphere_pdf(d, method="equal_area", normal=None):
+    """Density (solid angle) of each direction that :func:`sample_hemisphere` returns.
+
+    Parameters
+    ----------
+    d : array_like, shape (..., 3)
+        Unit directions.
+    method : {'equal_area', 'paper1', 'paper2'}
+    normal : array_like of 3 floats, optional
+        Pole of the hemisphere (default (0, 0, 1)).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``triangle_pdf(base, method) / 24`` on the hemisphere about *normal*,
+        0 below it.
+
+    Examples
+    --------
+    >>> from symsphere import hemisphere_pdf
+    >>> hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * 3.141592653589793
+    array([1., 0.])
+    """
+    d = check_directions(d, "d")
+    normal = check_normal(normal)
+    triangle_map = get_map(method)
+    local = d.astype(np.float64)
+    if normal is not None:
+        local = frames.to_local(local, frames.frame(normal))
+    _, base = _fold(local)
+    density = np.where(local[..., 2] >= 0, triangle_map.pdf(base) / 24, 0.0)
+    return density.astype(d.dtype, copy=False)
+
+
+# --- private ------------------------------------------------------------------
+
+
+def _sample(n, count, normal, method, points, rng, dtype, out):
+    n = check_count(n, "n", multiple=count)
+    dtype = check_dtype(dtype)
+    triangle_map = get_map(method)
+    check_points(points)
+    if out is not None:
+        check_out(out, (n, 3), dtype)
+    else:
+        out = np.empty((n, 3), dtype=dtype)
+    uv = unit_square_points(n // count, points, rng, per_point=count)
+    directions = _orbit(triangle_map.forward(uv), count)
+    if normal is not None:
+        directions = frames.to_world(directions, frames.frame(normal))
+    out.reshape(n // count, count, 3)[...] = directions
+    return out

@@ -1,0 +1,196 @@
+"""The scheme: layout of the orbits, point sets, determinism, dtypes, out=, normals, pdfs, bad input."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.stats import qmc
+
+from symsphere import (
+    METHODS,
+    fold,
+    hemisphere_pdf,
+    orbit,
+    sample_hemisphere,
+    sample_sphere,
+    sphere_pdf,
+    triangle_pdf,
+    triangle_to_square,
+)
+from symsphere.frames import frame
+
+SAMPLERS = [(sample_sphere, 48, "sphere"), (sample_hemisphere, 24, "hemisphere")]
+
+
+@pytest.mark.parametrize("sampler, count, domain", SAMPLERS)
+@pytest.mark.parametrize("method", METHODS)
+def test_rows_are_orbits_in_table_order(sampler, count, domain, method):
+    d = sampler(count * 50, method=method, rng=3)
+    groups = d.reshape(50, count, 3)
+    k, base = fold(d, domain)
+    base = base.reshape(50, count, 3)
+    assert np.all(base == base[:, :1])  # one base point per group
+    assert np.all(k.reshape(50, count) == np.arange(count))
+    assert np.array_equal(orbit(base[:, 0], domain), groups)
+    np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1, atol=1e-15)
+
+
+@pytest.mark.parametrize("points", ["random", "stratified", "sobol", "halton"])
+@pytest.mark.parametrize("sampler, count, domain", SAMPLERS)
+def test_same_seed_same_output(points, sampler, count, domain):
+    n = count * 64
+    a = sampler(n, points=points, rng=12345)
+    assert np.array_equal(a, sampler(n, points=points, rng=12345))
+    assert np.array_equal(a, sampler(n, points=points, rng=np.random.SeedSequence(12345)))
+    assert np.array_equal(a, sampler(n, points=points, rng=np.random.default_rng(12345)))
+    assert not np.array_equal(a, sampler(n, points=points, rng=12346))
+
+
+def test_rng_none_gives_fresh_samples():
+    assert not np.array_equal(sample_sphere(48), sample_sphere(48))
+
+
+def test_stratified_one_point_per_cell():
+    side = 16
+    d = sample_sphere(48 * side * side, points="stratified", rng=7)
+    uv = triangle_to_square(fold(d[::48])[1])
+    cells = np.floor(uv * side).astype(int)
+    assert len({(i, j) for i, j in cells}) == side * side
+
+
+def test_stratified_needs_square_base_count():
+    with pytest.raises(ValueError, match=r"square number of base points; n=480 gives 10 .*use n=432 or n=768"):
+        sample_sphere(480, points="stratified")
+    with pytest.raises(ValueError, match=r"n=72 gives 3 \(n/24\); use n=24 or n=96"):
+        sample_hemisphere(72, points="stratified")
+
+
+def test_sobol_warns_unless_power_of_two():
+    with pytest.warns(UserWarning, match="power of 2"):
+        sample_sphere(48 * 6, points="sobol", rng=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sample_sphere(48 * 8, points="sobol", rng=0)
+
+
+def test_sobol_base_points_are_the_scipy_sequence():
+    d = sample_sphere(48 * 32, points="sobol", rng=5)
+    uv = triangle_to_square(fold(d[::48])[1])
+    expected = qmc.Sobol(d=2, scramble=True, rng=np.random.default_rng(5)).random(32)
+    np.testing.assert_allclose(uv, expected, atol=1e-12)
+
+
+def test_any_qmc_engine():
+    engine = qmc.Halton(d=2, scramble=False)
+    d = sample_hemisphere(24 * 5, points=engine)
+    uv = triangle_to_square(fold(d[::24], "hemisphere")[1])
+    np.testing.assert_allclose(uv, qmc.Halton(d=2, scramble=False).random(5), atol=1e-12)
+    with pytest.raises(ValueError, match="'points' engine must have d=2"):
+        sample_sphere(48, points=qmc.Sobol(d=3))
+
+
+@pytest.mark.parametrize("sampler, count, domain", SAMPLERS)
+def test_float32_and_out(sampler, count, domain):
+    n = count * 100
+    d64 = sampler(n, rng=9)
+    d32 = sampler(n, rng=9, dtype=np.float32)
+    assert d32.dtype == np.float32 and np.all(np.isfinite(d32))
+    np.testing.assert_allclose(d32, d64, atol=1e-7)
+    out = np.empty((n, 3), np.float32)
+    result = sampler(n, rng=9, dtype=np.float32, out=out)
+    assert result is out and np.array_equal(out, d32)
+    out64 = np.full((n, 3), np.nan)
+    assert sampler(n, rng=9, out=out64) is out64 and np.array_equal(out64, d64)
+
+
+def test_normal_none_is_z_axis_and_frame_is_orthonormal():
+    assert np.array_equal(sample_hemisphere(240, rng=1), sample_hemisphere(240, rng=1, normal=[0, 0, 1]))
+    rng = np.random.default_rng(0)
+    for n in list(rng.normal(size=(50, 3))) + [np.array([0, 0, -1.0]), np.array([1.0, 0, 0])]:
+        n = n / np.linalg.norm(n)
+        basis = frame(n)
+        np.testing.assert_allclose(basis @ basis.T, np.eye(3), atol=1e-14)
+        np.testing.assert_allclose(basis[2], n, atol=0)
+        assert np.linalg.det(basis) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_hemisphere_about_normal(method):
+    normal = np.array([0.3, -0.5, -0.8])
+    unit = normal / np.linalg.norm(normal)
+    d = sample_hemisphere(24 * 200, normal=normal, method=method, rng=4)
+    assert np.all(d @ unit >= -1e-15)
+    # the same points as about z, rotated: the local coordinates are the un-rotated sample
+    local = d @ frame(unit).T
+    np.testing.assert_allclose(local, sample_hemisphere(24 * 200, method=method, rng=4), atol=1e-15)
+    np.testing.assert_allclose(
+        hemisphere_pdf(d, method, normal=normal), hemisphere_pdf(local, method), rtol=1e-12
+    )
+    assert np.all(hemisphere_pdf(-d[d @ unit > 1e-9], method, normal=normal) == 0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_scheme_pdf_is_triangle_pdf_over_count(method):
+    d = sample_sphere(48 * 100, method=method, rng=8)
+    _, base = fold(d)
+    np.testing.assert_array_equal(sphere_pdf(d, method), triangle_pdf(base, method) / 48)
+    h = sample_hemisphere(24 * 100, method=method, rng=8)
+    np.testing.assert_array_equal(hemisphere_pdf(h, method), triangle_pdf(fold(h, "hemisphere")[1], method) / 24)
+    if method == "equal_area":
+        np.testing.assert_allclose(sphere_pdf(d, method), 1 / (4 * np.pi), rtol=1e-15)
+        np.testing.assert_allclose(hemisphere_pdf(h, method), 1 / (2 * np.pi), rtol=1e-15)
+    else:  # diverges on the axes, the images of the vertex (0, 0, 1)
+        assert np.all(np.isinf(sphere_pdf(np.eye(3), method)))
+
+
+@pytest.mark.parametrize("sampler", [sample_sphere, sample_hemisphere])
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        ({"n": 0}, ValueError, r"'n' must be positive"),
+        ({"n": -48}, ValueError, r"'n' must be positive"),
+        ({"n": 48.0}, TypeError, r"'n' must be an integer"),
+        ({"n": True}, TypeError, r"'n' must be an integer"),
+        ({"n": "48"}, TypeError, r"'n' must be an integer"),
+        ({"method": "uniform"}, ValueError, r"'uniform' is not a valid method; use one of \{'equal_area', 'paper1', 'paper2'\}"),
+        ({"points": "lattice"}, ValueError, r"'lattice' is not a valid points; use one of"),
+        ({"points": 3}, TypeError, r"'points' must be one of"),
+        ({"rng": 1.5}, TypeError, r"'rng' must be None, an int, a numpy SeedSequence or a numpy Generator"),
+        ({"rng": -1}, ValueError, r"'rng' must be a non-negative integer seed"),
+        ({"dtype": np.float16}, TypeError, r"'dtype' must be float32 or float64, got float16"),
+        ({"dtype": int}, TypeError, r"'dtype' must be float32 or float64"),
+        ({"dtype": "banana"}, TypeError, r"'dtype' must be float32 or float64"),
+        ({"out": np.empty((10, 3))}, ValueError, r"'out' must have shape"),
+        ({"out": np.empty((96, 3), np.float32)}, TypeError, r"'out' has dtype float32 but dtype=float64"),
+        ({"out": np.empty((3, 96)).T}, ValueError, r"'out' must be C-contiguous"),
+        ({"out": [[0.0] * 3] * 96}, TypeError, r"'out' must be a numpy array"),
+    ],
+)
+def test_bad_input(sampler, kwargs, error, match):
+    kwargs = {"n": 96, **kwargs}  # 96 is valid for both samplers
+    with pytest.raises(error, match=match):
+        sampler(**kwargs)
+
+
+def test_n_not_multiple_names_nearest_sizes():
+    with pytest.raises(ValueError, match=r"'n'=100 is not a multiple of 48; the nearest valid sizes are 96 or 144"):
+        sample_sphere(100)
+    with pytest.raises(ValueError, match=r"'n'=10 is not a multiple of 24; the nearest valid sizes are 24"):
+        sample_hemisphere(10)
+
+
+@pytest.mark.parametrize("normal", [[0, 0, 0], [np.nan, 0, 1], [0, 1], [[0, 0, 1]], "up"])
+def test_bad_normal(normal):
+    with pytest.raises((ValueError, TypeError), match="'normal'"):
+        sample_hemisphere(24, normal=normal)
+    with pytest.raises((ValueError, TypeError), match="'normal'"):
+        hemisphere_pdf([0, 0, 1.0], normal=normal)
+
+
+def test_pdf_bad_input():
+    with pytest.raises(ValueError, match="'d' must have shape"):
+        sphere_pdf([1.0, 0.0])
+    with pytest.raises(ValueError, match="'d' must be finite"):
+        hemisphere_pdf([np.nan, 0.0, 1.0])
+    with pytest.raises(ValueError, match="not a valid method"):
+        sphere_pdf([0, 0, 1.0], method="paper3")
