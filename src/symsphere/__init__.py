@@ -9,6 +9,7 @@ unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
 """
 
+from . import stats
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
 from .sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
@@ -21,6 +22,7 @@ __all__ = [
     "METHODS",
     "POINT_SETS",
     "SPHERE_MAPS",
+    "stats",
     "fold",
     "hemisphere_pdf",
     "orbit",

@@ -1,0 +1,627 @@
+"""Tests of symsphere.stats, the chi-square harness.
+
+Every sampler and density here is an independent reference: samplers are
+built from numpy normals / uniforms (normalised Gaussians, rejection, Malley's
+method, inversion of a closed-form CDF), densities are written in closed form,
+and per-bin integrals are checked against antiderivatives.
+
+Statistical tests: each chi-square test that is expected to pass uses
+significance SIGNIFICANCE = 0.01 with test_count = TEST_COUNT, the number of
+such tests in this file (slow ones included), so with the Sidak correction the
+chance that any of them fails for a correct sampler is 1 %.  Seeds are fixed,
+so the outcome is deterministic.  The tests expected to reject use the same
+level and also require a tiny p-value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import doctest
+import math
+
+import numpy as np
+import pytest
+from scipy import optimize
+from scipy import stats as scipy_stats
+
+from symsphere import stats
+from symsphere.stats import (
+    Chi2Result,
+    bin_probabilities,
+    chi2_test,
+    equal_area_bins,
+    uniform_pdf,
+)
+
+SIGNIFICANCE = 0.01
+TEST_COUNT = 10  # chi-square tests expected to pass, in this file (incl. slow)
+LEVEL = dict(significance=SIGNIFICANCE, test_count=TEST_COUNT)
+INV_SQRT3 = 1.0 / math.sqrt(3.0)
+
+
+# ---------------------------------------------------------------------------
+# Reference samplers and densities
+# ---------------------------------------------------------------------------
+
+
+def uniform_sphere(n, seed, dtype=np.float64):
+    g = np.random.default_rng(seed).standard_normal((n, 3))
+    return (g / np.linalg.norm(g, axis=1, keepdims=True)).astype(dtype)
+
+
+def uniform_hemisphere(n, seed):
+    d = uniform_sphere(n, seed)
+    d[:, 2] = np.abs(d[:, 2])
+    return d
+
+
+def in_t0(d):
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    return (z >= x) & (x >= y) & (y >= 0)
+
+
+def uniform_triangle_rejection(n, seed):
+    """Uniform on T0 by rejection from the uniform sphere (acceptance 1/48)."""
+    rng = np.random.default_rng(seed)
+    kept, total = [], 0
+    while total < n:
+        g = rng.standard_normal((1_000_000, 3))
+        g /= np.linalg.norm(g, axis=1, keepdims=True)
+        g = g[in_t0(g)]
+        kept.append(g)
+        total += len(g)
+    return np.concatenate(kept)[:n]
+
+
+def uniform_triangle_fold(n, seed):
+    """Uniform on T0 by folding the uniform sphere: z = max, x = mid, y = min of |g|."""
+    a = np.sort(np.abs(uniform_sphere(n, seed)), axis=1)
+    return a[:, [1, 0, 2]]
+
+
+def cosine_hemisphere_malley(n, seed):
+    """Malley's method: uniform point on the unit disk, lifted to the hemisphere."""
+    rng = np.random.default_rng(seed)
+    u1, u2 = rng.random(n), rng.random(n)
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    z = np.sqrt(np.maximum(1 - r * r, 0))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+
+
+def cosine_pdf(d):
+    return np.maximum(d[:, 2], 0) / np.pi
+
+
+def pole_sampler(n, seed):
+    """phi ~ U[0, pi/4], then x/z = tan(theta) cos(phi) ~ U[0, 1]: lies in T0."""
+    rng = np.random.default_rng(seed)
+    phi = rng.random(n) * (np.pi / 4)
+    v = rng.random(n)
+    theta = np.arctan(v / np.cos(phi))
+    s = np.sin(theta)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(theta)], axis=1)
+
+
+def pole_pdf(d):
+    """Density of pole_sampler: 4 x / (pi z^2 (x^2 + y^2)) on T0 (1/sin(theta) at the pole)."""
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    r2 = x * x + y * y
+    inside = in_t0(d) & (r2 > 0)
+    safe_r2 = np.where(inside, r2, 1.0)
+    safe_z = np.where(inside, z, 1.0)
+    return np.where(inside, 4 * x / (np.pi * safe_z**2 * safe_r2), 0.0)
+
+
+# Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
+LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
+
+
+def linear_triangle_pdf(d):
+    return np.where(in_t0(d), LINEAR_NORM * d[:, 2], 0.0)
+
+
+def cap_sampler(n, seed):
+    """Uniform on the cap z >= 1/2."""
+    rng = np.random.default_rng(seed)
+    z = 0.5 + 0.5 * rng.random(n)
+    phi = 2 * np.pi * rng.random(n)
+    s = np.sqrt(1 - z * z)
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+
+
+def cap_pdf(d):
+    return np.where(d[:, 2] >= 0.5, 1 / np.pi, 0.0)
+
+
+# ---- exact per-bin integrals on T0 from antiderivatives in phi ----------------
+
+
+def cmax(phi):
+    return np.cos(phi) / np.sqrt(1 + np.cos(phi) ** 2)
+
+
+def _crossing(c, a, b):
+    """phi in [a, b] with cmax(phi) = c, if cmax - c changes sign there."""
+    fa, fb = cmax(a) - c, cmax(b) - c
+    if fa * fb < 0:
+        return optimize.brentq(lambda p: cmax(p) - c, a, b, xtol=1e-15, rtol=1e-15)
+    return None
+
+
+def exact_triangle_bins(bins, kind):
+    """Per-bin integrals over bin & T0 of: 'uniform' (12/pi), 'linear', 'pole'.
+
+    Inner integrals in c over [lo, c1] with lo = c0 or cmax(phi):
+      uniform: 12/pi (c1 - lo);  int cmax dphi = asin(sin(phi)/sqrt 2)
+      linear:  K (c1^2 - lo^2)/2;  int cmax^2 dphi = phi - atan(tan(phi)/sqrt 2)/sqrt 2
+      pole:    4 cos(phi)/pi (t(lo) - t(c1)), t(c) = sqrt(1-c^2)/c, t(cmax) = 1/cos(phi)
+    """
+    phi_e = np.linspace(0, np.pi / 4, bins[0] + 1)
+    cos_e = np.linspace(INV_SQRT3, 1, bins[1] + 1)
+    out = np.zeros(bins)
+    s2 = math.sqrt(2)
+
+    def t(c):
+        return math.sqrt(1 - c * c) / c
+
+    for i in range(bins[0]):
+        for j in range(bins[1]):
+            a, b = phi_e[i], phi_e[i + 1]
+            c0, c1 = cos_e[j], cos_e[j + 1]
+            pts = sorted({a, b} | {p for p in (_crossing(c0, a, b), _crossing(c1, a, b)) if p})
+            total = 0.0
+            for p, q in zip(pts[:-1], pts[1:]):
+                m = cmax(0.5 * (p + q))
+                if m >= c1:
+                    continue  # piece entirely outside T0
+                if m <= c0:  # full rectangle piece
+                    if kind == "uniform":
+                        total += 12 / np.pi * (c1 - c0) * (q - p)
+                    elif kind == "linear":
+                        total += LINEAR_NORM * (c1**2 - c0**2) / 2 * (q - p)
+                    else:
+                        total += 4 / np.pi * (t(c0) - t(c1)) * (math.sin(q) - math.sin(p))
+                else:  # lower limit is the boundary cmax(phi)
+                    if kind == "uniform":
+                        def F(x):
+                            return c1 * x - math.asin(math.sin(x) / s2)
+                        total += 12 / np.pi * (F(q) - F(p))
+                    elif kind == "linear":
+                        def F(x):
+                            return (c1**2 * x - x + math.atan(math.tan(x) / s2) / s2) / 2
+                        total += LINEAR_NORM * (F(q) - F(p))
+                    else:
+                        total += 4 / np.pi * ((q - p) - t(c1) * (math.sin(q) - math.sin(p)))
+            out[i, j] = total
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Chi-square tests expected to pass (TEST_COUNT of them, incl. slow)
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_uniform_sphere_passes(dtype):  # 2 of TEST_COUNT
+    d = uniform_sphere(200_000, seed=1, dtype=dtype)
+    res = chi2_test(d, uniform_pdf("sphere"), "sphere", **LEVEL)
+    assert res.passed, str(res)
+    assert res.observed.shape == (62, 31)
+    assert res.observed.sum() == len(d)
+    assert res.threshold == pytest.approx(1 - (1 - SIGNIFICANCE) ** (1 / TEST_COUNT))
+
+
+def test_uniform_hemisphere_passes():  # 3
+    res = chi2_test(uniform_hemisphere(200_000, seed=2), uniform_pdf("hemisphere"),
+                    "hemisphere", **LEVEL)
+    assert res.passed, str(res)
+
+
+def test_uniform_triangle_rejection_passes():  # 4
+    d = uniform_triangle_rejection(100_000, seed=3)
+    res = chi2_test(d, uniform_pdf("triangle"), "triangle", **LEVEL)
+    assert res.passed, str(res)
+    assert res.observed.shape == (31, 31)
+    # Bins entirely below the boundary have expected count exactly 0 and no samples.
+    assert np.any(res.expected == 0)
+    assert res.observed[res.expected == 0].sum() == 0
+
+
+def test_cosine_hemisphere_malley_passes():  # 5
+    res = chi2_test(cosine_hemisphere_malley(200_000, seed=4), cosine_pdf, "hemisphere",
+                    **LEVEL)
+    assert res.passed, str(res)
+
+
+def test_pole_density_on_triangle_passes():  # 6
+    d = pole_sampler(200_000, seed=5)
+    assert np.all(in_t0(d) | (np.abs(d[:, 2] - d[:, 0]) < 1e-15))
+    res = chi2_test(d, pole_pdf, "triangle", **LEVEL)
+    assert res.passed, str(res)
+
+
+def test_cosine_pooling_passes_and_pools():  # 7
+    # Few samples on a fine grid: the bins near the horizon have expected < 5.
+    n = 3000
+    res = chi2_test(cosine_hemisphere_malley(n, seed=6), cosine_pdf, "hemisphere",
+                    bins=(16, 8), **LEVEL)
+    assert res.passed, str(res)
+    e, o = res.expected.ravel(), res.observed.ravel().astype(float)
+    small = e < 5
+    assert small.sum() >= 2 and e[small].sum() >= 5  # one pooled cell suffices
+    stat = np.sum((o[~small] - e[~small]) ** 2 / e[~small])
+    stat += (o[small].sum() - e[small].sum()) ** 2 / e[small].sum()
+    assert res.statistic == pytest.approx(stat, rel=1e-12)
+    assert res.dof == (~small).sum() + 1 - 1
+    assert res.p_value == pytest.approx(scipy_stats.chi2.sf(stat, res.dof), rel=1e-12)
+    assert "pooled" in res.message
+    large = e >= 5
+    ratio = o[large] / e[large]
+    assert res.ratio_range == pytest.approx((ratio.min(), ratio.max()))
+
+
+def test_cap_density_with_zero_bins_passes():  # 8
+    # cos edges 0, .25, .5, .75, 1: the two lower rows have expected count exactly 0.
+    res = chi2_test(cap_sampler(20_000, seed=7), cap_pdf, "hemisphere", bins=(8, 4),
+                    **LEVEL)
+    assert res.passed, str(res)
+    assert np.all(res.expected[:, :2] == 0)
+    assert res.dof == 8 * 2 - 1
+
+
+@pytest.mark.slow
+def test_large_uniform_triangle_fold_passes():  # 9
+    # 4e6 samples on the 64 x 64 grid (~1000 per bin): sensitive to expected-count errors.
+    d = uniform_triangle_fold(4_000_000, seed=8)
+    res = chi2_test(d, uniform_pdf("triangle"), "triangle", **LEVEL)
+    assert res.observed.shape == (64, 64)
+    assert res.passed, str(res)
+
+
+@pytest.mark.slow
+def test_large_pole_density_passes():  # 10
+    res = chi2_test(pole_sampler(4_000_000, seed=9), pole_pdf, "triangle", **LEVEL)
+    assert res.passed, str(res)
+
+
+# ---------------------------------------------------------------------------
+# Chi-square tests expected to reject
+# ---------------------------------------------------------------------------
+
+
+def test_stretched_gaussian_fails():
+    g = np.random.default_rng(10).standard_normal((100_000, 3))
+    g[:, 0] *= 1.2
+    d = g / np.linalg.norm(g, axis=1, keepdims=True)
+    res = chi2_test(d, uniform_pdf("sphere"), **LEVEL)
+    assert not res.passed
+    assert res.p_value < 1e-10
+    assert "rejected" in res.message and "FAILED" in str(res)
+
+
+def test_quadratic_cos_sampler_fails():
+    rng = np.random.default_rng(11)
+    u, phi = rng.random(100_000), 2 * np.pi * rng.random(100_000)
+    z = 1 - 2 * u**2
+    s = np.sqrt(1 - z * z)
+    d = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
+    res = chi2_test(d, uniform_pdf("sphere"), **LEVEL)
+    assert not res.passed and res.p_value < 1e-10
+
+
+def test_uniform_hemisphere_rejected_by_cosine_pdf():
+    res = chi2_test(uniform_hemisphere(50_000, seed=12), cosine_pdf, "hemisphere", **LEVEL)
+    assert not res.passed and res.p_value < 1e-10
+
+
+def test_pole_sampler_rejected_by_uniform_triangle():
+    res = chi2_test(pole_sampler(50_000, seed=13), uniform_pdf("triangle"), "triangle",
+                    **LEVEL)
+    assert not res.passed and res.p_value < 1e-10
+
+
+def test_uniform_triangle_rejected_by_linear_pdf():
+    # A mild deviation: the linear density varies only by a factor sqrt 3 over T0.
+    res = chi2_test(uniform_triangle_fold(200_000, seed=14), linear_triangle_pdf,
+                    "triangle", **LEVEL)
+    assert not res.passed and res.p_value < 1e-10
+
+
+# ---------------------------------------------------------------------------
+# Quadrature accuracy
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("domain", ["sphere", "hemisphere", "triangle"])
+@pytest.mark.parametrize("bins", [(8, 4), (7, 5), (64, 64)])
+def test_uniform_integral_is_one(domain, bins):
+    p = bin_probabilities(uniform_pdf(domain), domain, bins)
+    assert abs(p.sum() - 1) < 1e-6
+    res = chi2_test(uniform_sphere(1000, 0) if domain == "sphere" else
+                    uniform_hemisphere(1000, 0) if domain == "hemisphere" else
+                    uniform_triangle_fold(1000, 0),
+                    uniform_pdf(domain), domain, bins=bins)
+    assert abs(res.integral - 1) < 1e-6
+    assert abs(res.expected.sum() - 1000) < 1e-6 * 1000
+
+
+@pytest.mark.parametrize("domain", ["sphere", "hemisphere"])
+def test_uniform_bins_have_equal_solid_angle(domain):
+    bins = (12, 6)
+    p = bin_probabilities(uniform_pdf(domain), domain, bins)
+    np.testing.assert_allclose(p, 1 / (12 * 6), rtol=1e-12)
+
+
+@pytest.mark.parametrize("bins", [(4, 2), (32, 16), (64, 32)])
+def test_cosine_integral_per_bin(bins):
+    # int_bin cos(theta)/pi d(omega) = dphi (c1^2 - c0^2) / (2 pi)
+    phi_e, cos_e = equal_area_bins("hemisphere", bins)
+    exact = np.outer(np.diff(phi_e), np.diff(cos_e**2)) / (2 * np.pi)
+    p = bin_probabilities(cosine_pdf, "hemisphere", bins)
+    np.testing.assert_allclose(p, exact, rtol=1e-12, atol=0)
+    assert abs(p.sum() - 1) < 1e-12
+
+
+@pytest.mark.parametrize("kind,pdf", [("uniform", uniform_pdf("triangle")),
+                                      ("linear", linear_triangle_pdf),
+                                      ("pole", pole_pdf)])
+@pytest.mark.parametrize("bins", [(5, 7), (16, 16), (31, 31), (64, 64)])
+def test_triangle_bins_match_antiderivatives(kind, pdf, bins):
+    """Bins cut by the T0 boundary, and the pole bins, are integrated to 1e-6 relative."""
+    exact = exact_triangle_bins(bins, kind)
+    p = bin_probabilities(pdf, "triangle", bins)
+    assert np.all(p[exact == 0] == 0)  # bins entirely outside T0 are exactly 0
+    nz = exact > 0
+    rel = np.abs(p[nz] - exact[nz]) / exact[nz]
+    assert rel.max() < 1e-6, (kind, bins, rel.max())
+    assert abs(p.sum() - 1) < 1e-9
+    assert abs(exact.sum() - 1) < 1e-12  # the reference itself is normalised
+
+
+def test_pole_substitution_matters():
+    """The 1/sin(theta) pole density is integrated to 1e-6 only thanks to u-substitution.
+
+    Check the top row of bins against the antiderivative, at a low order where a
+    plain rule in cos(theta) would be visibly wrong (about 1e-3 relative).
+    """
+    bins = (4, 4)
+    exact = exact_triangle_bins(bins, "pole")
+    p = bin_probabilities(pole_pdf, "triangle", bins, quadrature_order=4)
+    rel = np.abs(p[:, -1] - exact[:, -1]) / exact[:, -1]
+    assert rel.max() < 1e-6
+    # A plain Gauss-Legendre rule in cos theta on the same top row, for contrast.
+    x, w = np.polynomial.legendre.leggauss(4)
+    phi_e, cos_e = equal_area_bins("triangle", bins)
+    c0, c1 = cos_e[-2], cos_e[-1]
+    c = (c0 + c1) / 2 + (c1 - c0) / 2 * x
+    plain = []
+    for i in range(bins[0]):
+        ph = (phi_e[i] + phi_e[i + 1]) / 2 + (phi_e[i + 1] - phi_e[i]) / 2 * x
+        P, C = np.meshgrid(ph, c, indexing="ij")
+        s = np.sqrt(1 - C**2)
+        d = np.stack([s * np.cos(P), s * np.sin(P), C], axis=-1).reshape(-1, 3)
+        W = np.outer(w * (phi_e[i + 1] - phi_e[i]) / 2, w * (c1 - c0) / 2).ravel()
+        plain.append(np.sum(pole_pdf(d) * W))
+    plain_rel = np.abs(np.array(plain) - exact[:, -1]) / exact[:, -1]
+    assert plain_rel.max() > 1e-3
+
+
+def test_pole_density_normalised():
+    for bins in [(4, 4), (16, 16), (64, 64)]:
+        assert abs(bin_probabilities(pole_pdf, "triangle", bins).sum() - 1) < 1e-6
+
+
+# ---------------------------------------------------------------------------
+# Binning and edges
+# ---------------------------------------------------------------------------
+
+
+def test_equal_area_bins_edges():
+    phi, cos = equal_area_bins("triangle", (4, 3))
+    np.testing.assert_allclose(phi, np.linspace(0, np.pi / 4, 5))
+    np.testing.assert_allclose(cos, np.linspace(INV_SQRT3, 1, 4))
+    phi, cos = equal_area_bins("sphere", (6, 3))
+    assert phi[0] == -np.pi and phi[-1] == np.pi and cos[0] == -1 and cos[-1] == 1
+
+
+def test_bin_assignment_at_phi_pi_and_poles():
+    d = np.array([
+        [-1.0, 0.0, 0.0],   # phi = +pi  -> wrapped to -pi: phi bin 0
+        [-1.0, -0.0, 0.0],  # phi = -pi: phi bin 0
+        [0.0, 0.0, 1.0],    # cos = 1 exactly: last cos bin
+        [0.0, 0.0, -1.0],   # cos = -1: first cos bin
+        [1.0, 0.0, 0.0],    # phi = 0: bin 2 of 4
+    ])
+    res = chi2_test(d, uniform_pdf("sphere"), bins=(4, 2))
+    expected_counts = np.zeros((4, 2), dtype=int)
+    expected_counts[0, 1] = 2
+    expected_counts[2, 1] = 2
+    expected_counts[2, 0] = 1
+    np.testing.assert_array_equal(res.observed, expected_counts)
+
+
+def test_triangle_vertices_are_inside():
+    v = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    res = chi2_test(v, uniform_pdf("triangle"), "triangle", bins=(4, 4))
+    assert "outside" not in res.message
+    obs = np.zeros((4, 4), dtype=int)
+    obs[0, 3] = 1  # pole: phi = 0, cos = 1
+    obs[3, 0] = 1  # (1,1,1)/sqrt 3: phi = pi/4, cos = 1/sqrt 3
+    obs[0, int((1 / math.sqrt(2) - INV_SQRT3) / (1 - INV_SQRT3) * 4)] += 1
+    np.testing.assert_array_equal(res.observed, obs)
+
+
+def test_default_bins():
+    assert chi2_test(uniform_sphere(100, 0), uniform_pdf("sphere")).observed.shape == (8, 4)
+    res = chi2_test(uniform_sphere(2_000_000, 0, np.float32), uniform_pdf("sphere"))
+    assert res.observed.shape == (128, 64)
+
+
+# ---------------------------------------------------------------------------
+# Failing samplers: outside the domain, not unit, zero-probability bins, bad pdf
+# ---------------------------------------------------------------------------
+
+
+def test_sample_below_hemisphere_fails():
+    d = uniform_hemisphere(10_000, seed=15)
+    d[17] = [0.6, 0.0, -0.8]
+    res = chi2_test(d, uniform_pdf("hemisphere"), "hemisphere")
+    assert not res.passed and res.p_value == 0 and res.statistic == math.inf
+    assert "outside the hemisphere" in res.message and "sample 17" in res.message
+    assert res.observed.sum() == len(d) - 1
+
+
+def test_sample_in_rectangle_but_outside_triangle_fails():
+    d = uniform_triangle_fold(10_000, seed=16)
+    phi, c = 0.1, 0.6  # cmax(0.1) = 0.705 > 0.6: inside the rectangle, below T0
+    s = math.sqrt(1 - c * c)
+    d[3] = [s * math.cos(phi), s * math.sin(phi), c]
+    res = chi2_test(d, uniform_pdf("triangle"), "triangle")
+    assert not res.passed and res.p_value == 0
+    assert "outside the triangle" in res.message
+
+
+def test_sample_outside_triangle_rectangle_fails():
+    d = uniform_triangle_fold(10_000, seed=17)
+    d[0] = [0.0, 0.0, -1.0]
+    res = chi2_test(d, uniform_pdf("triangle"), "triangle")
+    assert not res.passed and res.p_value == 0 and "outside" in res.message
+
+
+def test_non_unit_sample_fails():
+    d = uniform_sphere(10_000, seed=18)
+    d[5] *= 2
+    res = chi2_test(d, uniform_pdf("sphere"))
+    assert not res.passed and res.p_value == 0 and "not unit vectors" in res.message
+
+
+def test_sample_in_zero_probability_bin_fails():
+    # Uniform hemisphere samples against a pdf supported on the cap z >= 1/2.
+    res = chi2_test(uniform_hemisphere(10_000, seed=19), cap_pdf, "hemisphere", bins=(8, 4))
+    assert not res.passed and res.p_value == 0
+    assert "integrates to 0" in res.message
+
+
+def test_unnormalised_pdf_fails():
+    d = uniform_sphere(10_000, seed=20)
+    res = chi2_test(d, lambda x: np.full(len(x), 1.002 / (4 * np.pi)))
+    assert not res.passed
+    assert res.integral == pytest.approx(1.002, rel=1e-12)
+    assert "integrates to" in res.message
+    # Within tolerance it is accepted (the samples are uniform).
+    res = chi2_test(d, lambda x: np.full(len(x), 1.0005 / (4 * np.pi)), **LEVEL)
+    assert "integrates" not in res.message
+
+
+def test_too_few_cells_fails():
+    res = chi2_test(uniform_sphere(3, 0), uniform_pdf("sphere"), bins=(2, 1))
+    assert not res.passed and math.isnan(res.p_value) and "nothing to test" in res.message
+
+
+# ---------------------------------------------------------------------------
+# Sidak correction and result object
+# ---------------------------------------------------------------------------
+
+
+def _two_bin_samples(n, k):
+    """n samples on the equator, k with y < 0 (phi bin 0 of 2), n - k with y > 0."""
+    d = np.zeros((n, 3))
+    d[:k] = [0.0, -1.0, 0.0]
+    d[k:] = [0.0, 1.0, 0.0]
+    return d
+
+
+def test_sidak_threshold_decides():
+    # Two bins of expected 500: statistic (2k - n)^2 / n = 8.1, dof 1, p = 0.0044.
+    d = _two_bin_samples(1000, 545)
+    one = chi2_test(d, uniform_pdf("sphere"), bins=(2, 1), significance=0.01)
+    ten = chi2_test(d, uniform_pdf("sphere"), bins=(2, 1), significance=0.01, test_count=10)
+    assert one.statistic == pytest.approx(8.1, rel=1e-12) and one.dof == 1
+    assert one.p_value == pytest.approx(scipy_stats.chi2.sf(8.1, 1), rel=1e-12)
+    assert 0.001 < one.p_value < 0.01
+    assert one.threshold == pytest.approx(0.01, rel=1e-14)
+    assert ten.threshold == pytest.approx(1 - 0.99 ** (1 / 10), rel=1e-12)
+    assert not one.passed
+    assert ten.passed, str(ten)
+
+
+def test_result_is_frozen_and_printable():
+    res = chi2_test(uniform_sphere(20_000, 21), uniform_pdf("sphere"), **LEVEL)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.passed = False
+    with pytest.raises(ValueError):
+        res.observed[0, 0] = 1
+    text = str(res)
+    assert "sphere" in text and ("PASSED" if res.passed else "FAILED") in text
+    assert res.message in text
+    assert isinstance(res, Chi2Result)
+
+
+def test_docstring_examples():
+    failures, attempted = doctest.testmod(stats, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert attempted > 10 and failures == 0
+
+
+# ---------------------------------------------------------------------------
+# Argument validation
+# ---------------------------------------------------------------------------
+
+GOOD = uniform_sphere(100, 0)
+
+
+@pytest.mark.parametrize(
+    "kwargs,exc,match",
+    [
+        (dict(domain="torus"), ValueError,
+         r"'torus' is not a valid domain; use one of \{'sphere', 'hemisphere', 'triangle'\}"),
+        (dict(bins=(0, 4)), ValueError, "'bins'"),
+        (dict(bins=(4, -1)), ValueError, "'bins'"),
+        (dict(bins=(4.5, 4)), TypeError, "'bins'"),
+        (dict(bins=(True, 4)), TypeError, "'bins'"),
+        (dict(bins=5), TypeError, "'bins'"),
+        (dict(bins=(1, 2, 3)), ValueError, "'bins'"),
+        (dict(samples=np.zeros((10, 2))), ValueError, "'samples'"),
+        (dict(samples=np.zeros(3)), ValueError, "'samples'"),
+        (dict(samples=np.zeros((0, 3))), ValueError, "'samples'"),
+        (dict(samples=np.full((4, 3), np.nan)), ValueError, "'samples'"),
+        (dict(samples="abc"), TypeError, "'samples'"),
+        (dict(samples=GOOD.astype(np.float16)), TypeError, "'samples'"),
+        (dict(pdf=0.25), TypeError, "'pdf'"),
+        (dict(significance=0.0), ValueError, "'significance'"),
+        (dict(significance=1.0), ValueError, "'significance'"),
+        (dict(significance=1.5), ValueError, "'significance'"),
+        (dict(significance=float("nan")), ValueError, "'significance'"),
+        (dict(significance="0.01"), TypeError, "'significance'"),
+        (dict(test_count=0), ValueError, "'test_count'"),
+        (dict(test_count=2.0), TypeError, "'test_count'"),
+        (dict(min_expected=0), ValueError, "'min_expected'"),
+        (dict(quadrature_order=0), ValueError, "'quadrature_order'"),
+        (dict(pdf=lambda d: np.ones((len(d), 2))), ValueError, "'pdf' must return shape"),
+        (dict(pdf=lambda d: np.full(len(d), np.nan)), ValueError, "'pdf' returned non-finite"),
+        (dict(pdf=lambda d: -np.ones(len(d))), ValueError, "'pdf' returned negative"),
+    ],
+)
+def test_bad_arguments(kwargs, exc, match):
+    args = dict(samples=GOOD, pdf=uniform_pdf("sphere"))
+    args.update(kwargs)
+    with pytest.raises(exc, match=match):
+        chi2_test(args.pop("samples"), args.pop("pdf"), **args)
+
+
+def test_bad_arguments_of_helpers():
+    with pytest.raises(ValueError, match="'bins'"):
+        equal_area_bins("sphere", (0, 1))
+    with pytest.raises(ValueError, match="not a valid domain"):
+        uniform_pdf("cube")
+    with pytest.raises(TypeError, match="'pdf'"):
+        bin_probabilities(None, "sphere", (4, 2))
+
+
+def test_uniform_pdf_values():
+    d = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, -0.8], [0.3, 0.2, 0.9], [0.2, 0.3, 0.9]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    np.testing.assert_allclose(uniform_pdf("sphere")(d), 1 / (4 * np.pi))
+    np.testing.assert_allclose(uniform_pdf("hemisphere")(d), [1 / (2 * np.pi), 0, 1 / (2 * np.pi),
+                                                              1 / (2 * np.pi)])
+    np.testing.assert_allclose(uniform_pdf("triangle")(d), [12 / np.pi, 0, 12 / np.pi, 0])
