@@ -1,0 +1,192 @@
+"""Atomic file output for the command line and the demo.
+
+A file (or directory) appears under its final name only once it is complete:
+it is written under a hidden temporary name in the same directory and then
+renamed over the target (``os.replace``, atomic on POSIX and Windows within
+one file system).  On any exception, ``KeyboardInterrupt`` included, the
+temporary is removed and the target is left as it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["DIRECTION_SUFFIXES", "atomic_path", "atomic_directory", "save_directions"]
+
+DIRECTION_SUFFIXES = (".npy", ".csv")
+
+_CSV_FORMATS = {np.dtype(np.float64): "%.17g", np.dtype(np.float32): "%.9g"}  # shortest exact round trip
+
+
+def _temporary_name(target: Path, kind: str) -> Path:
+    # Hidden, in the target's directory (so the rename stays on one file system),
+    # and recognisable if a hard crash (SIGKILL, power loss) ever leaves one behind.
+    return target.with_name(f".{target.name}.{secrets.token_hex(4)}.{kind}")
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a fresh temporary file path that replaces *path* on success.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final file.  Its directory must exist.
+
+    Yields
+    ------
+    pathlib.Path
+        An empty file, created in the directory of *path* with the
+        permissions a new file would get (``0o666`` minus the umask).  Write
+        to it (by name, or open it again); do not rename it.
+
+    Notes
+    -----
+    On normal exit the temporary is flushed to disk (``fsync``) and renamed
+    over *path*.  On any exception (``KeyboardInterrupt`` too) it is removed
+    and the exception propagates; *path* is untouched.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from symsphere._io import atomic_path
+    >>> target = os.path.join(tempfile.mkdtemp(), "out.txt")
+    >>> with atomic_path(target) as tmp:
+    ...     _ = tmp.write_text("done")
+    >>> open(target).read()
+    'done'
+    """
+    target = Path(path)
+    while True:
+        temporary = _temporary_name(target, "tmp")
+        try:
+            # O_EXCL: never clobber an existing file; mode 0o666 lets the umask decide, unlike mkstemp's 0o600.
+            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(descriptor)
+        break
+    try:
+        yield temporary
+        with open(temporary, "rb+") as handle:
+            os.fsync(handle.fileno())  # the data is on disk before the name points at it
+        os.replace(temporary, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temporary)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_directory(path, *, replaceable=None):
+    """Yield a fresh temporary directory that replaces the directory *path* on success.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final directory.  Its parent must exist.
+    replaceable : collection of str, optional
+        If *path* already exists it is replaced only if it is a directory
+        holding nothing but entries with these names (an earlier run's
+        output); anything else raises ``FileExistsError`` before any work is
+        done, so that a mistyped ``--out`` cannot delete a user's files.
+        ``None`` allows only an empty directory.
+
+    Yields
+    ------
+    pathlib.Path
+        An empty directory next to *path*.
+
+    Notes
+    -----
+    A directory cannot be renamed over a non-empty one, so an existing
+    *path* is first renamed aside, the new one renamed in, and the old one
+    deleted.  Readers see either the old or the new directory, except in the
+    instant between the two renames, when *path* does not exist.
+    """
+    target = Path(path)
+    allowed = set(replaceable or ())
+    _check_replaceable(target, allowed)
+    temporary = _temporary_name(target, "tmp")
+    temporary.mkdir()
+    try:
+        yield temporary
+        _check_replaceable(target, allowed)  # it may have appeared or changed meanwhile
+        if target.exists():
+            aside = _temporary_name(target, "old")
+            os.replace(target, aside)
+            os.replace(temporary, target)
+            shutil.rmtree(aside, ignore_errors=True)
+        else:
+            os.replace(temporary, target)
+    except BaseException:
+        shutil.rmtree(temporary, ignore_errors=True)
+        raise
+
+
+def _check_replaceable(target: Path, allowed: set) -> None:
+    if not (target.exists() or target.is_symlink()):
+        return
+    if target.is_symlink() or not target.is_dir():
+        raise FileExistsError(f"{str(target)!r} exists and is not a directory; choose another output directory")
+    unexpected = sorted(entry.name for entry in target.iterdir() if entry.name not in allowed)
+    if unexpected:
+        shown = ", ".join(unexpected[:3]) + (", ..." if len(unexpected) > 3 else "")
+        raise FileExistsError(
+            f"{str(target)!r} exists and holds files this program did not write ({shown}); "
+            "refusing to replace it: choose a new or empty output directory"
+        )
+
+
+def save_directions(path, directions, *, name="path"):
+    """Write an (n, 3) array of directions to ``.npy`` or ``.csv``, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file; the suffix (case-insensitive) chooses the format:
+        ``.npy`` (``numpy.save``) or ``.csv`` (header ``x,y,z``, then one
+        direction per line, with 17 significant digits for float64 and 9 for
+        float32, which read back exactly).
+    directions : ndarray, shape (n, 3)
+    name : str, optional
+        How error messages call *path* (the command line passes ``'--out'``).
+
+    Raises
+    ------
+    ValueError
+        If the suffix is neither ``.npy`` nor ``.csv``, or *directions* is not (n, 3).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from symsphere._io import save_directions
+    >>> target = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> save_directions(target, np.array([[0.0, 0.6, 0.8]]))
+    >>> print(open(target).read(), end="")
+    x,y,z
+    0,0.59999999999999998,0.80000000000000004
+    """
+    target = Path(path)
+    suffix = target.suffix.lower()
+    if suffix not in DIRECTION_SUFFIXES:
+        allowed = ", ".join(DIRECTION_SUFFIXES)
+        raise ValueError(f"'{name}' must end in one of {allowed}, got {str(path)!r}")
+    directions = np.asarray(directions)
+    if directions.ndim != 2 or directions.shape[1] != 3:
+        raise ValueError(f"directions must have shape (n, 3), got {directions.shape}")
+    with atomic_path(target) as temporary:
+        # Write through an open handle: np.save given a *name* would append '.npy' to it.
+        with open(temporary, "wb") as handle:
+            if suffix == ".npy":
+                np.save(handle, directions, allow_pickle=False)
+            else:
+                fmt = _CSV_FORMATS.get(directions.dtype, "%.17g")
+                np.savetxt(handle, directions, fmt=fmt, delimiter=",", header="x,y,z", comments="")

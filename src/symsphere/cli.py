@@ -1,0 +1,183 @@
+"""The ``symsphere`` command: sample directions to a file, or run the demo.
+
+Examples
+--------
+::
+
+    symsphere sample --n 4800 --seed 1 --out directions.npy
+    symsphere sample --n 4800 --domain hemisphere --normal 0 1 0 --out hemi.csv
+    symsphere demo --out symsphere-demo
+    symsphere --version
+
+Exit status: 0 on success, 2 for invalid arguments (the message names the
+argument), 1 when the output cannot be written, 130 on Ctrl-C.  No partial
+output file is ever left behind.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from . import __version__
+from ._io import DIRECTION_SUFFIXES, save_directions
+from .maps import METHODS
+from .points import POINT_SETS
+
+__all__ = ["main", "build_parser"]
+
+_DOMAINS = ("sphere", "hemisphere")
+_DTYPES = ("float64", "float32")
+_DEMO_DEFAULT_N = 48 * 2**14
+
+
+class _UsageError(Exception):
+    """An invalid combination of arguments that argparse cannot express."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``symsphere`` command (one sub-parser per verb)."""
+    parser = argparse.ArgumentParser(
+        prog="symsphere",
+        description="Exactly uniform, 48-fold symmetric sampling of the sphere and hemisphere.",
+    )
+    parser.add_argument("--version", action="version", version=f"symsphere {__version__}")
+    verbs = parser.add_subparsers(dest="verb", metavar="{sample,demo}")
+
+    sample = verbs.add_parser(
+        "sample",
+        help="write N directions to a .npy or .csv file",
+        description=(
+            "Write N unit directions, one per row (x, y, z), drawn by the 48-fold (hemisphere: "
+            "24-fold) symmetric scheme.  Rows 48i..48i+47 (24i..24i+23) are the orbit of one "
+            "point of the fundamental triangle.  The file appears only when complete."
+        ),
+    )
+    sample.add_argument("--n", type=int, required=True, help="number of directions: a multiple of 48 (hemisphere: 24)")
+    sample.add_argument("--domain", choices=_DOMAINS, default="sphere", help="default: %(default)s")
+    sample.add_argument(
+        "--method",
+        choices=METHODS,
+        default="equal_area",
+        help="map from the unit square onto the triangle; only equal_area is uniform (default: %(default)s)",
+    )
+    sample.add_argument(
+        "--points",
+        choices=POINT_SETS,
+        default="random",
+        help="base points of the unit square (stratified needs N/48 to be a square; default: %(default)s)",
+    )
+    sample.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    sample.add_argument(
+        "--out",
+        required=True,
+        metavar="FILE",
+        help=f"output file; its suffix chooses the format: {', '.join(DIRECTION_SUFFIXES)}",
+    )
+    sample.add_argument(
+        "--normal",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=None,
+        help="pole of the hemisphere (only with --domain hemisphere; default: 0 0 1)",
+    )
+    sample.add_argument("--dtype", choices=_DTYPES, default="float64", help="default: %(default)s")
+    sample.set_defaults(handler=_run_sample)
+
+    demo = verbs.add_parser(
+        "demo",
+        help="chi-square tests of the three maps, written up as report.md and figure.png",
+        description=(
+            "Sample the sphere and the hemisphere with every map, run chi-square tests against "
+            "the uniform density (and the paper's maps against their own density), and write "
+            "report.md and figure.png into DIR.  An existing DIR is replaced only if it holds "
+            "nothing but an earlier demo's output."
+        ),
+    )
+    demo.add_argument("--out", default="symsphere-demo", metavar="DIR", help="output directory (default: %(default)s)")
+    demo.add_argument(
+        "--n", type=int, default=_DEMO_DEFAULT_N, help="directions per sample, a multiple of 48 (default: %(default)s)"
+    )
+    demo.add_argument("--seed", type=int, default=0, help="default: %(default)s")
+    demo.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    demo.set_defaults(handler=_run_demo)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version and usage errors: hand back argparse's status
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    if args.verb is None:
+        parser.print_help(sys.stderr)
+        return 2
+    prog = f"symsphere {args.verb}"
+    try:
+        return args.handler(args)
+    except (_UsageError, ValueError, TypeError) as exc:
+        # The library's validators name the argument; a traceback would add nothing.
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{prog}: error: {_describe_os_error(exc)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+def _run_sample(args) -> int:
+    from .sampling import sample_hemisphere, sample_sphere
+
+    if args.normal is not None and args.domain != "hemisphere":
+        raise _UsageError("--normal is only valid with --domain hemisphere")
+    # Check the suffix before sampling, so that a typo costs nothing.
+    if not args.out.lower().endswith(DIRECTION_SUFFIXES):
+        raise _UsageError(f"--out must end in one of {', '.join(DIRECTION_SUFFIXES)}, got {args.out!r}")
+    seed = args.seed
+    if seed is not None and seed < 0:
+        raise _UsageError(f"--seed must be a non-negative integer, got {seed}")
+    if seed is None:
+        seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
+    start = time.perf_counter()
+    options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
+    if args.domain == "sphere":
+        directions = sample_sphere(args.n, **options)
+    else:
+        directions = sample_hemisphere(args.n, normal=args.normal, **options)
+    try:
+        save_directions(args.out, directions, name="--out")
+    except OSError as exc:  # name the user's file, not the temporary next to it
+        raise OSError(exc.errno, exc.strerror, args.out) from exc
+    elapsed = time.perf_counter() - start
+    print(
+        f"wrote {len(directions)} directions ({args.domain}, {args.method}, {args.points}, "
+        f"seed {seed}, {args.dtype}) to {args.out} in {elapsed:.3f} s"
+    )
+    return 0
+
+
+def _run_demo(args) -> int:
+    from .demo import run_demo
+
+    start = time.perf_counter()
+    report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
+    print(f"report: {report}  (figure: {report.with_name('figure.png')}; {time.perf_counter() - start:.1f} s)")
+    return 0
+
+
+def _describe_os_error(exc: OSError) -> str:
+    if exc.filename is not None and exc.strerror:
+        return f"cannot write {exc.filename!s}: {exc.strerror}"
+    return str(exc)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

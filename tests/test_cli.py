@@ -1,0 +1,282 @@
+"""The ``symsphere`` command, its atomic output, and the demo."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import symsphere
+from symsphere import sample_hemisphere, sample_sphere
+from symsphere._io import atomic_directory, atomic_path, save_directions
+from symsphere.cli import main
+
+
+def _read_csv(path, dtype=np.float64):
+    with open(path) as handle:
+        assert handle.readline() == "x,y,z\n"
+    return np.loadtxt(path, delimiter=",", skiprows=1, dtype=dtype, ndmin=2)
+
+
+def _leftovers(directory):
+    """Everything in *directory*: after a failure it must be empty (no target, no temporary)."""
+    return sorted(p.name for p in directory.iterdir())
+
+
+# --- sample ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "method, points, dtype",
+    [("equal_area", "random", "float64"), ("paper2", "sobol", "float64"), ("equal_area", "halton", "float32")],
+)
+@pytest.mark.parametrize("suffix", [".npy", ".csv"])
+def test_sample_writes_what_the_library_returns(tmp_path, capsys, method, points, dtype, suffix):
+    out = tmp_path / f"directions{suffix}"
+    status = main(
+        ["sample", "--n", "768", "--method", method, "--points", points, "--seed", "7", "--dtype", dtype]
+        + ["--out", str(out)]
+    )
+    assert status == 0
+    expected = sample_sphere(768, method=method, points=points, rng=7, dtype=dtype)
+    written = np.load(out) if suffix == ".npy" else _read_csv(out, dtype)
+    assert written.dtype == expected.dtype
+    # %.17g (float64) and %.9g (float32) round-trip exactly.
+    np.testing.assert_array_equal(written, expected)
+    closing = capsys.readouterr().out.strip().splitlines()
+    assert len(closing) == 1
+    assert "768 directions" in closing[0] and str(out) in closing[0] and closing[0].endswith(" s")
+    assert _leftovers(tmp_path) == [out.name]
+
+
+def test_sample_hemisphere_with_normal(tmp_path):
+    out = tmp_path / "hemi.npy"
+    arguments = ["sample", "--n", "240", "--domain", "hemisphere", "--normal", "0", "2", "0", "--seed", "3"]
+    assert main([*arguments, "--out", str(out)]) == 0
+    written = np.load(out)
+    np.testing.assert_array_equal(written, sample_hemisphere(240, normal=[0.0, 2.0, 0.0], rng=3))
+    assert np.all(written[:, 1] >= -1e-15)  # the hemisphere about +y
+
+
+def test_sample_without_seed_prints_a_seed_that_reproduces_the_file(tmp_path, capsys):
+    out = tmp_path / "d.npy"
+    assert main(["sample", "--n", "96", "--out", str(out)]) == 0
+    seed = int(capsys.readouterr().out.split("seed ")[1].split(",")[0])
+    np.testing.assert_array_equal(np.load(out), sample_sphere(96, rng=seed))
+
+
+def test_sample_replaces_an_existing_file(tmp_path):
+    out = tmp_path / "d.csv"
+    out.write_text("old\n")
+    assert main(["sample", "--n", "48", "--seed", "0", "--out", str(out)]) == 0
+    np.testing.assert_array_equal(_read_csv(out), sample_sphere(48, rng=0))
+
+
+@pytest.mark.parametrize(
+    "arguments, named",
+    [
+        (["--n", "100"], "'n'"),  # not a multiple of 48
+        (["--n", "36", "--domain", "hemisphere"], "'n'"),  # not a multiple of 24
+        (["--n", "0"], "'n'"),
+        (["--n", "96", "--method", "bogus"], "--method"),
+        (["--n", "96", "--points", "lattice"], "--points"),
+        (["--n", "96", "--points", "stratified"], "stratified"),  # 96/48 = 2 is not a square
+        (["--n", "96", "--dtype", "float16"], "--dtype"),
+        (["--n", "96", "--seed", "-1"], "--seed"),
+        (["--n", "96", "--normal", "0", "0", "1"], "--normal"),  # sphere has no normal
+        (["--n", "96", "--domain", "hemisphere", "--normal", "0", "0", "0"], "'normal'"),
+        (["--n", "many"], "--n"),
+    ],
+)
+def test_sample_rejects_invalid_values(tmp_path, capsys, arguments, named):
+    out = tmp_path / "d.npy"
+    assert main(["sample", *arguments, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "symsphere sample: error:" in err and named in err
+    assert "Traceback" not in err
+    assert _leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("name", ["d.txt", "d", "d.npz"])
+def test_sample_rejects_unknown_suffix(tmp_path, capsys, name):
+    assert main(["sample", "--n", "96", "--out", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and ".npy" in err and ".csv" in err
+    assert _leftovers(tmp_path) == []
+
+
+def test_sample_into_missing_directory_fails_cleanly(tmp_path, capsys):
+    out = tmp_path / "missing" / "d.npy"
+    assert main(["sample", "--n", "96", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert str(out) in err and "Traceback" not in err
+
+
+# --- atomic output --------------------------------------------------------------
+
+
+def _failing_save(exception):
+    def save(file, arr, *args, **kwargs):
+        file.write(b"\x93NUMPY partial header")  # some bytes reach the temporary first
+        raise exception
+
+    return save
+
+
+def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
+    monkeypatch.setattr(np, "save", _failing_save(OSError(28, "No space left on device")))
+    out = tmp_path / "d.npy"
+    with pytest.raises(OSError, match="No space"):
+        save_directions(out, np.zeros((48, 3)))
+    assert _leftovers(tmp_path) == []
+
+
+def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "d.npy"
+    out.write_bytes(b"previous run")
+    monkeypatch.setattr(np, "save", _failing_save(KeyboardInterrupt()))
+    assert main(["sample", "--n", "96", "--seed", "1", "--out", str(out)]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert _leftovers(tmp_path) == [out.name]
+    assert out.read_bytes() == b"previous run"
+
+
+def test_atomic_path_keeps_target_on_any_exception(tmp_path):
+    out = tmp_path / "f.txt"
+    with pytest.raises(ZeroDivisionError):
+        with atomic_path(out) as temporary:
+            temporary.write_text("half")
+            1 / 0
+    assert _leftovers(tmp_path) == []
+    with atomic_path(out) as temporary:
+        assert temporary.parent == tmp_path and temporary.name.startswith(".")
+        temporary.write_text("whole")
+    assert out.read_text() == "whole" and _leftovers(tmp_path) == ["f.txt"]
+
+
+def test_atomic_path_gives_the_usual_permissions(tmp_path):
+    umask = os.umask(0o022)
+    os.umask(umask)
+    out = tmp_path / "f.txt"
+    with atomic_path(out) as temporary:
+        temporary.write_text("x")
+    assert out.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_save_directions_names_the_argument():
+    with pytest.raises(ValueError, match="'--out' must end in one of .npy, .csv"):
+        save_directions("d.json", np.zeros((48, 3)), name="--out")
+    with pytest.raises(ValueError, match="'path'"):
+        save_directions("d.json", np.zeros((48, 3)))
+
+
+def test_atomic_directory_refuses_to_replace_foreign_files(tmp_path):
+    target = tmp_path / "out"
+    target.mkdir()
+    (target / "thesis.tex").write_text("precious")
+    with pytest.raises(FileExistsError, match="thesis.tex"):
+        with atomic_directory(target, replaceable={"report.md"}):
+            pytest.fail("must refuse before yielding")
+    assert (target / "thesis.tex").read_text() == "precious"
+    assert _leftovers(tmp_path) == ["out"]
+
+
+def test_atomic_directory_cleans_up_after_failure(tmp_path):
+    target = tmp_path / "out"
+    target.mkdir()
+    (target / "report.md").write_text("old")
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_directory(target, replaceable={"report.md"}) as build:
+            (build / "report.md").write_text("new")
+            raise KeyboardInterrupt
+    assert (target / "report.md").read_text() == "old"
+    assert _leftovers(tmp_path) == ["out"]
+
+
+# --- demo -----------------------------------------------------------------------
+
+DEMO_N = 48 * 2**11
+
+
+@pytest.fixture(scope="module")
+def demo_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo") / "symsphere-demo"
+    assert main(["demo", "--out", str(out), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
+    return out
+
+
+def test_demo_writes_report_and_figure(demo_dir):
+    assert sorted(p.name for p in demo_dir.iterdir()) == ["figure.png", "report.md"]
+    assert (demo_dir / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert _leftovers(demo_dir.parent) == ["symsphere-demo"]  # no temporary directories
+
+
+def test_demo_report_states_the_measured_verdicts(demo_dir):
+    report = (demo_dir / "report.md").read_text(encoding="utf-8")
+    assert "**equal_area passes** every test against the uniform density" in report
+    assert "**paper1 fails** against the uniform density" in report
+    assert "**paper2 fails** against the uniform density" in report
+    rows = [line for line in report.splitlines() if line.startswith("| ") and "domain" not in line]
+    assert len(rows) == 15  # 3 domains x 3 maps vs uniform, + 3 domains x 2 paper maps vs their own pdf
+    equal_area = [row for row in rows if "| equal_area |" in row]
+    assert len(equal_area) == 3 and all("| pass |" in row for row in equal_area)
+
+
+def test_demo_replaces_its_own_output(demo_dir, capsys):
+    before = (demo_dir / "report.md").read_text(encoding="utf-8")
+    assert main(["demo", "--out", str(demo_dir), "--n", "4800", "--seed", "1", "--no-progress"]) == 0
+    assert str(demo_dir / "report.md") in capsys.readouterr().out
+    assert (demo_dir / "report.md").read_text(encoding="utf-8") != before
+    assert _leftovers(demo_dir.parent) == ["symsphere-demo"]
+    # Same seed, same n: the same report.
+    assert main(["demo", "--out", str(demo_dir), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
+    assert (demo_dir / "report.md").read_text(encoding="utf-8") == before
+
+
+def test_demo_refuses_a_directory_with_other_files(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("keep me")
+    assert main(["demo", "--out", str(tmp_path), "--n", "4800", "--no-progress"]) == 1
+    assert "notes.txt" in capsys.readouterr().err
+    assert _leftovers(tmp_path) == ["notes.txt"]
+
+
+@pytest.mark.parametrize("arguments, named", [(["--n", "100"], "'n'"), (["--seed", "-2"], "'seed'")])
+def test_demo_rejects_invalid_values(tmp_path, capsys, arguments, named):
+    out = tmp_path / "demo"
+    assert main(["demo", "--out", str(out), *arguments, "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "symsphere demo: error:" in err and named in err
+    assert _leftovers(tmp_path) == []
+
+
+# --- help and version -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("verb", [[], ["sample"], ["demo"]])
+def test_help_exits_zero(capsys, verb):
+    assert main([*verb, "--help"]) == 0
+    assert "usage: symsphere" in capsys.readouterr().out
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"symsphere {symsphere.__version__}"
+
+
+def test_no_verb_is_a_usage_error(capsys):
+    assert main([]) == 2
+    assert "usage: symsphere" in capsys.readouterr().err
+
+
+def test_python_dash_m(tmp_path):
+    run = subprocess.run(
+        [sys.executable, "-m", "symsphere", "sample", "--n", "50", "--out", str(tmp_path / "d.npy")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert run.returncode == 2
+    assert "symsphere sample: error: 'n'=50 is not a multiple of 48" in run.stderr
+    assert "Traceback" not in run.stderr
+    assert _leftovers(tmp_path) == []
