@@ -637,3 +637,34 @@ def test_adaptive_quadrature_handles_corner_singularities(bins):
     for method in ("paper1", "paper2"):
         total = bin_probabilities(lambda d: sphere_pdf(d, method), "sphere", bins).sum()
         assert total == pytest.approx(1.0, abs=1e-6)
+
+
+def test_one_per_orbit_picks_a_member_of_each_orbit():
+    from symsphere import fold, sample_sphere
+    from symsphere.stats import one_per_orbit
+
+    d = sample_sphere(48 * 2000, rng=3)
+    picked = one_per_orbit(d, 48, rng=4)
+    assert picked.shape == (2000, 3)
+    orbits = d.reshape(2000, 48, 3)
+    member = np.argmax(np.all(orbits == picked[:, None, :], axis=-1), axis=1)
+    assert np.all(np.all(orbits[np.arange(2000), member] == picked, axis=-1))
+    assert set(member.tolist()) == set(range(48))  # every member is chosen somewhere
+    assert np.array_equal(fold(picked)[1], fold(d[::48])[1])
+    assert np.array_equal(picked, one_per_orbit(d, 48, rng=4))
+
+
+@pytest.mark.parametrize(
+    "args, error, match",
+    [
+        ((np.zeros((96, 3)), 47), ValueError, "'orbit_size' must be 48"),
+        ((np.zeros((50, 3)), 48), ValueError, r"'directions' must have shape \(m \* 48, 3\)"),
+        ((np.zeros((48, 2)), 48), ValueError, "'directions' must have shape"),
+        ((np.zeros((48, 3)), True), ValueError, "'orbit_size'"),
+    ],
+)
+def test_one_per_orbit_bad_input(args, error, match):
+    from symsphere.stats import one_per_orbit
+
+    with pytest.raises(error, match=match):
+        one_per_orbit(*args)

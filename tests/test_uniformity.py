@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from symsphere import METHODS, fold, sample_hemisphere, sample_sphere, sphere_pdf, square_to_triangle, triangle_pdf
-from symsphere.stats import chi2_test, uniform_pdf
+from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
 
 SIGNIFICANCE = 0.01
 # equal_area on T0 (4 point sets) + sphere + hemisphere (2) + paper maps on T0 (2) + sphere pdfs (3) + quick
@@ -30,12 +30,6 @@ def _check(result):
     assert result.passed, str(result)
 
 
-def _one_member_per_orbit(directions, count, seed):
-    orbits = directions.reshape(-1, count, 3)
-    pick = np.random.default_rng(seed).integers(count, size=len(orbits))
-    return orbits[np.arange(len(orbits)), pick]
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("points", ["random", "stratified", "sobol", "halton"])
 def test_equal_area_uniform_on_t0(points):
@@ -46,20 +40,20 @@ def test_equal_area_uniform_on_t0(points):
 
 @pytest.mark.slow
 def test_equal_area_uniform_on_sphere():
-    d = _one_member_per_orbit(sample_sphere(48 * N_ORBITS, rng=12), 48, seed=13)
+    d = one_per_orbit(sample_sphere(48 * N_ORBITS, rng=12), 48, rng=13)
     _check(chi2_test(d, uniform_pdf("sphere"), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
 
 
 @pytest.mark.slow
 def test_equal_area_uniform_on_hemisphere():
-    d = _one_member_per_orbit(sample_hemisphere(24 * N_ORBITS, rng=14), 24, seed=15)
+    d = one_per_orbit(sample_hemisphere(24 * N_ORBITS, rng=14), 24, rng=15)
     _check(chi2_test(d, uniform_pdf("hemisphere"), "hemisphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
 
 
 @pytest.mark.slow
 def test_equal_area_uniform_on_hemisphere_about_a_normal():
     normal = np.array([0.48, -0.6, 0.64])
-    d = _one_member_per_orbit(sample_hemisphere(24 * N_ORBITS, normal=normal, rng=16), 24, seed=17)
+    d = one_per_orbit(sample_hemisphere(24 * N_ORBITS, normal=normal, rng=16), 24, rng=17)
     # rotate back with an independent frame (Gram-Schmidt), then test on the z-hemisphere
     n = normal / np.linalg.norm(normal)
     t = np.cross(n, [1.0, 0.0, 0.0])
@@ -95,7 +89,7 @@ def test_paper_maps_are_not_uniform(method):
 @pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_sphere_scheme_matches_sphere_pdf(method):
-    d = _one_member_per_orbit(sample_sphere(48 * N_ORBITS, method=method, rng=20), 48, seed=21)
+    d = one_per_orbit(sample_sphere(48 * N_ORBITS, method=method, rng=20), 48, rng=21)
     _check(
         chi2_test(d, lambda q: sphere_pdf(q, method), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS)
     )

@@ -42,9 +42,7 @@ FAMILY_SIGNIFICANCE = 0.01
 """Chance that any of the demo's tests rejects an exactly uniform sampler."""
 
 _DOMAINS = ("sphere", "hemisphere", "triangle")
-_SCATTER_ORBITS = 64
-# The paper's densities are singular at the axes: more nodes keep their bin integrals within stats' 1e-3.
-_OWN_PDF_QUADRATURE_ORDER = 24  # 64 whole orbits = 3072 directions in the scatter plots
+_SCATTER_ORBITS = 64  # 64 whole orbits = 3072 directions in the scatter plots
 
 
 @dataclass(frozen=True)
@@ -102,7 +100,7 @@ def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> P
     """
     from tqdm.auto import tqdm
 
-    from .stats import chi2_test
+    from .stats import chi2_test, one_per_orbit
 
     n = check_count(n, "n", multiple=48)
     seed_sequence = np.random.SeedSequence(_check_seed(seed))
@@ -115,8 +113,8 @@ def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> P
             sphere = sample_sphere(n, method=method, rng=sampling_seeds[2 * index])
             hemisphere = sample_hemisphere(n, method=method, rng=sampling_seeds[2 * index + 1])
             scatter[method] = sphere[: 48 * _SCATTER_ORBITS]
-            independent_sphere = _one_per_orbit(sphere, 48, choice_rng)
-            independent_hemisphere = _one_per_orbit(hemisphere, 24, choice_rng)
+            independent_sphere = one_per_orbit(sphere, 48, choice_rng)
+            independent_hemisphere = one_per_orbit(hemisphere, 24, choice_rng)
             tests.extend(_tests_of(method, independent_sphere, independent_hemisphere))
 
         results = []
@@ -128,10 +126,8 @@ def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> P
                     test.samples,
                     test.pdf,
                     test.domain,
-                    bins=_bins(test.domain, len(test.samples)),
                     significance=FAMILY_SIGNIFICANCE,
                     test_count=len(tests),
-                    quadrature_order=_OWN_PDF_QUADRATURE_ORDER if test.reference != "uniform" else 12,
                 )
             )
 
@@ -147,30 +143,6 @@ def _check_seed(seed):
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"'seed' must be a non-negative integer, got {seed!r}")
     return int(seed)
-
-
-def _bins(domain, count):
-    """About 100 samples per bin, with the six axes on bin corners.
-
-    The paper's densities diverge at the axes; four of them lie on the
-    equator, and the quadrature of :mod:`symsphere.stats` integrates such a
-    singularity accurately only at a bin corner, i.e. for an even number of
-    cos theta bins and a multiple of 4 of phi bins.  The triangle's only
-    singular point is its pole, which the default grid handles.
-    """
-    if domain == "triangle":
-        return None
-    per_phi_bin = 2
-    r = int(np.clip(math.isqrt(count // (per_phi_bin * 100)), 4, 64))
-    r -= r % 2
-    return (per_phi_bin * r, r)
-
-
-def _one_per_orbit(directions, count, rng):
-    """One randomly chosen row of each orbit of *count* rows: independent directions."""
-    orbits = directions.reshape(-1, count, 3)
-    members = rng.integers(0, count, size=len(orbits))
-    return orbits[np.arange(len(orbits)), members]
 
 
 def _tests_of(method, sphere, hemisphere):

@@ -35,13 +35,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats as _scipy_stats
 
-from ._validation import check_choice, check_count, check_directions
+from ._validation import check_choice, check_count, check_directions, check_rng
 
 __all__ = [
     "Chi2Result",
     "bin_probabilities",
     "chi2_test",
     "equal_area_bins",
+    "one_per_orbit",
     "uniform_pdf",
 ]
 
@@ -497,6 +498,48 @@ def uniform_pdf(domain="sphere"):
 # ---------------------------------------------------------------------------
 # Private helpers
 # ---------------------------------------------------------------------------
+
+
+def one_per_orbit(directions, orbit_size, rng=None):
+    """One randomly chosen row of each orbit: independent directions.
+
+    The 48 (hemisphere: 24) rows of an orbit of :func:`symsphere.sample_sphere`
+    are mirror images of one another, not independent samples, and a chi-square
+    test on all of them gives meaningless p-values (symmetric bins get equal
+    counts).  One member per orbit, chosen independently of the base point,
+    gives independent directions with the scheme's marginal density.
+
+    Parameters
+    ----------
+    directions : array_like, shape (m * orbit_size, 3)
+        Consecutive orbits, as the samplers return them.
+    orbit_size : {48, 24}
+        Rows per orbit.
+    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Chooses the members.
+
+    Returns
+    -------
+    ndarray, shape (m, 3)
+
+    Examples
+    --------
+    >>> from symsphere import sample_sphere
+    >>> from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
+    >>> d = one_per_orbit(sample_sphere(48 * 20_000, rng=1), 48, rng=2)
+    >>> chi2_test(d, uniform_pdf("sphere"), "sphere").passed
+    True
+    """
+    directions = check_directions(directions, "directions")
+    if isinstance(orbit_size, bool) or orbit_size not in (48, 24):
+        raise ValueError(f"'orbit_size' must be 48 (sphere) or 24 (hemisphere), got {orbit_size!r}")
+    if directions.ndim != 2 or len(directions) % orbit_size:
+        raise ValueError(
+            f"'directions' must have shape (m * {orbit_size}, 3), got {directions.shape}"
+        )
+    orbits = directions.reshape(-1, orbit_size, 3)
+    members = check_rng(rng).integers(orbit_size, size=len(orbits))
+    return orbits[np.arange(len(orbits)), members]
 
 
 def _to_phi_cos(d):
