@@ -52,15 +52,27 @@ TRIANGLE_AREA = np.pi / 12
 class TriangleMap:
     """A map from the unit square onto T0: forward, pdf and inverse.
 
-    The three callables take and return float64 arrays and trust their
+    ``point(u, v) -> (x, y, z)`` and ``density(x, y, z)`` are elementwise and
+    written with numpy ufuncs only, so the same source serves numpy arrays and,
+    compiled by numba, the scalar kernels of :mod:`symsphere._kernels`.
+    ``inverse`` takes and returns float64 arrays.  All three trust their
     inputs; the public functions of this module validate.
     """
 
     name: str
-    forward: Callable[[np.ndarray], np.ndarray]
-    pdf: Callable[[np.ndarray], np.ndarray]
+    point: Callable
+    density: Callable
     inverse: Callable[[np.ndarray], np.ndarray]
     uniform: bool
+
+    def forward(self, uv: np.ndarray) -> np.ndarray:
+        """Points (..., 2) of the unit square to directions (..., 3) in T0."""
+        return np.stack(self.point(uv[..., 0], uv[..., 1]), axis=-1)
+
+    def pdf(self, p: np.ndarray) -> np.ndarray:
+        """Density with respect to solid angle at directions (..., 3); 0 outside T0."""
+        with np.errstate(divide="ignore", over="ignore"):
+            return np.asarray(self.density(p[..., 0], p[..., 1], p[..., 2]), dtype=np.float64)
 
 
 def square_to_triangle(uv, method="equal_area"):
@@ -157,24 +169,19 @@ def get_map(method) -> TriangleMap:
     return _REGISTRY[check_choice(method, "method", METHODS)]
 
 
-# --- private: the triples ----------------------------------------------------
+# --- private: the triples ------------------------------------------------------
+# Elementwise, numpy ufuncs only (no np.where, no branches): numpy runs them on
+# arrays and numba compiles them to scalar code (see _kernels.py).
 
 
-def _stack(x, y, z):
-    """Clamp into T0 (z >= x >= y >= 0) and stack to (..., 3)."""
+def _clamped_into_t0(x, y, z):
+    """Clamp rounding errors so that z >= x >= y >= 0."""
     x = np.minimum(x, z)
-    y = np.clip(y, 0.0, x)
-    return np.stack([x, y, z], axis=-1)
+    return x, np.minimum(np.maximum(y, 0.0), x), z
 
 
-def _azimuth_to_u(p):
-    """u = 4 phi / pi with phi = atan2(y, x) (both paper maps use phi = u pi/4)."""
-    return np.clip(np.arctan2(p[..., 1], p[..., 0]) * (4 / np.pi), 0.0, 1.0)
-
-
-def _in_triangle(p):
-    x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    return (z >= x) & (x >= y) & (y >= 0)
+def _in_triangle(x, y, z):
+    return (z >= x) & (x >= y) & (y >= 0.0)
 
 
 def _one_minus_cos_theta_max(cos_phi):
@@ -183,17 +190,22 @@ def _one_minus_cos_theta_max(cos_phi):
     return 1.0 / (r * (r + cos_phi))
 
 
-def _equal_area_forward(uv):
-    s = uv[..., 0] * (np.pi / 12)
-    phi = np.clip(np.arctan2(_SQRT2 * np.sin(s), _SQRT2 * np.cos(s) - 1.0), 0.0, np.pi / 4)
+def _azimuth_to_u(p):
+    """u = 4 phi / pi with phi = atan2(y, x) (both paper maps use phi = u pi/4)."""
+    return np.clip(np.arctan2(p[..., 1], p[..., 0]) * (4 / np.pi), 0.0, 1.0)
+
+
+def _equal_area_point(u, v):
+    s = u * (np.pi / 12)
+    phi = np.minimum(np.maximum(np.arctan2(_SQRT2 * np.sin(s), _SQRT2 * np.cos(s) - 1.0), 0.0), np.pi / 4)
     cos_phi, sin_phi = np.cos(phi), np.sin(phi)
-    w = uv[..., 1] * _one_minus_cos_theta_max(cos_phi)  # w = 1 - cos(theta)
+    w = v * _one_minus_cos_theta_max(cos_phi)  # w = 1 - cos(theta)
     sin_theta = np.sqrt(w * (2.0 - w))  # no cancellation near the pole
-    return _stack(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - w)
+    return _clamped_into_t0(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - w)
 
 
-def _equal_area_pdf(p):
-    return np.where(_in_triangle(p), 12 / np.pi, 0.0)
+def _equal_area_density(x, y, z):
+    return _in_triangle(x, y, z) * (12 / np.pi)
 
 
 def _equal_area_inverse(p):
@@ -205,17 +217,17 @@ def _equal_area_inverse(p):
     return np.stack([u, v], axis=-1)
 
 
-def _paper1_forward(uv):
+def _paper1_point(u, v):
     # Algorithm 1 as printed: phi = u pi/4, theta = arctan(v / cos phi).
-    phi = uv[..., 0] * (np.pi / 4)
-    theta = np.arctan(uv[..., 1] / np.cos(phi))
-    return _stack(np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta), np.cos(theta))
+    phi = u * (np.pi / 4)
+    theta = np.arctan(v / np.cos(phi))
+    return _clamped_into_t0(np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta), np.cos(theta))
 
 
-def _paper1_pdf(p):
-    # (a, b) = (x/z, y/z) = (v, v tan phi): |J| = pi (x^2 + y^2) / (4 x z), d(omega) = z^3 da db.
-    x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    return _singular_density(p, 4.0, np.pi * z * z)
+def _paper1_density(x, y, z):
+    # (a, b) = (x/z, y/z) = (v, v tan phi): |J| = pi (x^2 + y^2) / (4 x z), d(omega) = z^3 da db,
+    # so pdf = 4 x / (pi z^2 (x^2 + y^2)).
+    return _vertex_singular_density(x, y, _in_triangle(x, y, z), 4.0, np.pi * z * z)
 
 
 def _paper1_inverse(p):
@@ -223,19 +235,19 @@ def _paper1_inverse(p):
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
-def _paper2_forward(uv):
+def _paper2_point(u, v):
     # Algorithm 2 as printed: phi = u pi/4, theta = v pi/4, P = N'_x x N'_y / |N'_x x N'_y|.
-    phi = uv[..., 0] * (np.pi / 4)
-    theta = uv[..., 1] * (np.pi / 4)
+    phi = u * (np.pi / 4)
+    theta = v * (np.pi / 4)
     sin_t, cos_t, cos_p = np.sin(theta), np.cos(theta), np.cos(phi)
-    norm = np.sqrt(sin_t**2 + cos_t**2 * cos_p**2)
-    return _stack(sin_t * cos_p / norm, sin_t * np.sin(phi) / norm, cos_t * cos_p / norm)
+    norm = np.sqrt(sin_t * sin_t + cos_t * cos_t * cos_p * cos_p)
+    return _clamped_into_t0(sin_t * cos_p / norm, sin_t * np.sin(phi) / norm, cos_t * cos_p / norm)
 
 
-def _paper2_pdf(p):
-    # (a, b) = (tan theta, tan theta tan phi): |J| = (pi/4)^2 (x^2+z^2)(x^2+y^2) / (x z^3).
-    x, z = p[..., 0], p[..., 2]
-    return _singular_density(p, 16.0, np.pi**2 * (x * x + z * z))
+def _paper2_density(x, y, z):
+    # (a, b) = (tan theta, tan theta tan phi): |J| = (pi/4)^2 (x^2+z^2)(x^2+y^2) / (x z^3),
+    # so pdf = 16 x / (pi^2 (x^2 + z^2)(x^2 + y^2)).
+    return _vertex_singular_density(x, y, _in_triangle(x, y, z), 16.0, np.pi**2 * (x * x + z * z))
 
 
 def _paper2_inverse(p):
@@ -243,25 +255,25 @@ def _paper2_inverse(p):
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
-def _singular_density(p, constant, smooth_factor):
-    """``constant * x / (smooth_factor * (x^2 + y^2))`` on T0, 0 outside.
+def _vertex_singular_density(x, y, inside, constant, smooth_factor):
+    """``constant x / (smooth_factor (x^2 + y^2))`` on T0, 0 outside, +inf at the vertex (0, 0, 1).
 
-    Written as ``constant * cos(phi) / (smooth_factor * r)`` with r = hypot(x, y), so
-    that it neither underflows to 0/0 near the vertex (0, 0, 1) nor loses accuracy.
-    At the vertex itself (r = 0) the density is +inf, its limit from every side.
+    Evaluated as ``constant cos(phi) / (smooth_factor r)`` with r = hypot(x, y), so
+    that it neither underflows to 0/0 near the vertex nor loses digits.  At the
+    vertex (r = 0, cos(phi) := 1) the division gives +inf, the density's limit from
+    every side.  Outside T0, r and smooth_factor are shifted by 1 so that the
+    product with ``inside = 0`` is 0, never 0 * inf.
     """
-    x, y = p[..., 0], p[..., 1]
-    r = np.hypot(x, y)
-    pole = r == 0
-    safe_r = np.where(pole, 1.0, r)
-    with np.errstate(over="ignore"):  # within ~1e-308 of the vertex the density exceeds float64
-        density = constant * (x / safe_r) / (smooth_factor * safe_r)
-    return np.where(_in_triangle(p), np.where(pole, np.inf, density), 0.0)
+    outside = 1.0 - inside
+    r = np.hypot(x, y) + outside
+    at_vertex = r == 0.0
+    cos_phi = (x + at_vertex) / (r + at_vertex)
+    return inside * (constant * cos_phi / ((smooth_factor + outside) * r))
 
 
 _REGISTRY = {
-    "equal_area": TriangleMap("equal_area", _equal_area_forward, _equal_area_pdf, _equal_area_inverse, True),
-    "paper1": TriangleMap("paper1", _paper1_forward, _paper1_pdf, _paper1_inverse, False),
-    "paper2": TriangleMap("paper2", _paper2_forward, _paper2_pdf, _paper2_inverse, False),
+    "equal_area": TriangleMap("equal_area", _equal_area_point, _equal_area_density, _equal_area_inverse, True),
+    "paper1": TriangleMap("paper1", _paper1_point, _paper1_density, _paper1_inverse, False),
+    "paper2": TriangleMap("paper2", _paper2_point, _paper2_density, _paper2_inverse, False),
 }
 METHODS = tuple(_REGISTRY)
