@@ -73,11 +73,17 @@ def test_sobol_warns_unless_power_of_two():
         sample_sphere(48 * 8, points="sobol", rng=0)
 
 
-def test_sobol_base_points_are_the_scipy_sequence():
-    d = sample_sphere(48 * 32, points="sobol", rng=5)
+def test_sobol_base_points_are_a_scrambled_sobol_net():
+    # 2^k scrambled Sobol' points form a (0, k, 2)-net in base 2: every dyadic box of
+    # area 2^-k, of any shape, holds exactly one point.  Unscrambled, the first point is 0.
+    k = 10
+    d = sample_sphere(48 * 2**k, points="sobol", rng=5)
     uv = triangle_to_square(fold(d[::48])[1])
-    expected = qmc.Sobol(d=2, scramble=True, rng=np.random.default_rng(5)).random(32)
-    np.testing.assert_allclose(uv, expected, atol=1e-12)
+    for a in range(k + 1):
+        cells = np.floor(uv[:, 0] * 2**a).astype(int) * 2 ** (k - a) + np.floor(uv[:, 1] * 2 ** (k - a)).astype(int)
+        assert np.array_equal(np.sort(cells), np.arange(2**k)), a
+    assert np.all(uv[0] > 0)
+    assert not np.array_equal(d, sample_sphere(48 * 2**k, points="sobol", rng=6))
 
 
 def test_any_qmc_engine():

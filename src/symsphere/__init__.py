@@ -12,7 +12,7 @@ densities; the default map, ``'equal_area'``, is exactly uniform.
 from . import stats
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
-from .sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
+from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
 from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
 __version__ = "0.1.0"
@@ -25,6 +25,8 @@ __all__ = [
     "stats",
     "fold",
     "hemisphere_pdf",
+    "iter_hemisphere",
+    "iter_sphere",
     "orbit",
     "sample_hemisphere",
     "sample_sphere",

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numba.extending import register_jitable
 
 from ._validation import check_choice, check_directions, check_uv
 
@@ -171,19 +172,23 @@ def get_map(method) -> TriangleMap:
 
 # --- private: the triples ------------------------------------------------------
 # Elementwise, numpy ufuncs only (no np.where, no branches): numpy runs them on
-# arrays and numba compiles them to scalar code (see _kernels.py).
+# arrays, and numba compiles them to scalar code inside the kernels of
+# _kernels.py (``register_jitable`` leaves the Python functions unchanged).
 
 
+@register_jitable
 def _clamped_into_t0(x, y, z):
     """Clamp rounding errors so that z >= x >= y >= 0."""
     x = np.minimum(x, z)
     return x, np.minimum(np.maximum(y, 0.0), x), z
 
 
+@register_jitable
 def _in_triangle(x, y, z):
     return (z >= x) & (x >= y) & (y >= 0.0)
 
 
+@register_jitable
 def _one_minus_cos_theta_max(cos_phi):
     # 1 - c/sqrt(1+c^2) rewritten without cancellation: 1 / (r (r + c)), r = sqrt(1+c^2).
     r = np.sqrt(1.0 + cos_phi * cos_phi)
@@ -195,15 +200,22 @@ def _azimuth_to_u(p):
     return np.clip(np.arctan2(p[..., 1], p[..., 0]) * (4 / np.pi), 0.0, 1.0)
 
 
+@register_jitable
 def _equal_area_point(u, v):
-    s = u * (np.pi / 12)
-    phi = np.minimum(np.maximum(np.arctan2(_SQRT2 * np.sin(s), _SQRT2 * np.cos(s) - 1.0), 0.0), np.pi / 4)
-    cos_phi, sin_phi = np.cos(phi), np.sin(phi)
+    # tan(phi) = sqrt2 sin(s) / (sqrt2 cos(s) - 1) =: a / b with s = u pi/12 in [0, pi/12]; then
+    # (cos phi, sin phi) = (b, a) / |(a, b)|, with b >= sqrt2 cos(pi/12) - 1 > 0.36.  One sine
+    # (cos s = sqrt(1 - sin^2 s) is exact enough for sin s <= 0.26) and no atan2, sin, cos of phi.
+    sin_s = np.sin(u * (np.pi / 12))
+    a = _SQRT2 * sin_s
+    b = _SQRT2 * np.sqrt(1.0 - sin_s * sin_s) - 1.0
+    inv_norm = 1.0 / np.sqrt(a * a + b * b)
+    cos_phi, sin_phi = b * inv_norm, a * inv_norm
     w = v * _one_minus_cos_theta_max(cos_phi)  # w = 1 - cos(theta)
     sin_theta = np.sqrt(w * (2.0 - w))  # no cancellation near the pole
     return _clamped_into_t0(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - w)
 
 
+@register_jitable
 def _equal_area_density(x, y, z):
     return _in_triangle(x, y, z) * (12 / np.pi)
 
@@ -217,6 +229,7 @@ def _equal_area_inverse(p):
     return np.stack([u, v], axis=-1)
 
 
+@register_jitable
 def _paper1_point(u, v):
     # Algorithm 1 as printed: phi = u pi/4, theta = arctan(v / cos phi).
     phi = u * (np.pi / 4)
@@ -224,6 +237,7 @@ def _paper1_point(u, v):
     return _clamped_into_t0(np.cos(phi) * np.sin(theta), np.sin(phi) * np.sin(theta), np.cos(theta))
 
 
+@register_jitable
 def _paper1_density(x, y, z):
     # (a, b) = (x/z, y/z) = (v, v tan phi): |J| = pi (x^2 + y^2) / (4 x z), d(omega) = z^3 da db,
     # so pdf = 4 x / (pi z^2 (x^2 + y^2)).
@@ -235,6 +249,7 @@ def _paper1_inverse(p):
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
+@register_jitable
 def _paper2_point(u, v):
     # Algorithm 2 as printed: phi = u pi/4, theta = v pi/4, P = N'_x x N'_y / |N'_x x N'_y|.
     phi = u * (np.pi / 4)
@@ -244,6 +259,7 @@ def _paper2_point(u, v):
     return _clamped_into_t0(sin_t * cos_p / norm, sin_t * np.sin(phi) / norm, cos_t * cos_p / norm)
 
 
+@register_jitable
 def _paper2_density(x, y, z):
     # (a, b) = (tan theta, tan theta tan phi): |J| = (pi/4)^2 (x^2+z^2)(x^2+y^2) / (x z^3),
     # so pdf = 16 x / (pi^2 (x^2 + z^2)(x^2 + y^2)).
@@ -255,6 +271,7 @@ def _paper2_inverse(p):
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
+@register_jitable
 def _vertex_singular_density(x, y, inside, constant, smooth_factor):
     """``constant x / (smooth_factor (x^2 + y^2))`` on T0, 0 outside, +inf at the vertex (0, 0, 1).
 

@@ -1,25 +1,39 @@
 """Point sets on the unit square: the inputs of the maps.
 
-``'random'``      independent uniform points from a numpy ``Generator``;
+``'random'``      independent uniform points;
 ``'stratified'``  a jittered sqrt(m) x sqrt(m) grid, one point per cell (m must be a square);
-``'sobol'``       scrambled Sobol' points (``scipy.stats.qmc.Sobol``); scipy warns when m
-                  is not a power of 2, since the balance properties need it;
+``'sobol'``       scrambled Sobol' points (``scipy.stats.qmc.Sobol``); a warning, as scipy
+                  gives, when m is not a power of 2, since the balance properties need it;
 ``'halton'``      scrambled Halton points (``scipy.stats.qmc.Halton``);
-any ``scipy.stats.qmc.QMCEngine`` with ``d == 2``, used as given (its state advances).
+any ``scipy.stats.qmc.QMCEngine`` with ``d == 2``, used from its current state (which advances).
+
+Points are addressed by index, so that any stretch ``[start, stop)`` can be made on
+its own and every chunking of a run gives the same points (:class:`BasePoints`).
+Random points come in blocks of :data:`BLOCK` points, block ``b`` drawn from
+``SeedSequence(root_entropy, spawn_key=(0, b))``: the numbers depend on the root
+seed and the block index only, not on how the run is split into chunks or workers.
+QMC points are consecutive segments of one scrambled sequence (``fast_forward``).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from scipy.stats import qmc
 
 from ._validation import check_choice, check_count, check_rng
 
-__all__ = ["POINT_SETS", "unit_square_points"]
+__all__ = ["POINT_SETS", "BLOCK", "BasePoints", "unit_square_points", "check_points"]
 
 POINT_SETS = ("random", "stratified", "sobol", "halton")
+
+BLOCK = 4096
+"""Random points per seeding block."""
+
+_BLOCK_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequence
+_SOBOL_WARNING = "The balance properties of Sobol' points require n to be a power of 2."
 
 
 def unit_square_points(m, points="random", rng=None, *, per_point=1):
@@ -48,16 +62,96 @@ def unit_square_points(m, points="random", rng=None, *, per_point=1):
     (4, 2)
     """
     m = check_count(m, "m")
-    engine = check_points(points)
-    rng = check_rng(rng)
-    if engine is not None:
-        return np.asarray(engine.random(m), dtype=np.float64)
-    if points == "random":
-        return rng.random((m, 2))
-    if points == "stratified":
-        return _jittered_grid(m, rng, per_point)
-    engine_class = qmc.Sobol if points == "sobol" else qmc.Halton
-    return engine_class(d=2, scramble=True, rng=rng).random(m)
+    return BasePoints(points, rng, m, per_point=per_point).take(0, m)
+
+
+class BasePoints:
+    """A reproducible, index-addressable source of *total* points of the unit square.
+
+    Parameters
+    ----------
+    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
+    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Consumed once, at construction, to fix the root seed (a Generator
+        advances; the same int, SeedSequence or freshly seeded Generator gives
+        the same points).
+    total : int
+        Number of points in the run (the grid size for ``'stratified'``, the
+        count checked for Sobol' balance).
+    per_point : int
+        Outputs per point (48 or 24), only to phrase errors in terms of ``n``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.points import BasePoints
+    >>> source = BasePoints("random", 7, total=10_000)
+    >>> whole = source.take(0, 10_000)
+    >>> bool(np.array_equal(whole[5000:6000], BasePoints("random", 7, total=10_000).take(5000, 6000)))
+    True
+    """
+
+    def __init__(self, points, rng, total, *, per_point=1):
+        self.total = check_count(total, "total")
+        self._engine = check_points(points)
+        self._kind = "engine" if self._engine is not None else points
+        self._side = None
+        entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
+        self.root_entropy = tuple(int(e) for e in entropy)
+        if self._kind == "stratified":
+            self._side = _square_side(self.total, per_point)
+        elif self._kind in ("sobol", "halton"):
+            engine_class = qmc.Sobol if self._kind == "sobol" else qmc.Halton
+            scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
+            self._engine = engine_class(d=2, scramble=True, rng=np.random.default_rng(scramble_seed))
+        if self._engine is not None:
+            self._offset = self._engine.num_generated
+            if isinstance(self._engine, qmc.Sobol) and self.total & (self.total - 1):
+                warnings.warn(_SOBOL_WARNING, UserWarning, stacklevel=3)
+        self._cached_block = (None, None)
+
+    def take(self, start, stop):
+        """Points ``start ... stop - 1`` of the run, shape (stop - start, 2), float64."""
+        if not 0 <= start <= stop <= self.total:
+            raise ValueError(f"'start'={start} and 'stop'={stop} must satisfy 0 <= start <= stop <= {self.total}")
+        if self._engine is not None:
+            return self._take_engine(start, stop)
+        jitter = self._take_random(start, stop)
+        if self._kind == "random":
+            return jitter
+        cells = np.arange(start, stop)
+        corner = np.stack([cells // self._side, cells % self._side], axis=-1)
+        return (corner + jitter) / self._side
+
+    def _take_random(self, start, stop):
+        first, last = start // BLOCK, (stop - 1) // BLOCK if stop > start else start // BLOCK
+        pieces = []
+        for block in range(first, last + 1):
+            values = self._block(block)
+            lo = max(start - block * BLOCK, 0)
+            hi = min(stop - block * BLOCK, BLOCK)
+            pieces.append(values[lo:hi])
+        return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+
+    def _block(self, block):
+        cached_index, cached_values = self._cached_block
+        if cached_index == block:
+            return cached_values
+        seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_BLOCK_KEY, block))
+        values = np.random.default_rng(seed).random((BLOCK, 2))
+        self._cached_block = (block, values)
+        return values
+
+    def _take_engine(self, start, stop):
+        engine = self._engine
+        position = self._offset + start
+        if engine.num_generated != position:
+            engine.reset()
+            engine.fast_forward(position)
+        with warnings.catch_warnings():
+            # The balance warning is given once, for the whole run, at construction.
+            warnings.filterwarnings("ignore", message="The balance properties of Sobol")
+            return np.asarray(engine.random(stop - start), dtype=np.float64)
 
 
 def check_points(points):
@@ -75,7 +169,7 @@ def check_points(points):
     return None
 
 
-def _jittered_grid(m, rng, per_point):
+def _square_side(m, per_point):
     side = math.isqrt(m)
     if side * side != m:
         options = [c for c in (side * side, (side + 1) ** 2) if c > 0]
@@ -86,6 +180,4 @@ def _jittered_grid(m, rng, per_point):
             sizes = " or ".join(str(c) for c in options)
             got = f"got {m}"
         raise ValueError(f"points='stratified' needs a square number of base points; {got}; use {sizes}")
-    cells = np.arange(m)
-    corner = np.stack([cells // side, cells % side], axis=-1)
-    return (corner + rng.random((m, 2))) / side
+    return side

@@ -12,12 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from . import frames
+from ._kernels import fill_orbits
 from ._validation import check_count, check_directions, check_dtype, check_normal, check_out
 from .maps import get_map
-from .points import check_points, unit_square_points
+from .points import BasePoints
 from .symmetry import _fold, _orbit
 
-__all__ = ["sample_sphere", "sample_hemisphere", "sphere_pdf", "hemisphere_pdf"]
+__all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
+
+DEFAULT_CHUNK = 48 * 2**16
+"""Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
 
 
 def sample_sphere(n, *, method="equal_area", points="random", rng=None, dtype=np.float64, out=None):
@@ -90,6 +94,54 @@ def sample_hemisphere(n, *, normal=None, method="equal_area", points="random", r
     return _sample(n, 24, normal, method, points, rng, dtype, out)
 
 
+def iter_sphere(n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="random", rng=None, dtype=np.float64):
+    """Directions of :func:`sample_sphere` in blocks, for runs larger than memory.
+
+    Parameters
+    ----------
+    n_total : int
+        Directions in all, a positive multiple of 48.
+    chunk : int
+        Directions per block (a multiple of 48; the last block may be shorter).
+    method, points, rng, dtype
+        As in :func:`sample_sphere`.
+
+    Yields
+    ------
+    ndarray, shape (m, 3)
+        Consecutive blocks; concatenated, they equal ``sample_sphere(n_total, ...)``
+        with the same arguments.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import iter_sphere, sample_sphere
+    >>> blocks = list(iter_sphere(48 * 1000, chunk=48 * 300, rng=5))
+    >>> [len(b) for b in blocks]
+    [14400, 14400, 14400, 4800]
+    >>> bool(np.array_equal(np.concatenate(blocks), sample_sphere(48 * 1000, rng=5)))
+    True
+    """
+    return _iterate(n_total, chunk, 48, None, method, points, rng, dtype)
+
+
+def iter_hemisphere(
+    n_total, *, chunk=DEFAULT_CHUNK // 2, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64
+):
+    """Directions of :func:`sample_hemisphere` in blocks (see :func:`iter_sphere`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import iter_hemisphere, sample_hemisphere
+    >>> blocks = iter_hemisphere(24 * 100, chunk=24 * 64, normal=[1, 0, 0], rng=5)
+    >>> bool(np.array_equal(np.concatenate(list(blocks)), sample_hemisphere(2400, normal=[1, 0, 0], rng=5)))
+    True
+    """
+    normal = check_normal(normal)
+    return _iterate(n_total, chunk, 24, normal, method, points, rng, dtype)
+
+
 def sphere_pdf(d, method="equal_area"):
     """Density (solid angle) of each direction that :func:`sample_sphere` returns.
 
@@ -155,18 +207,43 @@ def hemisphere_pdf(d, method="equal_area", normal=None):
 # --- private ------------------------------------------------------------------
 
 
-def _sample(n, count, normal, method, points, rng, dtype, out):
+def _prepare(n, count, normal, method, points, rng, dtype):
+    """Validate; return (n, dtype, method, base point source, frame or None)."""
     n = check_count(n, "n", multiple=count)
     dtype = check_dtype(dtype)
-    triangle_map = get_map(method)
-    check_points(points)
+    get_map(method)
+    source = BasePoints(points, rng, n // count, per_point=count)
+    basis = None if normal is None else frames.frame(normal)
+    return n, dtype, method, source, basis
+
+
+def _sample(n, count, normal, method, points, rng, dtype, out):
+    n, dtype, method, source, basis = _prepare(n, count, normal, method, points, rng, dtype)
     if out is not None:
         check_out(out, (n, 3), dtype)
     else:
         out = np.empty((n, 3), dtype=dtype)
-    uv = unit_square_points(n // count, points, rng, per_point=count)
-    directions = _orbit(triangle_map.forward(uv), count)
-    if normal is not None:
-        directions = frames.to_world(directions, frames.frame(normal))
-    out.reshape(n // count, count, 3)[...] = directions
-    return out
+    return fill_orbits(source.take(0, n // count), method, count, basis, out)
+
+
+def _iterate(n_total, chunk, count, normal, method, points, rng, dtype):
+    # Validate now, not at the first next(): a generator function would defer the errors.
+    n_total, dtype, method, source, basis = _prepare(n_total, count, normal, method, points, rng, dtype)
+    per_chunk = check_count(chunk, "chunk", multiple=count) // count
+    total = n_total // count
+
+    def blocks():
+        for start in range(0, total, per_chunk):
+            stop = min(start + per_chunk, total)
+            out = np.empty(((stop - start) * count, 3), dtype=dtype)
+            yield fill_orbits(source.take(start, stop), method, count, basis, out)
+
+    return blocks()
+
+
+def _reference_orbits(uv, method, count, basis):
+    """The numpy path (map, orbit, frame): what the kernels must reproduce."""
+    directions = _orbit(get_map(method).forward(uv), count)
+    if basis is not None:
+        directions = frames.to_world(directions, basis)
+    return directions.reshape(-1, 3)

@@ -1,0 +1,110 @@
+"""numba kernels: map + orbit (+ frame) fused in one pass, parallel over all cores.
+
+The map formulas are the elementwise functions of :mod:`symsphere.maps`
+(``register_jitable``), the orbit stores are generated from the tables of
+:mod:`symsphere.symmetry` (:mod:`symsphere._codegen`), so nothing here restates
+a formula.  The numpy path (``maps.TriangleMap.forward`` + ``symmetry._orbit`` +
+``frames.to_world``) is the reference the tests compare against.
+
+Kernels compile lazily per output dtype and are cached on disk (``cache=True``),
+so a new process with a warm cache pays no compilation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+from numba.extending import register_jitable
+
+from ._orbit_stores import store_orbit_24, store_orbit_24_rotated, store_orbit_48
+from .maps import (
+    METHODS,
+    _equal_area_density,
+    _equal_area_point,
+    _paper1_density,
+    _paper1_point,
+    _paper2_density,
+    _paper2_point,
+)
+from .symmetry import SIGNS, SOURCES
+
+__all__ = ["METHOD_CODES", "fill_orbits", "triangle_point", "triangle_density", "orbit_member"]
+
+METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
+assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
+
+_OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
+
+
+@register_jitable
+def triangle_point(u, v, code):
+    """The map *code* of METHOD_CODES at (u, v): a point (x, y, z) of T0."""
+    if code == 0:
+        return _equal_area_point(u, v)
+    if code == 1:
+        return _paper1_point(u, v)
+    return _paper2_point(u, v)
+
+
+@register_jitable
+def triangle_density(x, y, z, code):
+    """The density of map *code* at a unit direction (x, y, z); 0 outside T0."""
+    if code == 0:
+        return _equal_area_density(x, y, z)
+    if code == 1:
+        return _paper1_density(x, y, z)
+    return _paper2_density(x, y, z)
+
+
+_SOURCES = SOURCES.copy()
+_SIGNS = SIGNS.copy()
+
+
+@register_jitable
+def orbit_member(x, y, z, k):
+    """Image k of (x, y, z): ``(x, y, z) @ SPHERE_MAPS[k]`` (table-driven, for one image)."""
+    base = (x, y, z)
+    return (
+        _SIGNS[k, 0] * base[_SOURCES[k, 0]],
+        _SIGNS[k, 1] * base[_SOURCES[k, 1]],
+        _SIGNS[k, 2] * base[_SOURCES[k, 2]],
+    )
+
+
+@njit(parallel=True, **_OPTIONS)
+def _fill_sphere(uv, code, rows):
+    for i in prange(uv.shape[0]):
+        x, y, z = triangle_point(uv[i, 0], uv[i, 1], code)
+        store_orbit_48(rows[i], x, y, z)
+
+
+@njit(parallel=True, **_OPTIONS)
+def _fill_hemisphere(uv, code, rows):
+    for i in prange(uv.shape[0]):
+        x, y, z = triangle_point(uv[i, 0], uv[i, 1], code)
+        store_orbit_24(rows[i], x, y, z)
+
+
+@njit(parallel=True, **_OPTIONS)
+def _fill_hemisphere_rotated(uv, code, basis, rows):
+    for i in prange(uv.shape[0]):
+        x, y, z = triangle_point(uv[i, 0], uv[i, 1], code)
+        store_orbit_24_rotated(rows[i], x, y, z, basis)
+
+
+def fill_orbits(uv, method, count, basis, out):
+    """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
+
+    *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
+    (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
+    C-contiguous float32 or float64.
+    """
+    code = METHOD_CODES[method]
+    rows = out.reshape(len(uv), 3 * count)
+    if count == 48:
+        _fill_sphere(uv, code, rows)
+    elif basis is None:
+        _fill_hemisphere(uv, code, rows)
+    else:
+        _fill_hemisphere_rotated(uv, code, np.ascontiguousarray(basis, dtype=np.float64), rows)
+    return out

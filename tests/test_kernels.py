@@ -1,0 +1,98 @@
+"""The numba kernels against the numpy reference path; streaming; the generated orbit stores."""
+
+import numpy as np
+import pytest
+from numba import njit
+
+from symsphere import METHODS, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere import _codegen, _kernels
+from symsphere.frames import frame
+from symsphere.points import BLOCK, BasePoints
+from symsphere.sampling import _reference_orbits
+from symsphere.symmetry import SPHERE_MAPS
+
+
+def test_generated_stores_are_up_to_date():
+    assert _codegen.TARGET.read_text() == _codegen.orbit_store_source()
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+def test_kernel_matches_numpy_reference(method, count, normal):
+    uv = np.random.default_rng(0).random((5000, 2))
+    uv[:4] = [[0, 0], [0, 1], [1, 0], [1, 1]]
+    basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
+    reference = _reference_orbits(uv, method, count, basis)
+    for dtype in (np.float64, np.float32):
+        out = np.empty((len(uv) * count, 3), dtype)
+        _kernels.fill_orbits(uv, method, count, basis, out)
+        # Same formulas; libm and numpy's SIMD functions may differ in the last bit.
+        np.testing.assert_allclose(out, reference.astype(dtype), rtol=0, atol=4 * np.finfo(dtype).eps)
+        assert np.all(np.isfinite(out))
+
+
+def test_kernel_exact_signs_and_permutations():
+    # Without a frame the orbit stores are exact copies: compare against the tables.
+    uv = np.random.default_rng(1).random((100, 2))
+    out = _kernels.fill_orbits(uv, "equal_area", 48, None, np.empty((4800, 3)))
+    base = out[::48]
+    assert np.array_equal(out.reshape(100, 48, 3), np.einsum("mi,kij->mkj", base, SPHERE_MAPS))
+
+
+def test_scalar_helpers_match_numpy():
+    @njit
+    def evaluate(uv, code, k):
+        out = np.empty((len(uv), 7))
+        for i in range(len(uv)):
+            x, y, z = _kernels.triangle_point(uv[i, 0], uv[i, 1], code)
+            a, b, c = _kernels.orbit_member(x, y, z, k)
+            out[i, 0], out[i, 1], out[i, 2] = x, y, z
+            out[i, 3], out[i, 4], out[i, 5] = a, b, c
+            out[i, 6] = _kernels.triangle_density(x, y, z, code)
+        return out
+
+    from symsphere import square_to_triangle, triangle_pdf
+
+    uv = np.random.default_rng(2).random((200, 2))
+    for method, code in _kernels.METHOD_CODES.items():
+        for k in (0, 13, 47):
+            got = evaluate(uv, code, k)
+            p = square_to_triangle(uv, method)
+            np.testing.assert_allclose(got[:, :3], p, atol=4e-16, rtol=0)
+            np.testing.assert_allclose(got[:, 3:6], got[:, :3] @ SPHERE_MAPS[k], atol=0, rtol=0)
+            np.testing.assert_allclose(got[:, 6], triangle_pdf(p, method), rtol=1e-14)
+
+
+@pytest.mark.parametrize("points", ["random", "stratified", "sobol", "halton"])
+@pytest.mark.parametrize("chunk_orbits", [1, 7, BLOCK - 1, BLOCK + 3])
+def test_iter_sphere_equals_one_shot(points, chunk_orbits):
+    total = 96**2  # a square, for 'stratified'
+    if points == "sobol":
+        total = 2**13
+    whole = sample_sphere(48 * total, points=points, rng=11)
+    blocks = list(iter_sphere(48 * total, chunk=48 * chunk_orbits, points=points, rng=11))
+    assert all(len(b) == 48 * chunk_orbits for b in blocks[:-1])
+    assert np.array_equal(np.concatenate(blocks), whole)
+
+
+def test_iter_hemisphere_equals_one_shot_with_normal_and_float32():
+    args = dict(normal=[0.2, 0.9, -0.1], rng=3, dtype=np.float32, method="paper2")
+    whole = sample_hemisphere(24 * 5000, **args)
+    assert np.array_equal(np.concatenate(list(iter_hemisphere(24 * 5000, chunk=24 * 999, **args))), whole)
+
+
+def test_iter_validates_eagerly():
+    with pytest.raises(ValueError, match="'chunk'=50 is not a multiple of 48"):
+        iter_sphere(480, chunk=50)
+    with pytest.raises(ValueError, match="'n'=10 is not a multiple of 24"):
+        iter_hemisphere(10)
+
+
+def test_base_points_any_stretch():
+    source = BasePoints("random", 4, total=3 * BLOCK)
+    whole = source.take(0, 3 * BLOCK)
+    for start, stop in [(0, 1), (BLOCK - 1, BLOCK + 1), (5, 2 * BLOCK + 7), (3 * BLOCK, 3 * BLOCK)]:
+        assert np.array_equal(BasePoints("random", 4, total=3 * BLOCK).take(start, stop), whole[start:stop])
+        assert np.array_equal(source.take(start, stop), whole[start:stop])
+    with pytest.raises(ValueError, match="'start'"):
+        source.take(2, 1)
