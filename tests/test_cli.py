@@ -9,7 +9,7 @@ import pytest
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
-from symsphere._io import atomic_directory, atomic_path, save_directions
+from symsphere._io import atomic_directory, atomic_path, save_directions, stream_directions
 from symsphere.cli import main
 
 
@@ -116,30 +116,57 @@ def test_sample_into_missing_directory_fails_cleanly(tmp_path, capsys):
 # --- atomic output --------------------------------------------------------------
 
 
-def _failing_save(exception):
-    def save(file, arr, *args, **kwargs):
-        file.write(b"\x93NUMPY partial header")  # some bytes reach the temporary first
+def _blocks_failing_after_one(exception):
+    def blocks(out):
+        first = np.zeros((48, 3))
+        if out is not None:
+            out[:48] = first
+            first = out[:48]
+        yield first  # some bytes reach the temporary first
         raise exception
 
-    return save
+    return blocks
 
 
-def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
-    monkeypatch.setattr(np, "save", _failing_save(OSError(28, "No space left on device")))
-    out = tmp_path / "d.npy"
+@pytest.mark.parametrize("suffix", [".npy", ".csv"])
+def test_failed_write_leaves_no_file(tmp_path, suffix):
+    out = tmp_path / f"d{suffix}"
     with pytest.raises(OSError, match="No space"):
-        save_directions(out, np.zeros((48, 3)))
+        stream_directions(out, 96, np.float64, _blocks_failing_after_one(OSError(28, "No space left on device")))
     assert _leftovers(tmp_path) == []
 
 
 def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monkeypatch, capsys):
+    import symsphere.sampling
+
     out = tmp_path / "d.npy"
     out.write_bytes(b"previous run")
-    monkeypatch.setattr(np, "save", _failing_save(KeyboardInterrupt()))
-    assert main(["sample", "--n", "96", "--seed", "1", "--out", str(out)]) == 130
+    calls = []
+    original = symsphere.sampling.fill_orbits
+
+    def interrupted_on_third_chunk(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return original(*args)
+
+    monkeypatch.setattr(symsphere.sampling, "fill_orbits", interrupted_on_third_chunk)
+    assert main(["sample", "--n", "960", "--chunk", "96", "--seed", "1", "--out", str(out)]) == 130
+    assert len(calls) == 3
     assert "interrupted" in capsys.readouterr().err
     assert _leftovers(tmp_path) == [out.name]
     assert out.read_bytes() == b"previous run"
+
+
+@pytest.mark.parametrize("suffix", [".npy", ".csv"])
+def test_streamed_output_equals_one_shot(tmp_path, suffix):
+    out = tmp_path / f"d{suffix}"
+    args = ["sample", "--n", "4800", "--chunk", "480", "--domain", "hemisphere", "--normal", "0", "1", "1"]
+    assert main(args + ["--seed", "9", "--out", str(out)]) == 0
+    got = np.load(out) if suffix == ".npy" else np.loadtxt(out, delimiter=",", skiprows=1)
+    from symsphere import sample_hemisphere
+
+    assert np.array_equal(got, sample_hemisphere(4800, normal=[0, 1, 1], rng=9))
 
 
 def test_atomic_path_keeps_target_on_any_exception(tmp_path):

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DIRECTION_SUFFIXES", "atomic_path", "atomic_directory", "save_directions"]
+__all__ = ["DIRECTION_SUFFIXES", "atomic_path", "atomic_directory", "save_directions", "stream_directions"]
 
 DIRECTION_SUFFIXES = (".npy", ".csv")
 
@@ -151,7 +151,7 @@ def save_directions(path, directions, *, name="path"):
     ----------
     path : str or os.PathLike
         Output file; the suffix (case-insensitive) chooses the format:
-        ``.npy`` (``numpy.save``) or ``.csv`` (header ``x,y,z``, then one
+        ``.npy`` (``numpy.save`` format) or ``.csv`` (header ``x,y,z``, then one
         direction per line, with 17 significant digits for float64 and 9 for
         float32, which read back exactly).
     directions : ndarray, shape (n, 3)
@@ -174,19 +174,68 @@ def save_directions(path, directions, *, name="path"):
     x,y,z
     0,0.59999999999999998,0.80000000000000004
     """
-    target = Path(path)
-    suffix = target.suffix.lower()
-    if suffix not in DIRECTION_SUFFIXES:
-        allowed = ", ".join(DIRECTION_SUFFIXES)
-        raise ValueError(f"'{name}' must end in one of {allowed}, got {str(path)!r}")
     directions = np.asarray(directions)
     if directions.ndim != 2 or directions.shape[1] != 3:
         raise ValueError(f"directions must have shape (n, 3), got {directions.shape}")
-    with atomic_path(target) as temporary:
-        # Write through an open handle: np.save given a *name* would append '.npy' to it.
-        with open(temporary, "wb") as handle:
-            if suffix == ".npy":
-                np.save(handle, directions, allow_pickle=False)
-            else:
-                fmt = _CSV_FORMATS.get(directions.dtype, "%.17g")
-                np.savetxt(handle, directions, fmt=fmt, delimiter=",", header="x,y,z", comments="")
+    stream_directions(path, len(directions), directions.dtype, lambda out: [directions], name=name)
+
+
+def check_suffix(path, name="path"):
+    """The lower-case suffix of *path*, if it is one of DIRECTION_SUFFIXES."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in DIRECTION_SUFFIXES:
+        allowed = ", ".join(DIRECTION_SUFFIXES)
+        raise ValueError(f"'{name}' must end in one of {allowed}, got {str(path)!r}")
+    return suffix
+
+
+def stream_directions(path, n, dtype, blocks, *, name="path", progress=None):
+    """Write *n* directions, produced block by block, to ``.npy`` or ``.csv``, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file, ``.npy`` or ``.csv`` (see :func:`save_directions`).
+    n : int
+        Number of directions in all.
+    dtype : float32 or float64
+    blocks : callable
+        ``blocks(out)`` returns an iterable of consecutive (m, 3) blocks.  For
+        ``.npy``, *out* is an (n, 3) memory map of the file's data and the blocks
+        may be views of it (written in place, so memory stays at one block);
+        for ``.csv``, *out* is None.
+    name : str, optional
+        How error messages call *path*.
+    progress : callable, optional
+        Called with the length of each block once it is written.
+
+    Notes
+    -----
+    The file appears only when complete: an interrupted or failed run leaves
+    no file under *path* (see :func:`atomic_path`).
+    """
+    suffix = check_suffix(path, name)
+    dtype = np.dtype(dtype)
+    written = 0
+    with atomic_path(Path(path)) as temporary:
+        if suffix == ".npy":
+            data = np.lib.format.open_memmap(temporary, mode="w+", dtype=dtype, shape=(n, 3))
+            for block in blocks(data):
+                if not np.shares_memory(block, data):
+                    data[written : written + len(block)] = block
+                written += len(block)
+                if progress is not None:
+                    progress(len(block))
+            data.flush()
+            del data
+        else:
+            fmt = _CSV_FORMATS.get(dtype, "%.17g")
+            with open(temporary, "w", encoding="ascii", newline="\n") as handle:
+                handle.write("x,y,z\n")
+                for block in blocks(None):
+                    np.savetxt(handle, block, fmt=fmt, delimiter=",")
+                    written += len(block)
+                    if progress is not None:
+                        progress(len(block))
+        if written != n:
+            raise RuntimeError(f"expected {n} directions, got {written}")

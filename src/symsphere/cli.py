@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 from . import __version__
-from ._io import DIRECTION_SUFFIXES, save_directions
+from ._io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from .maps import METHODS
 from .points import POINT_SETS
 
@@ -86,6 +86,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="pole of the hemisphere (only with --domain hemisphere; default: 0 0 1)",
     )
     sample.add_argument("--dtype", choices=_DTYPES, default="float64", help="default: %(default)s")
+    sample.add_argument(
+        "--chunk",
+        type=int,
+        default=None,
+        help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
+        "memory stays at one chunk for any N (default: 48 * 2**16)",
+    )
     sample.set_defaults(handler=_run_sample)
 
     demo = verbs.add_parser(
@@ -134,13 +141,13 @@ def main(argv=None) -> int:
 
 
 def _run_sample(args) -> int:
-    from .sampling import sample_hemisphere, sample_sphere
+    from tqdm.auto import tqdm
+
+    from .sampling import iter_hemisphere, iter_sphere
 
     if args.normal is not None and args.domain != "hemisphere":
         raise _UsageError("--normal is only valid with --domain hemisphere")
-    # Check the suffix before sampling, so that a typo costs nothing.
-    if not args.out.lower().endswith(DIRECTION_SUFFIXES):
-        raise _UsageError(f"--out must end in one of {', '.join(DIRECTION_SUFFIXES)}, got {args.out!r}")
+    check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
     seed = args.seed
     if seed is not None and seed < 0:
         raise _UsageError(f"--seed must be a non-negative integer, got {seed}")
@@ -148,17 +155,21 @@ def _run_sample(args) -> int:
         seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
     start = time.perf_counter()
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
+    count = 48 if args.domain == "sphere" else 24
+    chunk = args.chunk if args.chunk is not None else count * 2**16
     if args.domain == "sphere":
-        directions = sample_sphere(args.n, **options)
+        iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
     else:
-        directions = sample_hemisphere(args.n, normal=args.normal, **options)
-    try:
-        save_directions(args.out, directions, name="--out")
-    except OSError as exc:  # name the user's file, not the temporary next to it
-        raise OSError(exc.errno, exc.strerror, args.out) from exc
+        iterate = lambda out: iter_hemisphere(args.n, chunk=chunk, normal=args.normal, out=out, **options)  # noqa: E731
+    iterate(None)  # validate every argument before the output file is created
+    with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
+        try:
+            stream_directions(args.out, args.n, args.dtype, iterate, name="--out", progress=bar.update)
+        except OSError as exc:  # name the user's file, not the temporary next to it
+            raise OSError(exc.errno, exc.strerror, args.out) from exc
     elapsed = time.perf_counter() - start
     print(
-        f"wrote {len(directions)} directions ({args.domain}, {args.method}, {args.points}, "
+        f"wrote {args.n} directions ({args.domain}, {args.method}, {args.points}, "
         f"seed {seed}, {args.dtype}) to {args.out} in {elapsed:.3f} s"
     )
     return 0

@@ -94,7 +94,9 @@ def sample_hemisphere(n, *, normal=None, method="equal_area", points="random", r
     return _sample(n, 24, normal, method, points, rng, dtype, out)
 
 
-def iter_sphere(n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="random", rng=None, dtype=np.float64):
+def iter_sphere(
+    n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="random", rng=None, dtype=np.float64, out=None
+):
     """Directions of :func:`sample_sphere` in blocks, for runs larger than memory.
 
     Parameters
@@ -105,6 +107,10 @@ def iter_sphere(n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="ra
         Directions per block (a multiple of 48; the last block may be shorter).
     method, points, rng, dtype
         As in :func:`sample_sphere`.
+    out : ndarray, optional
+        An (n_total, 3) array of the given dtype (a ``numpy.memmap`` too): each
+        block is written into its rows and yielded as a view of them, so a run
+        can fill a file larger than memory.
 
     Yields
     ------
@@ -122,11 +128,19 @@ def iter_sphere(n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="ra
     >>> bool(np.array_equal(np.concatenate(blocks), sample_sphere(48 * 1000, rng=5)))
     True
     """
-    return _iterate(n_total, chunk, 48, None, method, points, rng, dtype)
+    return _iterate(n_total, chunk, 48, None, method, points, rng, dtype, out)
 
 
 def iter_hemisphere(
-    n_total, *, chunk=DEFAULT_CHUNK // 2, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64
+    n_total,
+    *,
+    chunk=DEFAULT_CHUNK // 2,
+    normal=None,
+    method="equal_area",
+    points="random",
+    rng=None,
+    dtype=np.float64,
+    out=None,
 ):
     """Directions of :func:`sample_hemisphere` in blocks (see :func:`iter_sphere`).
 
@@ -139,7 +153,7 @@ def iter_hemisphere(
     True
     """
     normal = check_normal(normal)
-    return _iterate(n_total, chunk, 24, normal, method, points, rng, dtype)
+    return _iterate(n_total, chunk, 24, normal, method, points, rng, dtype, out)
 
 
 def sphere_pdf(d, method="equal_area"):
@@ -226,17 +240,22 @@ def _sample(n, count, normal, method, points, rng, dtype, out):
     return fill_orbits(source.take(0, n // count), method, count, basis, out)
 
 
-def _iterate(n_total, chunk, count, normal, method, points, rng, dtype):
+def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
     # Validate now, not at the first next(): a generator function would defer the errors.
     n_total, dtype, method, source, basis = _prepare(n_total, count, normal, method, points, rng, dtype)
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
     total = n_total // count
+    if out is not None:
+        check_out(out, (n_total, 3), dtype)
 
     def blocks():
         for start in range(0, total, per_chunk):
             stop = min(start + per_chunk, total)
-            out = np.empty(((stop - start) * count, 3), dtype=dtype)
-            yield fill_orbits(source.take(start, stop), method, count, basis, out)
+            if out is None:
+                block = np.empty(((stop - start) * count, 3), dtype=dtype)
+            else:
+                block = out[start * count : stop * count]
+            yield fill_orbits(source.take(start, stop), method, count, basis, block)
 
     return blocks()
 
