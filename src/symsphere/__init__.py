@@ -10,6 +10,7 @@ densities; the default map, ``'equal_area'``, is exactly uniform.
 """
 
 from . import stats
+from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
 from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
@@ -24,7 +25,9 @@ __all__ = [
     "SPHERE_MAPS",
     "stats",
     "fold",
+    "IntegrationResult",
     "hemisphere_pdf",
+    "integrate",
     "iter_hemisphere",
     "iter_sphere",
     "orbit",
