@@ -1,0 +1,105 @@
+"""Dask scale-out: bit-identical to the single-process results, any chunking, a killed worker."""
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import symsphere
+from symsphere.points import BLOCK
+
+distributed = pytest.importorskip("distributed")
+from symsphere import distributed as ss_distributed  # noqa: E402
+
+A = np.array([0.7, -0.4, 0.5])
+
+
+def exp_dot(w):
+    return np.exp(w @ A)
+
+
+def slow_exp_dot(w):
+    time.sleep(0.15)  # long enough to kill a worker in the middle of the run
+    return np.exp(w @ A)
+
+
+@pytest.fixture(scope="module")
+def client():
+    client = ss_distributed.local_client(2)
+    yield client
+    cluster = client.cluster
+    client.close()
+    cluster.close()
+
+
+def _same(a, b):
+    return np.array_equal(a.integral, b.integral) and np.array_equal(a.standard_error, b.standard_error)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(n=48 * BLOCK * 5 + 48 * 17, rng=1),
+        dict(n=48 * 8 * 2**12, points="sobol", rng=2),
+        dict(n=48 * 8 * 48**2, points="stratified", rng=3, method="paper1"),
+        dict(n=24 * BLOCK * 3, domain="hemisphere", normal=[0.2, 0.3, -0.9], rng=4, method="paper2"),
+    ],
+)
+def test_integrate_equals_single_process(client, kwargs):
+    single = symsphere.integrate(exp_dot, **kwargs)
+    for chunk_blocks in (1, 2, 7):
+        assert _same(ss_distributed.integrate(exp_dot, client=client, chunk_blocks=chunk_blocks, **kwargs), single)
+
+
+def test_dask_array_equals_sample_sphere(client):
+    n = 48 * (2 * BLOCK + 100)
+    expected = symsphere.sample_sphere(n, rng=5, dtype=np.float32)
+    for chunks in (48 * BLOCK, 2 * 48 * BLOCK):
+        array = ss_distributed.sample_sphere(n, chunks=chunks, rng=5, dtype=np.float32)
+        assert np.array_equal(client.compute(array).result(), expected)
+    hemi = ss_distributed.sample_hemisphere(24 * 3 * BLOCK, chunks=24 * BLOCK, normal=[1, 1, 0], points="halton", rng=6)
+    assert np.array_equal(client.compute(hemi).result(), symsphere.sample_hemisphere(24 * 3 * BLOCK, normal=[1, 1, 0], points="halton", rng=6))
+
+
+def test_killed_worker_gives_identical_result(client):
+    kwargs = dict(n=48 * BLOCK * 24, rng=7)
+    expected = symsphere.integrate(exp_dot, **kwargs)
+    pids = list(client.run(os.getpid).values())
+    assert len(pids) == 2
+
+    def kill_one():
+        time.sleep(1.0)
+        os.kill(pids[0], signal.SIGKILL)
+
+    killer = threading.Thread(target=kill_one)
+    killer.start()
+    start = time.perf_counter()
+    result = ss_distributed.integrate(slow_exp_dot, client=client, chunk_blocks=1, **kwargs)
+    killer.join()
+    assert time.perf_counter() - start > 1.0  # the kill happened during the run
+    assert _same(result, symsphere.integrate(slow_exp_dot, **kwargs)) and _same(result, expected)
+    client.wait_for_workers(2, timeout=60)  # the nanny restarts the worker
+
+
+def test_unreachable_scheduler_fails_fast():
+    start = time.perf_counter()
+    with pytest.raises(ConnectionError, match="could not reach the Dask scheduler at 'tcp://127.0.0.1:9'"):
+        ss_distributed.connect("tcp://127.0.0.1:9", timeout=2)
+    assert time.perf_counter() - start < 15
+
+
+@pytest.mark.parametrize(
+    "call, error, match",
+    [
+        (lambda: ss_distributed.sample_sphere(48 * 10, chunks=480), ValueError, "'chunks'=480 is not a multiple of 196608"),
+        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, chunk_blocks=0), ValueError, "'chunk_blocks' must be positive"),
+        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, colour="red"), TypeError, "unexpected keyword arguments"),
+        (lambda: ss_distributed.integrate(exp_dot, client=object()), TypeError, "missing required keyword argument 'n'"),
+    ],
+)
+def test_bad_input(call, error, match):
+    with pytest.raises(error, match=match):
+        call()
