@@ -9,7 +9,7 @@ unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
 """
 
-from . import stats
+from . import integrands, peers, stats
 from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
@@ -23,6 +23,8 @@ __all__ = [
     "METHODS",
     "POINT_SETS",
     "SPHERE_MAPS",
+    "integrands",
+    "peers",
     "stats",
     "fold",
     "IntegrationResult",
