@@ -9,7 +9,6 @@ unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
 """
 
-from . import integrands, peers, stats
 from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
@@ -17,6 +16,18 @@ from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemis
 from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
 __version__ = "0.1.0"
+
+_SUBMODULES = ("distributed", "integrands", "peers", "stats")
+
+
+def __getattr__(name):
+    # Submodules that need scipy.stats, scipy.integrate or dask are imported on first use
+    # (PEP 562), so that ``import symsphere`` and a first sample stay fast.
+    if name in _SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
     "HEMISPHERE_MAPS",

@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats as _scipy_stats
 
 from . import frames
 from ._kernels import fill_orbits
@@ -262,6 +261,8 @@ def _finish(plan, partials):
         variance = estimates.var(axis=0, ddof=1) if units > 1 else np.full_like(integral, np.nan)
     standard_error = np.sqrt(variance / units)
     if units > 1:
+        from scipy import stats as _scipy_stats  # not at import: it costs 0.3 s
+
         t = _scipy_stats.t.ppf(0.5 + plan.confidence_level / 2, df=units - 1)
     else:
         t = np.nan

@@ -21,7 +21,6 @@ import math
 import warnings
 
 import numpy as np
-from scipy.stats import qmc
 
 from ._validation import check_choice, check_count, check_rng
 
@@ -101,12 +100,14 @@ class BasePoints:
         if self._kind == "stratified":
             self._side = _square_side(self.total, per_point)
         elif self._kind in ("sobol", "halton"):
+            from scipy.stats import qmc  # imported when needed: scipy.stats costs 0.3 s at start-up
+
             engine_class = qmc.Sobol if self._kind == "sobol" else qmc.Halton
             scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
             self._engine = engine_class(d=2, scramble=True, rng=np.random.default_rng(scramble_seed))
         if self._engine is not None:
             self._offset = self._engine.num_generated
-            if isinstance(self._engine, qmc.Sobol) and self.total & (self.total - 1):
+            if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
                 warnings.warn(_SOBOL_WARNING, UserWarning, stacklevel=3)
         self._cached_block = (None, None)
 
@@ -156,17 +157,18 @@ class BasePoints:
 
 def check_points(points):
     """Validate *points*; return the engine if it is a QMCEngine, else None."""
+    if isinstance(points, str):
+        check_choice(points, "points", POINT_SETS)
+        return None
+    from scipy.stats import qmc  # not at import: scipy.stats costs 0.3 s at start-up
+
     if isinstance(points, qmc.QMCEngine):
         if points.d != 2:
             raise ValueError(f"'points' engine must have d=2 (points of the unit square), got d={points.d}")
         return points
-    if not isinstance(points, str):
-        raise TypeError(
-            f"'points' must be one of {set(POINT_SETS)} or a scipy.stats.qmc.QMCEngine, "
-            f"got {type(points).__name__}"
-        )
-    check_choice(points, "points", POINT_SETS)
-    return None
+    raise TypeError(
+        f"'points' must be one of {set(POINT_SETS)} or a scipy.stats.qmc.QMCEngine, got {type(points).__name__}"
+    )
 
 
 def _square_side(m, per_point):
