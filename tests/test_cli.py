@@ -234,7 +234,7 @@ def demo_dir(tmp_path_factory):
 
 
 def test_demo_writes_report_and_figure(demo_dir):
-    assert sorted(p.name for p in demo_dir.iterdir()) == ["figure.png", "report.md"]
+    assert sorted(p.name for p in demo_dir.iterdir()) == ["figure.png", "render.png", "report.md"]
     assert (demo_dir / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert _leftovers(demo_dir.parent) == ["symsphere-demo"]  # no temporary directories
 

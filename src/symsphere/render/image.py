@@ -1,0 +1,126 @@
+"""Image output: linear HDR (PFM, .npy) and tone-mapped sRGB PNG, every file written atomically.
+
+Images are (height, width, 3) arrays of linear radiance, row 0 at the top.
+
+- PFM (Portable Float Map): ``PF``, ``width height``, scale ``-1.0`` (negative:
+  little-endian), then float32 RGB rows from the *bottom* row up.
+- ``.npy``: the array as is (``numpy.save``), float64 unless given otherwise.
+- PNG: ``exposure * radiance`` clamped to [0, 1], then the sRGB transfer
+  function (``12.92 c`` below 0.0031308, else ``1.055 c^(1/2.4) - 0.055``),
+  rounded to 8 bits; written with ``matplotlib.image.imsave``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .._io import atomic_path
+
+__all__ = ["HDR_SUFFIXES", "linear_to_srgb", "tonemap", "save_png", "save_pfm", "load_pfm", "save_npy", "save_image"]
+
+HDR_SUFFIXES = (".pfm", ".npy")
+
+
+def _check_image(image, name="image") -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 1 or image.shape[1] < 1:
+        raise ValueError(f"'{name}' must have shape (height, width, 3), got {image.shape}")
+    if not np.issubdtype(image.dtype, np.floating):
+        raise TypeError(f"'{name}' must be a floating-point array, got dtype {image.dtype}")
+    return image
+
+
+def linear_to_srgb(c):
+    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1]."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
+
+
+def tonemap(image, exposure=1.0) -> np.ndarray:
+    """8-bit sRGB of a linear HDR image: ``round(255 * srgb(clip(exposure * image, 0, 1)))``.
+
+    NaN (never produced by the renderer) maps to 0.
+    """
+    image = _check_image(image)
+    if not (isinstance(exposure, (int, float)) and np.isfinite(exposure) and exposure > 0):
+        raise ValueError(f"'exposure' must be a positive number, got {exposure!r}")
+    scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
+    return np.rint(255.0 * linear_to_srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
+
+
+def save_png(path, image, exposure=1.0) -> Path:
+    """Write the tone-mapped *image* (see :func:`tonemap`) as a PNG file, atomically."""
+    from matplotlib.image import imsave
+
+    pixels = tonemap(image, exposure)
+    with atomic_path(path) as temporary:
+        imsave(temporary, pixels, format="png")
+    return Path(path)
+
+
+def save_pfm(path, image) -> Path:
+    """Write *image* as a little-endian RGB PFM (float32, bottom row first), atomically."""
+    image = _check_image(image)
+    height, width = image.shape[:2]
+    data = np.ascontiguousarray(image[::-1], dtype="<f4")
+    with atomic_path(path) as temporary:
+        with open(temporary, "wb") as handle:
+            handle.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
+            handle.write(data.tobytes())
+    return Path(path)
+
+
+def load_pfm(path) -> np.ndarray:
+    """Read a PFM file (``PF`` colour or ``Pf`` grey, either endianness) as (height, width, 3 or 1) float32."""
+    with open(path, "rb") as handle:
+        raw = handle.read()
+    tokens, position = [], 0
+    while len(tokens) < 4:  # magic, width, height, scale; then exactly one whitespace byte
+        while position < len(raw) and raw[position : position + 1].isspace():
+            position += 1
+        end = position
+        while end < len(raw) and not raw[end : end + 1].isspace():
+            end += 1
+        if end == position:
+            raise ValueError(f"{str(path)!r} is not a PFM file (truncated header)")
+        tokens.append(raw[position:end].decode("ascii", "replace"))
+        position = end
+    position += 1
+    magic, width, height, scale = tokens
+    if magic not in ("PF", "Pf"):
+        raise ValueError(f"{str(path)!r} is not a PFM file (magic {magic!r})")
+    try:
+        width, height, scale = int(width), int(height), float(scale)
+    except ValueError:
+        raise ValueError(f"{str(path)!r} is not a PFM file (bad size or scale: {tokens[1:]})") from None
+    if width < 1 or height < 1 or scale == 0:
+        raise ValueError(f"{str(path)!r} is not a PFM file (bad size or scale: {tokens[1:]})")
+    channels = 3 if magic == "PF" else 1
+    count = width * height * channels
+    if len(raw) - position < 4 * count:
+        raise ValueError(f"{str(path)!r} is truncated: expected {count} floats")
+    data = np.frombuffer(raw, dtype="<f4" if scale < 0 else ">f4", count=count, offset=position)
+    return data.astype(np.float32).reshape(height, width, channels)[::-1].copy()
+
+
+def save_npy(path, image) -> Path:
+    """Write *image* with ``numpy.save``, atomically."""
+    image = _check_image(image)
+    with atomic_path(path) as temporary:
+        with open(temporary, "wb") as handle:
+            np.save(handle, image)
+    return Path(path)
+
+
+def save_image(path, image, exposure=1.0) -> Path:
+    """Write *image* in the format of the suffix of *path*: .png (tone-mapped), .pfm or .npy."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".png":
+        return save_png(path, image, exposure)
+    if suffix == ".pfm":
+        return save_pfm(path, image)
+    if suffix == ".npy":
+        return save_npy(path, image)
+    raise ValueError(f"the image file must end in .png, .pfm or .npy, got {str(path)!r}")
