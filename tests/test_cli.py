@@ -307,3 +307,39 @@ def test_python_dash_m(tmp_path):
     assert "symsphere sample: error: 'n'=50 is not a multiple of 48" in run.stderr
     assert "Traceback" not in run.stderr
     assert _leftovers(tmp_path) == []
+
+
+def test_integrate_prints_estimate_and_exact(capsys):
+    assert main(["integrate", "--integrand", "exp", "--n", "4800", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "estimate" in out and "exact     14.5379897513" in out and "100 orbits" in out
+
+
+def test_integrate_on_local_cluster_is_identical(capsys):
+    pytest.importorskip("distributed")
+    args = ["integrate", "--integrand", "cap", "--n", str(48 * 4096 * 2), "--seed", "4"]
+    assert main(args) == 0
+    single = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line]
+    assert main(args + ["--workers", "2"]) == 0
+    clustered = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line]
+    assert single == clustered and single
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["integrate", "--integrand", "nope", "--n", "48"], "--integrand 'nope' is not known"),
+        (["integrate", "--integrand", "exp", "--n", "50"], "'n'=50 is not a multiple of 48"),
+        (["integrate", "--integrand", "exp", "--n", "48", "--workers", "0"], "--workers must be a positive integer"),
+    ],
+)
+def test_integrate_bad_arguments(capsys, args, match):
+    assert main(args) == 2
+    assert match in capsys.readouterr().err
+
+
+def test_unreachable_scheduler_is_a_clear_error(capsys):
+    pytest.importorskip("distributed")
+    args = ["integrate", "--integrand", "exp", "--n", "48", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"]
+    assert main(args) == 1
+    assert "could not reach the Dask scheduler" in capsys.readouterr().err

@@ -94,7 +94,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
         "memory stays at one chunk for any N (default: 48 * 2**16)",
     )
+    _add_cluster_options(sample)
     sample.set_defaults(handler=_run_sample)
+
+    integrate = verbs.add_parser(
+        "integrate",
+        help="integrate a closed-form test integrand, with an error bar",
+        description=(
+            "Integrate one of the closed-form test integrands of symsphere.integrands over its domain "
+            "(sphere or hemisphere) with the symmetric scheme, and print the estimate, its standard "
+            "error and confidence interval, and the exact value.  With --workers or --scheduler the "
+            "work runs on a Dask cluster and gives the identical result."
+        ),
+    )
+    integrate.add_argument("--integrand", required=True, help="a name from symsphere.integrands.INTEGRANDS")
+    integrate.add_argument("--n", type=int, required=True, help="evaluations: a multiple of 48 (hemisphere: 24)")
+    integrate.add_argument("--method", choices=METHODS, default="equal_area", help="default: %(default)s")
+    integrate.add_argument("--points", choices=POINT_SETS, default="random", help="default: %(default)s")
+    integrate.add_argument("--replicates", type=int, default=None, help="for stratified and QMC points (default 8)")
+    integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    _add_cluster_options(integrate)
+    integrate.set_defaults(handler=_run_integrate)
 
     demo = verbs.add_parser(
         "demo",
@@ -163,6 +183,40 @@ def _render_samplers():
     return SAMPLERS
 
 
+def _add_cluster_options(verb):
+    cluster = verb.add_mutually_exclusive_group()
+    cluster.add_argument(
+        "--workers", type=int, default=None, metavar="N", help="run on a local Dask cluster of N worker processes"
+    )
+    cluster.add_argument(
+        "--scheduler", default=None, metavar="ADDRESS", help="run on the Dask cluster at ADDRESS (tcp://host:8786)"
+    )
+    verb.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the scheduler (default: %(default)s)"
+    )
+
+
+def _cluster_client(args):
+    """A Dask client for --workers / --scheduler, or None to run in this process."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    from . import distributed
+
+    if args.scheduler is not None:
+        return distributed.connect(args.scheduler, timeout=args.timeout)
+    if args.workers < 1:
+        raise _UsageError(f"--workers must be a positive integer, got {args.workers}")
+    return distributed.local_client(args.workers)
+
+
+def _close_client(client):
+    if client is not None:
+        cluster = getattr(client, "cluster", None)
+        client.close()
+        if cluster is not None and cluster.__class__.__name__ == "LocalCluster":
+            cluster.close()
+
+
 def main(argv=None) -> int:
     """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status."""
     parser = build_parser()
@@ -210,16 +264,82 @@ def _run_sample(args) -> int:
     else:
         iterate = lambda out: iter_hemisphere(args.n, chunk=chunk, normal=args.normal, out=out, **options)  # noqa: E731
     iterate(None)  # validate every argument before the output file is created
-    with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
-        try:
-            stream_directions(args.out, args.n, args.dtype, iterate, name="--out", progress=bar.update)
-        except OSError as exc:  # name the user's file, not the temporary next to it
-            raise OSError(exc.errno, exc.strerror, args.out) from exc
+    client = _cluster_client(args)
+    try:
+        blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
+        with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
+            try:
+                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=bar.update)
+            except OSError as exc:  # name the user's file, not the temporary next to it
+                raise OSError(exc.errno, exc.strerror, args.out) from exc
+    finally:
+        _close_client(client)
     elapsed = time.perf_counter() - start
     print(
         f"wrote {args.n} directions ({args.domain}, {args.method}, {args.points}, "
         f"seed {seed}, {args.dtype}) to {args.out} in {elapsed:.3f} s"
     )
+    return 0
+
+
+def _cluster_blocks(client, args, options, chunk):
+    """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
+    from . import distributed
+    from .points import BLOCK
+
+    count = 48 if args.domain == "sphere" else 24
+    chunk = max(count * BLOCK, chunk - chunk % (count * BLOCK))  # cluster chunks are whole blocks
+    if args.domain == "sphere":
+        array = distributed.sample_sphere(args.n, chunks=chunk, **options)
+    else:
+        array = distributed.sample_hemisphere(args.n, chunks=chunk, normal=args.normal, **options)
+    pieces = array.to_delayed().ravel().tolist()
+    in_flight = 2 * max(1, len(client.scheduler_info()["workers"]))
+
+    def blocks(out):
+        futures = [client.compute(piece) for piece in pieces[:in_flight]]
+        for index in range(len(pieces)):
+            block = futures[index].result()
+            futures[index] = None  # release the finished chunk
+            if index + in_flight < len(pieces):
+                futures.append(client.compute(pieces[index + in_flight]))
+            yield block
+
+    return blocks
+
+
+def _run_integrate(args) -> int:
+    from .integrands import INTEGRANDS
+    from .integrate import integrate
+
+    if args.integrand not in INTEGRANDS:
+        raise _UsageError(f"--integrand {args.integrand!r} is not known; use one of {sorted(INTEGRANDS)}")
+    if args.seed is not None and args.seed < 0:
+        raise _UsageError(f"--seed must be a non-negative integer, got {args.seed}")
+    integrand = INTEGRANDS[args.integrand]
+    seed = args.seed if args.seed is not None else np.random.SeedSequence().entropy
+    kwargs = dict(
+        domain=integrand.domain, n=args.n, method=args.method, points=args.points, replicates=args.replicates, rng=seed
+    )
+    start = time.perf_counter()
+    client = _cluster_client(args)
+    try:
+        if client is None:
+            result = integrate(integrand.f, **kwargs)
+        else:
+            from . import distributed
+
+            result = distributed.integrate(integrand.f, client=client, progress=True, **kwargs)
+    finally:
+        _close_client(client)
+    elapsed = time.perf_counter() - start
+    error = result.integral - integrand.exact
+    low, high = result.confidence_interval
+    print(f"{integrand.name} over the {integrand.domain}: {integrand.description}")
+    print(f"  estimate  {result.integral:.12g} ± {result.standard_error:.3g} (standard error, {result.n_units} {result.unit}s)")
+    print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
+    print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
+    print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
     return 0
 
 
