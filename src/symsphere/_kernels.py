@@ -16,6 +16,8 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import register_jitable
 
+from . import _orbit_stores, maps, symmetry
+from ._numba_cache import invalidate_if_changed
 from ._orbit_stores import store_orbit_24, store_orbit_24_rotated, store_orbit_48
 from .maps import (
     METHODS,
@@ -34,6 +36,7 @@ METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
+invalidate_if_changed(__file__, [maps.__file__, _orbit_stores.__file__, symmetry.__file__])
 
 
 @register_jitable

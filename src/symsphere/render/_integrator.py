@@ -47,7 +47,10 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import register_jitable
 
+from .. import _kernels, _orbit_stores, maps, symmetry
 from .._kernels import orbit_member, triangle_density, triangle_point
+from .._numba_cache import invalidate_if_changed
+from . import _random
 from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL = 0, 1, 2, 3, 4
@@ -60,6 +63,9 @@ MATERIAL_COLUMNS = 11  # kind, colour (3), transmittance (3), ior, emission (3)
 CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image plane at distance 1 (3 each), near
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
+invalidate_if_changed(
+    __file__, [_random.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__, symmetry.__file__]
+)
 _PI = math.pi
 _INV_PI = 1.0 / math.pi
 _RR_CAP = 0.95
