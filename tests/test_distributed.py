@@ -103,3 +103,16 @@ def test_unreachable_scheduler_fails_fast():
 def test_bad_input(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+def test_render_on_cluster_equals_single_process(client):
+    from symsphere.render import render
+
+    from symsphere.render.renderer import _plan
+
+    options = dict(width=64, height=48, spp=200, sampler="symmetric_sobol", seed=3)
+    assert _plan("cornell", pixel_filter="box", method=None, **options).passes == 4
+    single = render("cornell", **options).image
+    for passes_per_task in (1, 3):
+        clustered = ss_distributed.render("cornell", client=client, passes_per_task=passes_per_task, **options)
+        assert np.array_equal(clustered.image, single)

@@ -169,6 +169,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, default=None, help="numba threads (default: all cores)")
     render.add_argument("--out", default="render.png", metavar="FILE.png", help="default: %(default)s")
     render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    _add_cluster_options(render)
     render.set_defaults(handler=_run_render)
 
     from .study import add_study_parser
@@ -373,8 +374,7 @@ def _run_render(args) -> int:
         value = getattr(args, name)
         if value is not None and value < 1:
             raise _UsageError(f"--{name} must be a positive integer, got {value}")
-    result = render(
-        args.scene,
+    options = dict(
         width=args.width,
         height=args.height,
         spp=args.spp,
@@ -382,9 +382,18 @@ def _run_render(args) -> int:
         method=args.method,
         pixel_filter=args.filter,
         seed=args.seed,
-        threads=args.threads,
         progress=not args.no_progress,
     )
+    client = _cluster_client(args)
+    try:
+        if client is None:
+            result = render(args.scene, threads=args.threads, **options)
+        else:
+            from . import distributed
+
+            result = distributed.render(args.scene, client=client, **options)
+    finally:
+        _close_client(client)
     try:
         paths = write_outputs(result, out, exposure=args.exposure)
     except OSError as exc:

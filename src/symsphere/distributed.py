@@ -26,6 +26,7 @@ import contextlib
 import copy
 import dataclasses
 import os
+import time
 
 import numpy as np
 
@@ -35,7 +36,7 @@ from .integrate import _block_partial, _finish, _plan
 from .points import BLOCK
 from .sampling import _prepare
 
-__all__ = ["sample_sphere", "sample_hemisphere", "integrate", "connect", "local_client"]
+__all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client"]
 
 DEFAULT_CHUNK_BLOCKS = 16
 """Blocks per task: 16 * 4096 orbits = 3 145 728 sphere directions (75 MB in float64)."""
@@ -125,6 +126,51 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     return _finish(plan, partials)
 
 
+def render(
+    scene="cornell",
+    *,
+    client=None,
+    passes_per_task=1,
+    progress=False,
+    width=256,
+    height=192,
+    spp=96,
+    sampler="symmetric_sobol",
+    method=None,
+    pixel_filter="box",
+    seed=None,
+):
+    """:func:`symsphere.render.render` with its sample passes on a Dask cluster, the identical image.
+
+    The renderer sums every pass of samples from zero and adds the passes in order;
+    here the passes are rendered on the workers (*passes_per_task* per task) and
+    added in the same order on the client, so the image equals the single-process
+    one bit for bit.  ``seconds`` of the result is the wall time of the whole run,
+    ``startup_seconds`` 0 and ``threads`` the number of workers.
+    """
+    from distributed import as_completed
+
+    from .render.renderer import _plan as _render_plan
+
+    plan = _render_plan(scene, width, height, spp, sampler, method, pixel_filter, seed)
+    passes_per_task = check_count(passes_per_task, "passes_per_task")
+    tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
+    with _client_or_local(client) as active:
+        start = time.perf_counter()
+        plan_future = active.scatter(plan, broadcast=True, hash=False)
+        futures = [active.submit(_render_task, plan_future, *task, pure=False) for task in tasks]
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        results = {}
+        for future in _progress(as_completed(futures), len(futures), progress, f"rendering {plan.scene.name}"):
+            results[index_of[future.key]] = future.result()
+        workers = len(active.scheduler_info()["workers"])
+    accum = np.zeros((plan.height, plan.width, 3))
+    for index in range(len(tasks)):
+        for image in results[index]:
+            accum += image
+    return plan.result(accum, time.perf_counter() - start, 0.0, workers)
+
+
 def connect(address, *, timeout=10):
     """A ``distributed.Client`` for the scheduler at *address*, or a clear error within *timeout* seconds."""
     from distributed import Client
@@ -168,6 +214,13 @@ def _partials_task(plan, replicate, first, stop):
     # A private copy of the point sources: QMC engines are stateful, and tasks may share a process.
     plan = dataclasses.replace(plan, sources=tuple(copy.deepcopy(source) for source in plan.sources))
     return [_block_partial(plan, replicate, block) for block in range(first, stop)]
+
+
+def _render_task(plan, first_pass, stop_pass):
+    from .render.renderer import render_passes
+
+    _single_threaded_kernels()
+    return render_passes(plan, first_pass, stop_pass)
 
 
 def _directions_task(source, method, count, basis, dtype, start, stop):

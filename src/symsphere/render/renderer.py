@@ -119,6 +119,79 @@ def render(
     -------
     RenderResult
     """
+    plan = _plan(scene, width, height, spp, sampler, method, pixel_filter, seed)
+    if threads is not None:
+        threads = _positive_int(threads, "threads")
+        if threads > numba.config.NUMBA_NUM_THREADS:
+            raise ValueError(f"'threads' must be at most {numba.config.NUMBA_NUM_THREADS}, got {threads}")
+
+    accum = np.zeros((plan.height, plan.width, 3))
+    previous_threads = numba.get_num_threads()
+    if threads is not None:
+        numba.set_num_threads(threads)
+    try:
+        start = time.perf_counter()
+        _render_pass_into(plan, 0, 0, accum)  # compile, or load from numba's cache
+        startup = time.perf_counter() - start
+        from tqdm.auto import tqdm
+
+        with tqdm(total=plan.spp, unit="spp", desc=f"rendering {plan.scene.name}", disable=None if progress else True) as bar:
+            start = time.perf_counter()
+            for index in range(plan.passes):
+                # Each pass is summed on its own and then added, so that a cluster that renders
+                # passes on workers (symsphere.distributed.render) gets the identical image.
+                accum += render_passes(plan, index, index + 1)[0]
+                bar.update(plan.pass_range(index)[1])
+            seconds = time.perf_counter() - start
+        used_threads = numba.get_num_threads()
+    finally:
+        if threads is not None:
+            numba.set_num_threads(previous_threads)
+    return plan.result(accum, seconds, startup, used_threads)
+
+
+@dataclass(frozen=True)
+class _RenderPlan:
+    """A validated render: everything a pass needs (picklable, for Dask workers)."""
+
+    scene: object
+    width: int
+    height: int
+    spp: int
+    sampler: str
+    method: str | None
+    pixel_filter: str
+    seed: int
+    arguments: tuple = field(repr=False)  # the kernel's scene and sampler arguments
+    per_pass: int
+
+    @property
+    def passes(self) -> int:
+        return -(-self.spp // self.per_pass)
+
+    def pass_range(self, index):
+        first = index * self.per_pass
+        return first, min(self.per_pass, self.spp - first)
+
+    def result(self, accum, seconds, startup, threads):
+        return RenderResult(
+            image=accum / self.spp,
+            scene=self.scene.name,
+            width=self.width,
+            height=self.height,
+            spp=self.spp,
+            sampler=self.sampler,
+            method=self.method,
+            pixel_filter=self.pixel_filter,
+            seed=self.seed,
+            seconds=seconds,
+            startup_seconds=startup,
+            paths=self.width * self.height * self.spp,
+            threads=threads,
+        )
+
+
+def _plan(scene, width, height, spp, sampler, method, pixel_filter, seed):
     scene = get_scene(scene)
     width = _positive_int(width, "width")
     height = _positive_int(height, "height")
@@ -144,42 +217,15 @@ def render(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"'seed' must be a non-negative integer, got {seed!r}")
     seed = int(seed)
-    if threads is not None:
-        threads = _positive_int(threads, "threads")
-        if threads > numba.config.NUMBA_NUM_THREADS:
-            raise ValueError(f"'threads' must be at most {numba.config.NUMBA_NUM_THREADS}, got {threads}")
-
-    arrays = scene.arrays(width, height)
+    a = scene.arrays(width, height)
     key = np.random.SeedSequence(seed).generate_state(1, dtype=np.uint64)[0]
-    accum = np.zeros((height, width, 3))
-    rows = np.arange(height, dtype=np.int64)
-    call = _bind(arrays, _SAMPLER_CODES[sampler], code, FILTERS.index(pixel_filter), key, rows, accum)
-
-    previous_threads = numba.get_num_threads()
-    if threads is not None:
-        numba.set_num_threads(threads)
-    try:
-        start = time.perf_counter()
-        call(0, 0)  # compile, or load from numba's cache
-        startup = time.perf_counter() - start
-        per_pass = max(1, min(spp, _PATHS_PER_PASS // (width * height)))
-        from tqdm.auto import tqdm
-
-        with tqdm(total=spp, unit="spp", desc=f"rendering {scene.name}", disable=None if progress else True) as bar:
-            start = time.perf_counter()
-            with numba.parallel_chunksize(1):  # rows differ in cost: hand them out one at a time
-                for first in range(0, spp, per_pass):
-                    count = min(per_pass, spp - first)
-                    call(first, count)
-                    bar.update(count)
-            seconds = time.perf_counter() - start
-        used_threads = numba.get_num_threads()
-    finally:
-        if threads is not None:
-            numba.set_num_threads(previous_threads)
-    return RenderResult(
-        image=accum / spp,
-        scene=scene.name,
+    arguments = (
+        a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"], a["camera"],
+        a["background"], a["eps"], a["rr_depth"], a["max_depth"], _SAMPLER_CODES[sampler], code,
+        FILTERS.index(pixel_filter), key,
+    )  # fmt: skip
+    return _RenderPlan(
+        scene=scene,
         width=width,
         height=height,
         spp=spp,
@@ -187,24 +233,25 @@ def render(
         method=method if sampler in SYMMETRIC_SAMPLERS else None,
         pixel_filter=pixel_filter,
         seed=seed,
-        seconds=seconds,
-        startup_seconds=startup,
-        paths=width * height * spp,
-        threads=used_threads,
+        arguments=arguments,
+        per_pass=max(1, min(spp, _PATHS_PER_PASS // (width * height))),
     )
 
 
-def _bind(arrays, sampler_code, map_code, filter_code, key, rows, accum):
-    a = arrays
-    args = (
-        a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"], a["camera"],
-        a["background"], a["eps"], a["rr_depth"], a["max_depth"], sampler_code, map_code, filter_code, key,
-    )  # fmt: skip
+def render_passes(plan, first_pass, stop_pass):
+    """The images (sums, not means) of passes ``first_pass .. stop_pass - 1``, each summed from zero."""
+    images = []
+    for index in range(first_pass, stop_pass):
+        image = np.zeros((plan.height, plan.width, 3))
+        _render_pass_into(plan, *plan.pass_range(index), image)
+        images.append(image)
+    return images
 
-    def call(first, count):
-        _k.render_pass(*args, first, count, rows, accum)
 
-    return call
+def _render_pass_into(plan, first, count, image):
+    rows = np.arange(plan.height, dtype=np.int64)
+    with numba.parallel_chunksize(1):  # rows differ in cost: hand them out one at a time
+        _k.render_pass(*plan.arguments, first, count, rows, image)
 
 
 def write_outputs(result: RenderResult, out, exposure=1.0) -> list[Path]:
