@@ -20,8 +20,23 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
+# make bench: the speed benchmarks (docs/benchmarks.md).  Mitsuba 3 (the optional extra "bench") is
+# a peer in the comparison; drjit 1.5 needs LLVM >= 16 (Debian: libllvm19).  Both are optional: if
+# either cannot be installed, bench_sample.py says why and skips the Mitsuba cases.
 bench: $(STAMP)
+	$(BIN)/python -c "import mitsuba" 2>/dev/null || $(BIN)/python -m pip install --quiet -e ".[bench]" \
+		|| echo "bench: could not install mitsuba (the extra 'bench'); the Mitsuba cases will be skipped"
+	@if $(BIN)/python benchmarks/bench_sample.py --find-llvm; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "bench: installing libllvm19 for Mitsuba's LLVM backend (apt-get)"; \
+		(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19) \
+			|| echo "bench: apt-get install libllvm19 failed; the Mitsuba cases will be skipped"; \
+	else \
+		echo "bench: for the Mitsuba cases run 'sudo apt-get install libllvm19'"; \
+		echo "       (or install LLVM >= 16 otherwise and set DRJIT_LIBLLVM_PATH to its libLLVM)"; \
+	fi
 	$(BIN)/python benchmarks/bench_sample.py
+	$(BIN)/python benchmarks/first_sample.py
 
 clean:
 	rm -rf $(VENV) symsphere-demo .pytest_cache

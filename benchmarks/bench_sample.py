@@ -1,32 +1,93 @@
-"""Throughput of symsphere's samplers next to numpy's classic uniform-sphere recipe.
+"""Throughput of symsphere's samplers next to numpy, scipy, Mitsuba 3 and the memory write limit.
 
-Every case is timed in the same process, interleaved round by round, so that
-the ratios compare like with like (same machine, same load, same numpy).
-Prints a Markdown table: median time over the repeats, directions per
-second, and the speed relative to the classic recipe
+Every case runs in the same process and the cases take turns in every round
+(round-robin, the starting case rotating from round to round), so that the
+ratios compare like with like on a shared, noisy machine.  Reported: the
+median (and the minimum) over the repeats, directions per second, bytes
+written per second and speed ratios (reference time / case time: above 1 is
+faster than the reference):
 
-    z = 1 - 2u,  phi = 2 pi v,  (x, y) = sqrt(1 - z^2) (cos phi, sin phi)
+* ``vs fill``        -- numpy ``ndarray.fill`` of the same bytes (n * 3 * itemsize)
+                        into an already touched buffer: the memory write limit
+                        for ``out=`` cases (target >= 0.8);
+* ``vs empty+fill``  -- ``np.empty`` + ``fill`` of the same bytes: the limit for
+                        freshly allocated output, page faults included (target >= 0.9);
+* ``vs classic``     -- numpy's textbook recipe z = 1 - 2u, phi = 2 pi v in the
+                        same dtype (target >= 20);
+* ``vs Mitsuba``     -- Mitsuba 3's ``mi.warp.square_to_uniform_sphere`` in the
+                        ``llvm_ad_rgb`` variant (float32 only), from an (n, 2) numpy
+                        array of uniforms to an (n, 3) numpy array (target >= 1).
 
-written into an (n, 3) array (a ratio above 1 means faster than it).
+A second table (``--no-profile`` skips it) times the pieces of
+``sample_sphere``/``sample_hemisphere`` separately -- base points, the kernel
+alone, the map alone, the orbit stores alone, a two-thread fill, and two
+experimental kernels compiled here (not library code) -- to show which piece
+keeps a target out of reach.
 
 Usage::
 
-    python benchmarks/bench_sample.py                  # n = 48 * 2**16, 15 repeats
-    python benchmarks/bench_sample.py --n 4800000 --repeats 7
+    python benchmarks/bench_sample.py                       # n = 48 * 2**16, 21 repeats
+    python benchmarks/bench_sample.py --n 480000 --repeats 31 --json results.json
+    python benchmarks/bench_sample.py --no-mitsuba
+    python benchmarks/bench_sample.py --integrate            # also the integrate() hook (no target yet)
+
+Mitsuba is optional (``pip install -e ".[bench]"``).  drjit 1.5 needs a recent
+LLVM (Debian: ``apt-get install libllvm19``); if ``DRJIT_LIBLLVM_PATH`` is unset,
+the newest libLLVM found in the usual places is used, and the script says which.
+Mitsuba is first tried in a subprocess (an LLVM that is too old aborts the
+process), and skipped with the reason if that fails; the rest still runs.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
+import glob
+import json
 import os
 import platform
+import re
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
+
+FILL_VALUE = 0.5
+NORMAL = (1.0, 1.0, 1.0)
+DTYPES = (np.float64, np.float32)
+
+
+@dataclass
+class Case:
+    """One timed callable.  *kind*: 'out' or 'fresh' (a sampler), 'ref' (a reference), 'piece' (profile)."""
+
+    group: str
+    label: str
+    dtype: str
+    kind: str
+    run: object
+    directions: int = 0  # directions per call (n; 0 for pieces that make none)
+    note: str = ""
+    part_of: str = ""  # for a piece: the label of the symsphere case it is a part of (same dtype, or both)
+    times: list = field(default_factory=list)
+
+    @property
+    def median(self):
+        return statistics.median(self.times)
+
+    @property
+    def best(self):
+        return min(self.times)
+
+
+# --- references -----------------------------------------------------------------
 
 
 def classic_sphere(n, rng, dtype=np.float64):
@@ -43,70 +104,677 @@ def classic_sphere(n, rng, dtype=np.float64):
     return out
 
 
-def build_cases(n):
-    """(label, dtype, callable) per case; each callable draws n directions with a fresh seed stream."""
-    rng = np.random.default_rng(12345)
-    out64 = np.empty((n, 3), dtype=np.float64)
-    out32 = np.empty((n, 3), dtype=np.float32)
+def gaussian_sphere(n, rng, dtype=np.float64):
+    """Normalised standard Gaussians (Muller 1959)."""
+    g = rng.standard_normal((n, 3), dtype=dtype)
+    g /= np.linalg.norm(g, axis=1, keepdims=True)
+    return g
+
+
+def reference_cases(n, rng):
+    from scipy.stats import uniform_direction
+
+    cases = []
+    for dtype in DTYPES:
+        name = np.dtype(dtype).name
+        touched = np.full((n, 3), FILL_VALUE, dtype=dtype)
+        cases += [
+            Case("limit", "numpy fill, touched buffer", name, "ref", lambda b=touched: b.fill(FILL_VALUE), n),
+            Case(
+                "limit",
+                "np.empty + fill",
+                name,
+                "ref",
+                lambda d=dtype: np.empty((n, 3), dtype=d).fill(FILL_VALUE),
+                n,
+            ),
+            Case("numpy", "numpy classic (z = 1 − 2u, φ = 2πv)", name, "ref", lambda d=dtype: classic_sphere(n, rng, d), n),
+            Case("numpy", "normalised Gaussians", name, "ref", lambda d=dtype: gaussian_sphere(n, rng, d), n),
+        ]
+    direction = uniform_direction(3)
+    cases.append(
+        Case("scipy", "scipy.stats.uniform_direction(3).rvs", "float64", "ref", lambda: direction.rvs(n, random_state=rng), n)
+    )
+    return cases
+
+
+# --- symsphere ------------------------------------------------------------------
+
+
+def symsphere_cases(n, rng):
+    cases = []
+    for dtype in DTYPES:
+        name = np.dtype(dtype).name
+        out = np.full((n, 3), FILL_VALUE, dtype=dtype)  # touched once, reused by every out= case
+        cases += [
+            Case("symsphere", "sample_sphere", name, "fresh", lambda d=dtype: sample_sphere(n, rng=rng, dtype=d), n),
+            Case(
+                "symsphere",
+                "sample_sphere, out=",
+                name,
+                "out",
+                lambda d=dtype, o=out: sample_sphere(n, rng=rng, dtype=d, out=o),
+                n,
+            ),
+            Case(
+                "symsphere", "sample_hemisphere", name, "fresh", lambda d=dtype: sample_hemisphere(n, rng=rng, dtype=d), n
+            ),
+            Case(
+                "symsphere",
+                "sample_hemisphere, out=",
+                name,
+                "out",
+                lambda d=dtype, o=out: sample_hemisphere(n, rng=rng, dtype=d, out=o),
+                n,
+            ),
+            Case(
+                "symsphere",
+                "sample_hemisphere, normal=(1,1,1)",
+                name,
+                "fresh",
+                lambda d=dtype: sample_hemisphere(n, normal=NORMAL, rng=rng, dtype=d),
+                n,
+            ),
+            Case(
+                "symsphere",
+                "sample_hemisphere, normal=(1,1,1), out=",
+                name,
+                "out",
+                lambda d=dtype, o=out: sample_hemisphere(n, normal=NORMAL, rng=rng, dtype=d, out=o),
+                n,
+            ),
+        ]
+    return cases
+
+
+# --- integrate() hook -----------------------------------------------------------
+
+
+def integrate_cases(n, rng):
+    """HOOK for integrate() throughput: OFF by default (``--integrate`` turns it on); no target yet.
+
+    The issue asks for integrate() throughput too, but integrate() did not
+    exist when this benchmark was written and its interface may still change.
+    With ``--integrate``, this times ``symsphere.integrate`` with a trivial
+    integrand (f(w) = z, whose cost is one strided read) next to the same
+    directions drawn by sample_sphere and averaged by numpy, so that
+    directions/s and "vs empty+fill" show the overhead of integrating over
+    sampling.  Edit here when integrate() settles.
+    """
+    try:
+        from symsphere import integrate
+    except ImportError as error:
+        print(f"integrate: skipped ({error})", file=sys.stderr)
+        return []
+
+    def f(w):
+        return w[:, 2]
+
+    def sample_and_average():
+        return f(sample_sphere(n, rng=rng)).mean()
+
     return [
-        ("numpy classic (z = 1 − 2u, φ = 2πv)", "float64", lambda: classic_sphere(n, rng)),
-        ("numpy classic (z = 1 − 2u, φ = 2πv)", "float32", lambda: classic_sphere(n, rng, np.float32)),
-        ("sample_sphere", "float64", lambda: sample_sphere(n, rng=rng)),
-        ("sample_sphere, out=", "float64", lambda: sample_sphere(n, rng=rng, out=out64)),
-        ("sample_sphere", "float32", lambda: sample_sphere(n, rng=rng, dtype=np.float32)),
-        ("sample_sphere, out=", "float32", lambda: sample_sphere(n, rng=rng, dtype=np.float32, out=out32)),
-        ("sample_hemisphere", "float64", lambda: sample_hemisphere(n, rng=rng)),
-        ("sample_hemisphere, normal=(1, 1, 1)", "float64", lambda: sample_hemisphere(n, normal=(1, 1, 1), rng=rng)),
+        Case("symsphere", "integrate(f(w) = z), sphere [hook]", "float64", "fresh",
+             lambda: integrate(f, n=n, rng=rng), n),
+        Case("symsphere", "sample_sphere + f + mean [hook]", "float64", "fresh", sample_and_average, n),
     ]
 
 
-def measure(cases, repeats):
-    """Median seconds per case; the cases take turns in every round."""
-    for _, _, run in cases:  # warm up: imports, first-touch page faults, scipy's lazy loads
-        run()
-    times = [[] for _ in cases]
-    for _ in range(repeats):
-        for k, (_, _, run) in enumerate(cases):
-            start = time.perf_counter()
-            run()
-            times[k].append(time.perf_counter() - start)
-    return [statistics.median(t) for t in times]
+# --- Mitsuba 3 ------------------------------------------------------------------
+
+MIN_LLVM = 16  # drjit 1.5 fails with LLVM 15 (an LLVM ERROR that aborts the process); 19 works
+
+_LLVM_GLOBS = (
+    "/usr/lib/llvm-*/lib/libLLVM*.so*",
+    "/usr/lib/x86_64-linux-gnu/libLLVM*.so*",
+    "/usr/lib/aarch64-linux-gnu/libLLVM*.so*",
+    "/usr/lib64/libLLVM*.so*",
+    "/usr/lib/libLLVM*.so*",
+    "/usr/local/lib/libLLVM*.so*",
+    "/usr/local/opt/llvm/lib/libLLVM.dylib",
+    "/opt/homebrew/opt/llvm/lib/libLLVM.dylib",
+)
+_PROBE = (  # the same kernel as the benchmark, on enough points to use the vector code paths
+    "import numpy as np, mitsuba as mi; mi.set_variant('llvm_ad_rgb'); u = np.linspace(0, 1, 4096, dtype=np.float32); "
+    "print(mi.warp.square_to_uniform_sphere(mi.Point2f(u, u[::-1].copy())).numpy().shape)"
+)
 
 
-def markdown_table(n, cases, medians):
-    classic = {dtype: medians[k] for k, (label, dtype, _) in enumerate(cases) if label.startswith("numpy classic")}
+def _llvm_version(path):
+    """LLVM major version from a library path (libLLVM-19.so, libLLVM.so.19.1, llvm-19/lib/...), or 0."""
+    for pattern in (r"libLLVM-(\d+)", r"libLLVM\.so\.(\d+)\.", r"llvm-(\d+)/"):
+        match = re.search(pattern, path)
+        if match:
+            return int(match.group(1))
+    return 0
+
+
+def find_libllvm():
+    """(path, message): DRJIT_LIBLLVM_PATH if set, else the newest libLLVM in the usual places."""
+    if os.environ.get("DRJIT_LIBLLVM_PATH"):
+        path = os.environ["DRJIT_LIBLLVM_PATH"]
+        return path, f"DRJIT_LIBLLVM_PATH={path} (from the environment)"
+    found = sorted(
+        {os.path.realpath(p) for pattern in _LLVM_GLOBS for p in glob.glob(pattern)},
+        key=lambda p: (_llvm_version(p), p),
+    )
+    if not found:
+        return None, "DRJIT_LIBLLVM_PATH is unset and no libLLVM was found (Debian: apt-get install libllvm19)"
+    path = found[-1]
+    message = f"DRJIT_LIBLLVM_PATH was unset; using the newest libLLVM found: {path} (LLVM {_llvm_version(path)})"
+    if _llvm_version(path) < MIN_LLVM:
+        message += f", older than the LLVM {MIN_LLVM} that drjit 1.5 needs (Debian: apt-get install libllvm19)"
+    return path, message
+
+
+def probe_mitsuba():
+    """(ok, message).  Sets DRJIT_LIBLLVM_PATH; tries the llvm_ad_rgb variant in a subprocess first."""
+    try:
+        import importlib.util
+
+        if importlib.util.find_spec("mitsuba") is None:
+            return False, 'mitsuba is not installed (pip install -e ".[bench]")'
+    except (ImportError, ValueError) as error:
+        return False, f"mitsuba cannot be found: {error}"
+    path, message = find_libllvm()
+    if path is not None:
+        os.environ["DRJIT_LIBLLVM_PATH"] = path
+    # drjit caches compiled kernels in ~/.drjit: a cache hit would hide an unusable LLVM, so the
+    # test process gets an empty home directory and must really compile.
+    with tempfile.TemporaryDirectory(prefix="symsphere-drjit-probe-") as home:
+        env = dict(os.environ, HOME=home)
+        proc = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=300, env=env)
+    if proc.returncode != 0:
+        tail = ((proc.stderr or proc.stdout).strip().splitlines() or [""])[0][:160]
+        return False, (
+            f"{message}; the llvm_ad_rgb variant failed in a test process (exit {proc.returncode}): {tail} "
+            "-- drjit 1.5 needs a newer LLVM than 15: apt-get install libllvm19, or set DRJIT_LIBLLVM_PATH"
+        )
+    return True, message
+
+
+def mitsuba_cases(n, rng):
+    """Mitsuba's square_to_uniform_sphere, numpy in, numpy out; the uniforms are made outside the timing."""
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_rgb")
+    uv = rng.random((n, 2), dtype=np.float32)  # llvm_ad_rgb is float32; the input is made once, untimed
+    u, v = np.ascontiguousarray(uv[:, 0]), np.ascontiguousarray(uv[:, 1])
+
+    def columns_to_view():
+        # The comparison of the issue: (n, 2) numpy array -> Point2f -> warp -> numpy (n, 3).
+        # .numpy() of a Vector3f is (3, n); .T is an (n, 3) view (Fortran order), no copy.
+        return mi.warp.square_to_uniform_sphere(mi.Point2f(uv[:, 0], uv[:, 1])).numpy().T
+
+    def soa_to_view():
+        # Mitsuba's best case: contiguous u and v in, (3, n) out viewed as (n, 3).
+        return mi.warp.square_to_uniform_sphere(mi.Point2f(u, v)).numpy().T
+
+    def columns_to_rows():
+        # Same memory layout as symsphere's output: C-contiguous (n, 3).
+        return np.ascontiguousarray(mi.warp.square_to_uniform_sphere(mi.Point2f(uv[:, 0], uv[:, 1])).numpy().T)
+
+    def with_uniforms():
+        # The whole pipeline, uniforms included (symsphere's timings include its random numbers).
+        fresh = rng.random((n, 2), dtype=np.float32)
+        return mi.warp.square_to_uniform_sphere(mi.Point2f(fresh[:, 0], fresh[:, 1])).numpy().T
+
+    c = float(np.sqrt(1 / 3))
+    frame = mi.Frame3f(mi.Vector3f(c, c, c))  # the normal (1, 1, 1) of the symsphere hemisphere cases
+
+    def hemisphere():
+        return mi.warp.square_to_uniform_hemisphere(mi.Point2f(uv[:, 0], uv[:, 1])).numpy().T
+
+    def hemisphere_frame():
+        return frame.to_world(mi.warp.square_to_uniform_hemisphere(mi.Point2f(uv[:, 0], uv[:, 1]))).numpy().T
+
+    threads = dr.thread_count() if hasattr(dr, "thread_count") else None
+    meta = {"mitsuba": mi.__version__, "drjit": dr.__version__, "drjit_threads": threads}
+    cases = [
+        Case("mitsuba", "Mitsuba warp: (n,2) → Point2f → .numpy().T", "float32", "ref", columns_to_view, n),
+        Case("mitsuba", "Mitsuba warp: contiguous u, v → .numpy().T", "float32", "ref", soa_to_view, n),
+        Case("mitsuba", "Mitsuba warp: (n,2) → C-contiguous (n,3)", "float32", "ref", columns_to_rows, n),
+        Case("mitsuba", "Mitsuba warp incl. rng.random((n,2)) uniforms", "float32", "ref", with_uniforms, n),
+        Case("mitsuba", "Mitsuba hemisphere warp: (n,2) → .numpy().T", "float32", "ref", hemisphere, n),
+        Case("mitsuba", "Mitsuba hemisphere warp + Frame3f((1,1,1)).to_world", "float32", "ref", hemisphere_frame, n),
+    ]
+    return cases, meta
+
+
+# --- profile pieces ---------------------------------------------------------------
+
+
+def profile_cases(n, rng):
+    """The pieces of sample_sphere / sample_hemisphere, each timed alone (kind 'piece')."""
+    import numba
+    from numba import njit, prange
+
+    from symsphere._kernels import fill_orbits, triangle_point
+    from symsphere._orbit_stores import store_orbit_48
+    from symsphere.points import BasePoints
+    from symsphere.symmetry import SIGNS, SOURCES
+
+    m48, m24 = n // 48, n // 24
+    uv48 = BasePoints("random", 1, m48, per_point=48).take(0, m48)
+    uv24 = BasePoints("random", 2, m24, per_point=24).take(0, m24)
+    basis = symsphere.frames.frame(np.asarray(NORMAL))
+
+    @njit(parallel=True, cache=False)
+    def map_only(uv, points):
+        # the map evaluation alone: one triangle_point per base point, 3 values stored
+        for i in prange(uv.shape[0]):
+            x, y, z = triangle_point(uv[i, 0], uv[i, 1], 0)
+            points[i, 0] = x
+            points[i, 1] = y
+            points[i, 2] = z
+
+    @njit(parallel=True, cache=False)
+    def stores_only(uv, rows):
+        # the library's orbit stores alone (store_orbit_48 on the row view rows[i]); no trig
+        for i in prange(uv.shape[0]):
+            store_orbit_48(rows[i], uv[i, 0], uv[i, 1], 0.5)
+
+    # The same 144 stores written by index into the 2-D array, without a row view per point
+    # (generated from the symmetry tables, as symsphere._codegen does for the library).
+    lines = ["def store_by_index(rows, i, x, y, z):"]
+    names = ("x", "y", "z")
+    for k in range(48):
+        for c in range(3):
+            sign = "-" if SIGNS[k, c] < 0 else ""
+            lines.append(f"    rows[i, {3 * k + c}] = {sign}{names[int(SOURCES[k, c])]}")
+    namespace = {}
+    exec("\n".join(lines), namespace)  # noqa: S102 - generated from the library's own tables
+    store_by_index = njit(inline="always")(namespace["store_by_index"])
+
+    @njit(parallel=True, cache=False)
+    def stores_by_index(uv, rows):
+        for i in prange(uv.shape[0]):
+            store_by_index(rows, i, uv[i, 0], uv[i, 1], 0.5)
+
+    @njit(parallel=True, cache=False)
+    def fused_by_index(uv, rows):
+        # experiment: the library's map, then the stores by index, everything inlined in one loop body
+        for i in prange(uv.shape[0]):
+            x, y, z = triangle_point(uv[i, 0], uv[i, 1], 0)
+            store_by_index(rows, i, x, y, z)
+
+    batch = 16
+
+    @njit(parallel=True, cache=False)
+    def batched_by_index(uv, rows):
+        # experiment: the map for `batch` base points first (independent chains overlap), then their stores
+        blocks = (uv.shape[0] + batch - 1) // batch
+        for b in prange(blocks):
+            lo = b * batch
+            hi = min(lo + batch, uv.shape[0])
+            base = np.empty((batch, 3))
+            for j in range(hi - lo):
+                x, y, z = triangle_point(uv[lo + j, 0], uv[lo + j, 1], 0)
+                base[j, 0] = x
+                base[j, 1] = y
+                base[j, 2] = z
+            for j in range(hi - lo):
+                store_by_index(rows, lo + j, base[j, 0], base[j, 1], base[j, 2])
+
+    @njit(parallel=True, cache=False)
+    def parallel_fill(flat, value):
+        for i in prange(flat.shape[0]):
+            flat[i] = value
+
+    points = np.empty((m48, 3))
+    cases = [
+        Case("base points", "BasePoints('random').take(0, n/48)", "float64", "piece",
+             lambda: BasePoints("random", rng, m48, per_point=48).take(0, m48), 0,
+             f"{m48} points, {-(-m48 // 4096)} seeded blocks of 4096", "sample_sphere, out="),
+        Case("base points", "rng.random((n/48, 2)), one Generator", "float64", "piece",
+             lambda: rng.random((m48, 2)), 0, "the same uniforms without per-block seeding", "sample_sphere, out="),
+        Case("base points", "BasePoints('random').take(0, n/24)", "float64", "piece",
+             lambda: BasePoints("random", rng, m24, per_point=24).take(0, m24), 0, f"{m24} points (hemisphere)",
+             "sample_hemisphere, out="),
+        Case("map", "map only: triangle_point per base point", "float64", "piece",
+             lambda: map_only(uv48, points), 0, f"{m48} evaluations, (n/48, 3) stored", "sample_sphere, out="),
+    ]
+    for dtype in DTYPES:
+        name = np.dtype(dtype).name
+        out = np.full((n, 3), FILL_VALUE, dtype=dtype)
+        rows48 = out.reshape(m48, 144)
+        flat = out.reshape(-1)
+        cases += [
+            Case("kernel", "fill_orbits sphere (kernel alone, touched out)", name, "piece",
+                 lambda o=out: fill_orbits(uv48, "equal_area", 48, None, o), n, "", "sample_sphere, out="),
+            Case("kernel", "fill_orbits hemisphere (kernel alone)", name, "piece",
+                 lambda o=out: fill_orbits(uv24, "equal_area", 24, None, o), n, "", "sample_hemisphere, out="),
+            Case("kernel", "fill_orbits hemisphere rotated (kernel alone)", name, "piece",
+                 lambda o=out: fill_orbits(uv24, "equal_area", 24, basis, o), n, "",
+                 "sample_hemisphere, normal=(1,1,1), out="),
+            Case("stores", "stores only: store_orbit_48(rows[i], ...)", name, "piece",
+                 lambda r=rows48: stores_only(uv48, r), n, "the library's stores, no trig", "sample_sphere, out="),
+            Case("stores", "stores only, by index rows[i, j] (no row view)", name, "piece",
+                 lambda r=rows48: stores_by_index(uv48, r), n, "experiment, not the library", "sample_sphere, out="),
+            Case("kernel", "experiment: map + stores by index, one inlined loop", name, "piece",
+                 lambda r=rows48: fused_by_index(uv48, r), n, "the library's loop, inlined; not the library",
+                 "sample_sphere, out="),
+            Case("kernel", f"experiment: map for {batch} base points, then their stores", name, "piece",
+                 lambda r=rows48: batched_by_index(uv48, r), n, "hides the map's latency; not the library",
+                 "sample_sphere, out="),
+            Case("limit", f"fill, numba prange ({numba.get_num_threads()} threads)", name, "piece",
+                 lambda f=flat: parallel_fill(f, FILL_VALUE), n, "the write limit with all threads"),
+        ]
+    return cases
+
+
+# --- measuring ------------------------------------------------------------------
+
+
+def measure(cases, repeats, warmup=2):
+    """Warm every case up (compilation, lazy imports, JIT caches), then time round-robin."""
+    for case in cases:
+        for _ in range(warmup):
+            case.run()
+    count = len(cases)
+    for round_index in range(repeats):
+        start = round_index % count  # rotate the order so no case always follows the same one
+        for case in cases[start:] + cases[:start]:
+            t0 = time.perf_counter()
+            case.run()
+            case.times.append(time.perf_counter() - t0)
+
+
+def cpu_snapshot():
+    """(busy CPU-seconds of the whole machine, CPU-seconds of this process), or None off Linux."""
+    import resource
+
+    try:
+        with open("/proc/stat", encoding="utf-8") as handle:
+            fields = [int(x) for x in handle.readline().split()[1:]]
+    except (OSError, ValueError):
+        return None
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
+    busy = (sum(fields[:8]) - idle) / os.sysconf("SC_CLK_TCK")  # user nice system idle iowait irq softirq steal
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    return busy, own.ru_utime + own.ru_stime
+
+
+def others_cpu(before, after, wall):
+    """CPU-seconds that other processes used while the cases ran (machine busy time minus ours)."""
+    if before is None or after is None:
+        return None
+    seconds = max((after[0] - before[0]) - (after[1] - before[1]), 0.0)
+    return {"cpu_s": seconds, "wall_s": wall, "share_of_all_cpus": seconds / (wall * (os.cpu_count() or 1))}
+
+
+def _find(cases, group, label, dtype):
+    for case in cases:
+        if case.group == group and case.label.startswith(label) and case.dtype == dtype:
+            return case
+    return None
+
+
+def _ratio(reference, case, best=False):
+    if reference is None:
+        return None
+    return reference.best / case.best if best else reference.median / case.median
+
+
+def _fmt_ratio(value):
+    return "—" if value is None else f"{value:.2f}×"
+
+
+def ratios(cases):
+    """Per case: vs fill (touched), vs empty+fill, vs numpy classic, vs Mitsuba (f32, issue's form)."""
+    mitsuba_sphere = _find(cases, "mitsuba", "Mitsuba warp: (n,2) → Point2f", "float32")
+    mitsuba_hemisphere = _find(cases, "mitsuba", "Mitsuba hemisphere warp: (n,2)", "float32")
+    mitsuba_frame = _find(cases, "mitsuba", "Mitsuba hemisphere warp + Frame3f", "float32")
+    result = {}
+    for case in cases:
+        mitsuba = mitsuba_sphere  # the same domain: sphere, hemisphere about z, hemisphere about (1, 1, 1)
+        if case.label.startswith("sample_hemisphere, normal"):
+            mitsuba = mitsuba_frame
+        elif case.label.startswith("sample_hemisphere"):
+            mitsuba = mitsuba_hemisphere
+        fill = _find(cases, "limit", "numpy fill, touched", case.dtype)
+        empty_fill = _find(cases, "limit", "np.empty + fill", case.dtype)
+        classic = _find(cases, "numpy", "numpy classic", case.dtype)
+        references = {
+            "vs_fill": fill if case.directions else None,
+            "vs_empty_fill": empty_fill if case.directions else None,
+            "vs_classic": classic if case.kind != "piece" else None,
+            "vs_mitsuba": mitsuba if case.dtype == "float32" and case.kind != "piece" else None,
+        }
+        result[id(case)] = {key: _ratio(ref, case) for key, ref in references.items()}
+        result[id(case)].update({key + "_min": _ratio(ref, case, best=True) for key, ref in references.items()})
+    return result
+
+
+def main_table(cases, table_ratios, n):
     lines = [
-        "| sampler | dtype | median time (ms) | directions/s | vs numpy classic (same dtype) |",
-        "|---|---|---:|---:|---:|",
+        "| case | dtype | median ms | min ms | directions/s | GB/s written | vs fill (touched) "
+        "| vs empty+fill | vs numpy classic | vs Mitsuba (f32, same domain) |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    for (label, dtype, _), seconds in zip(cases, medians):
-        ratio = classic[dtype] / seconds
-        lines.append(f"| {label} | {dtype} | {seconds * 1e3:.2f} | {n / seconds:.3g} | {ratio:.2f}× |")
+    for case in cases:
+        if case.kind == "piece":
+            continue
+        r = table_ratios[id(case)]
+        gbs = n * 3 * np.dtype(case.dtype).itemsize / case.median / 1e9
+        lines.append(
+            f"| {case.label} | {case.dtype} | {case.median * 1e3:.2f} | {case.best * 1e3:.2f} "
+            f"| {n / case.median / 1e6:.0f} M | {gbs:.1f} | {_fmt_ratio(r['vs_fill'])} "
+            f"| {_fmt_ratio(r['vs_empty_fill'])} | {_fmt_ratio(r['vs_classic'])} | {_fmt_ratio(r['vs_mitsuba'])} |"
+        )
+    return "\n".join(lines)
+
+
+def profile_table(cases, table_ratios):
+    lines = [
+        "| piece | dtype | median ms | min ms | share of the whole call (float64 / float32) | vs fill (touched) | note |",
+        "|---|---|---:|---:|---|---:|---|",
+    ]
+    for case in cases:
+        if case.kind != "piece":
+            continue
+        share = "—"
+        if case.part_of:
+            # dtype-independent pieces (base points, the map) are shares of both dtypes' calls
+            dtypes = (case.dtype,) if case.directions else ("float64", "float32")
+            parts = []
+            for dtype in dtypes:
+                whole = next((c for c in cases if c.kind != "piece" and c.label == case.part_of and c.dtype == dtype), None)
+                parts.append("—" if whole is None else f"{case.median / whole.median:.0%}")
+            share = f"{' / '.join(parts)} of `{case.part_of}`"
+        lines.append(
+            f"| {case.label} | {case.dtype} | {case.median * 1e3:.2f} | {case.best * 1e3:.2f} | {share} "
+            f"| {_fmt_ratio(table_ratios[id(case)]['vs_fill'])} | {case.note} |"
+        )
+    return "\n".join(lines)
+
+
+TARGETS = (
+    # (what, label of the symsphere case, dtype, ratio key, threshold)
+    ("sample_sphere f64, out= ≥ 0.8 × fill", "sample_sphere, out=", "float64", "vs_fill", 0.8),
+    ("sample_sphere f32, out= ≥ 0.8 × fill", "sample_sphere, out=", "float32", "vs_fill", 0.8),
+    ("sample_sphere f64, fresh ≥ 0.9 × (empty+fill)", "sample_sphere", "float64", "vs_empty_fill", 0.9),
+    ("sample_sphere f32, fresh ≥ 0.9 × (empty+fill)", "sample_sphere", "float32", "vs_empty_fill", 0.9),
+    ("sample_sphere f64 ≥ 20 × numpy classic", "sample_sphere", "float64", "vs_classic", 20),
+    ("sample_sphere f32 ≥ 20 × numpy classic", "sample_sphere", "float32", "vs_classic", 20),
+    ("sample_sphere f32 ≥ 1 × Mitsuba warp→numpy", "sample_sphere", "float32", "vs_mitsuba", 1),
+    ("sample_sphere f32, out= ≥ 1 × Mitsuba warp→numpy", "sample_sphere, out=", "float32", "vs_mitsuba", 1),
+    ("hemisphere normal f64, out= ≥ 0.8 × fill", "sample_hemisphere, normal=(1,1,1), out=", "float64", "vs_fill", 0.8),
+    ("hemisphere normal f32, out= ≥ 0.8 × fill", "sample_hemisphere, normal=(1,1,1), out=", "float32", "vs_fill", 0.8),
+    ("hemisphere normal f64, fresh ≥ 0.9 × (empty+fill)", "sample_hemisphere, normal=(1,1,1)", "float64",
+     "vs_empty_fill", 0.9),
+    ("hemisphere normal f32, fresh ≥ 0.9 × (empty+fill)", "sample_hemisphere, normal=(1,1,1)", "float32",
+     "vs_empty_fill", 0.9),
+    ("hemisphere normal f64 ≥ 20 × numpy classic", "sample_hemisphere, normal=(1,1,1)", "float64", "vs_classic", 20),
+    ("hemisphere normal f32 ≥ 20 × numpy classic", "sample_hemisphere, normal=(1,1,1)", "float32", "vs_classic", 20),
+    ("hemisphere normal f32 ≥ 1 × Mitsuba hemisphere warp + frame", "sample_hemisphere, normal=(1,1,1)", "float32",
+     "vs_mitsuba", 1),
+    ("hemisphere normal f32, out= ≥ 1 × Mitsuba hemisphere warp + frame", "sample_hemisphere, normal=(1,1,1), out=",
+     "float32", "vs_mitsuba", 1),
+)
+
+
+def target_rows(cases, table_ratios):
+    rows = []
+    for what, label, dtype, key, threshold in TARGETS:
+        case = next((c for c in cases if c.group == "symsphere" and c.label == label and c.dtype == dtype), None)
+        value = None if case is None else table_ratios[id(case)][key]
+        best = None if case is None else table_ratios[id(case)][key + "_min"]
+        rows.append({"target": what, "threshold": threshold, "ratio": value, "ratio_of_minima": best,
+                     "reached": None if value is None else value >= threshold})
+    return rows
+
+
+def targets_table(rows):
+    lines = [
+        "| target | ratio of medians | reached (medians) | ratio of minima |",
+        "|---|---:|---|---:|",
+    ]
+    for row in rows:
+        reached = "not measured" if row["reached"] is None else ("yes" if row["reached"] else "**no**")
+        lines.append(
+            f"| {row['target']} | {_fmt_ratio(row['ratio'])} | {reached} | {_fmt_ratio(row['ratio_of_minima'])} |"
+        )
     return "\n".join(lines)
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--n", type=int, default=48 * 2**16, help="directions per call, a multiple of 48 (default: %(default)s)")
+    parser.add_argument("--repeats", type=int, default=21, help="timed rounds; medians are reported (default: %(default)s)")
+    parser.add_argument("--json", metavar="FILE", help="also write the results as JSON to FILE")
+    parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba 3 cases")
+    parser.add_argument("--no-profile", action="store_true", help="skip the profile pieces")
+    parser.add_argument("--integrate", action="store_true", help="also time integrate() (the hook; off by default)")
     parser.add_argument(
-        "--n", type=int, default=48 * 2**16, help="directions per call, a multiple of 48 (default: %(default)s)"
-    )
-    parser.add_argument(
-        "--repeats", type=int, default=15, help="timed calls per case; the median is reported (default: %(default)s)"
+        "--find-llvm",
+        action="store_true",
+        help=f"only say which libLLVM Mitsuba would use; exit 1 if none of LLVM >= {MIN_LLVM} is found (for make bench)",
     )
     args = parser.parse_args(argv)
+    if args.find_llvm:
+        path, message = find_libllvm()
+        print(message)
+        explicit = bool(os.environ.get("DRJIT_LIBLLVM_PATH"))
+        sys.exit(0 if path is not None and (explicit or _llvm_version(path) >= MIN_LLVM) else 1)
     if args.n <= 0 or args.n % 48:
         parser.error(f"--n must be a positive multiple of 48, got {args.n}")
     if args.repeats < 1:
         parser.error(f"--repeats must be at least 1, got {args.repeats}")
 
-    cases = build_cases(args.n)
-    medians = measure(cases, args.repeats)
-    print(
-        f"n = {args.n} directions per call, median of {args.repeats} repeats; symsphere {symsphere.__version__}, "
-        f"numpy {np.__version__}, Python {platform.python_version()}, {platform.machine()}, "
-        f"{os.cpu_count()} CPUs\n"
+    import numba
+    import scipy
+
+    n = args.n
+    rng = np.random.default_rng(12345)
+    load_before = os.getloadavg()
+    cases = reference_cases(n, rng) + symsphere_cases(n, rng)
+    if args.integrate:
+        cases += integrate_cases(n, rng)
+    meta = {}
+    if args.no_mitsuba:
+        mitsuba_message = "skipped (--no-mitsuba)"
+    else:
+        ok, mitsuba_message = probe_mitsuba()
+        if ok:
+            try:
+                more, meta = mitsuba_cases(n, rng)
+                cases += more
+            except Exception as error:  # noqa: BLE001 - an optional peer must not stop the benchmark
+                mitsuba_message += f"; skipped: {type(error).__name__}: {error}"
+        else:
+            mitsuba_message = "skipped: " + mitsuba_message
+    if not args.no_profile:
+        cases += profile_cases(n, rng)
+    print(f"Mitsuba: {mitsuba_message}\nmeasuring {len(cases)} cases x {args.repeats} rounds ...", file=sys.stderr)
+
+    snapshot, wall = cpu_snapshot(), time.perf_counter()
+    measure(cases, args.repeats)
+    others = others_cpu(snapshot, cpu_snapshot(), time.perf_counter() - wall)
+    load_after = os.getloadavg()
+
+    meta.update(
+        {
+            "date": datetime.datetime.now().isoformat(timespec="seconds"),
+            "command": " ".join([os.path.relpath(sys.executable)] + sys.argv) if argv is None else None,
+            "n": n,
+            "repeats": args.repeats,
+            "symsphere": symsphere.__version__,
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "numba": numba.__version__,
+            "numba_threads": numba.get_num_threads(),
+            "numba_threading_layer": numba.threading_layer(),
+            "python": platform.python_version(),
+            "machine": platform.machine(),
+            "cpu": _cpu_name(),
+            "cpus": os.cpu_count(),
+            "loadavg_before": load_before,
+            "loadavg_after": load_after,
+            "mitsuba_status": mitsuba_message,
+            "other_processes": others,
+        }
     )
-    print(markdown_table(args.n, cases, medians))
+    table_ratios = ratios(cases)
+    targets = target_rows(cases, table_ratios)
+
+    print(
+        f"n = {n} directions per call ({n * 24 / 1e6:.1f} MB in float64), median of {args.repeats} rounds; "
+        f"{meta['date']}; {meta['cpu']}, {meta['cpus']} CPUs; numba {meta['numba_threads']} threads "
+        f"({meta['numba_threading_layer']}); symsphere {meta['symsphere']}, numpy {meta['numpy']}, "
+        f"scipy {meta['scipy']}, numba {meta['numba']}, Python {meta['python']}"
+        + (f"; Mitsuba {meta['mitsuba']}, drjit {meta['drjit']} ({meta['drjit_threads']} threads)" if "mitsuba" in meta else "")
+        + f"; load average {load_before[0]:.2f} before, {load_after[0]:.2f} after (this run included)"
+        + (
+            f"; other processes used {others['cpu_s']:.1f} CPU-s in the {others['wall_s']:.0f} s of timing "
+            f"({others['share_of_all_cpus']:.0%} of all CPUs)"
+            if others
+            else ""
+        )
+        + "\n"
+    )
+    print(f"Mitsuba: {mitsuba_message}\n")
+    print(main_table(cases, table_ratios, n))
+    print()
+    print(targets_table(targets))
+    if not args.no_profile:
+        print("\nProfile: the pieces, each timed alone in the same rounds\n")
+        print(profile_table(cases, table_ratios))
+
+    if args.json:
+        payload = {
+            "meta": meta,
+            "cases": [
+                {
+                    "group": c.group,
+                    "label": c.label,
+                    "dtype": c.dtype,
+                    "kind": c.kind,
+                    "directions": c.directions,
+                    "note": c.note,
+                    "median_s": c.median,
+                    "min_s": c.best,
+                    "times_s": c.times,
+                    **table_ratios[id(c)],
+                }
+                for c in cases
+            ],
+            "targets": targets,
+        }
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump(payload, handle, indent=1)
+
+
+def _cpu_name():
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
 
 
 if __name__ == "__main__":
