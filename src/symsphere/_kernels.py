@@ -89,37 +89,24 @@ def _map_batch(uv, code, first, stop, base):
         base[j, 2] = z
 
 
+_SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
+
+
 @njit(parallel=True, **_OPTIONS)
-def _fill_sphere(uv, code, rows):
+def _fill(uv, code, kind, basis, rows):
     for batch in prange((uv.shape[0] + _BATCH - 1) // _BATCH):
         first = batch * _BATCH
         stop = min(first + _BATCH, uv.shape[0])
         base = np.empty((_BATCH, 3))
         _map_batch(uv, code, first, stop, base)
         for j in range(stop - first):
-            store_orbit_48(rows, first + j, base[j, 0], base[j, 1], base[j, 2])
-
-
-@njit(parallel=True, **_OPTIONS)
-def _fill_hemisphere(uv, code, rows):
-    for batch in prange((uv.shape[0] + _BATCH - 1) // _BATCH):
-        first = batch * _BATCH
-        stop = min(first + _BATCH, uv.shape[0])
-        base = np.empty((_BATCH, 3))
-        _map_batch(uv, code, first, stop, base)
-        for j in range(stop - first):
-            store_orbit_24(rows, first + j, base[j, 0], base[j, 1], base[j, 2])
-
-
-@njit(parallel=True, **_OPTIONS)
-def _fill_hemisphere_rotated(uv, code, basis, rows):
-    for batch in prange((uv.shape[0] + _BATCH - 1) // _BATCH):
-        first = batch * _BATCH
-        stop = min(first + _BATCH, uv.shape[0])
-        base = np.empty((_BATCH, 3))
-        _map_batch(uv, code, first, stop, base)
-        for j in range(stop - first):
-            store_orbit_24_rotated(rows, first + j, base[j, 0], base[j, 1], base[j, 2], basis)
+            x, y, z = base[j, 0], base[j, 1], base[j, 2]
+            if kind == _SPHERE:
+                store_orbit_48(rows, first + j, x, y, z)
+            elif kind == _HEMISPHERE:
+                store_orbit_24(rows, first + j, x, y, z)
+            else:
+                store_orbit_24_rotated(rows, first + j, x, y, z, basis)
 
 
 def fill_orbits(uv, method, count, basis, out):
@@ -132,9 +119,9 @@ def fill_orbits(uv, method, count, basis, out):
     code = METHOD_CODES[method]
     rows = out.reshape(len(uv), 3 * count)
     if count == 48:
-        _fill_sphere(uv, code, rows)
-    elif basis is None:
-        _fill_hemisphere(uv, code, rows)
+        kind = _SPHERE
     else:
-        _fill_hemisphere_rotated(uv, code, np.ascontiguousarray(basis, dtype=np.float64), rows)
+        kind = _HEMISPHERE if basis is None else _HEMISPHERE_ROTATED
+    frame = np.eye(3) if basis is None else np.ascontiguousarray(basis, dtype=np.float64)
+    _fill(uv, code, kind, frame, rows)
     return out
