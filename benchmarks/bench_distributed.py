@@ -62,9 +62,7 @@ def main(argv=None):
                 times[workers, chunk_blocks] = elapsed
                 rows.append((f"distributed.integrate, {workers} worker(s), {label}", elapsed, "bit-identical"))
         finally:
-            cluster = client.cluster
-            client.close()
-            cluster.close()
+            distributed.close_client(client)
 
     print(f"n = {n} directions ({args.n_blocks} blocks), median of {args.repeats}; symsphere {symsphere.__version__}\n")
     print("| run | seconds | Mdirections/s | result |")

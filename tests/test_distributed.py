@@ -30,9 +30,7 @@ def slow_exp_dot(w):
 def client():
     client = ss_distributed.local_client(2)
     yield client
-    cluster = client.cluster
-    client.close()
-    cluster.close()
+    ss_distributed.close_client(client)
 
 
 def _same(a, b):

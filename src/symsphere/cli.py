@@ -212,10 +212,9 @@ def _cluster_client(args):
 
 def _close_client(client):
     if client is not None:
-        cluster = getattr(client, "cluster", None)
-        client.close()
-        if cluster is not None and cluster.__class__.__name__ == "LocalCluster":
-            cluster.close()
+        from .distributed import close_client
+
+        close_client(client)
 
 
 def main(argv=None) -> int:

@@ -36,7 +36,7 @@ from .integrate import _block_partial, _finish, _plan
 from .points import BLOCK
 from .sampling import _prepare
 
-__all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client"]
+__all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client", "close_client"]
 
 DEFAULT_CHUNK_BLOCKS = 16
 """Blocks per task: 16 * 4096 orbits = 3 145 728 sphere directions (75 MB in float64)."""
@@ -194,6 +194,14 @@ def local_client(workers=None):
     return Client(cluster)
 
 
+def close_client(client):
+    """Close *client*, and its cluster too if it runs one of its own (as :func:`local_client`'s does)."""
+    cluster = getattr(client, "cluster", None)  # None for a client of a remote scheduler
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
 # --- private ---------------------------------------------------------------------
 
 
@@ -266,9 +274,7 @@ def _client_or_local(client):
     try:
         yield owned
     finally:
-        cluster = owned.cluster
-        owned.close()
-        cluster.close()
+        close_client(owned)
 
 
 def _progress(iterable, total, enabled, description):
