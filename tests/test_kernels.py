@@ -31,6 +31,36 @@ def test_kernel_matches_numpy_reference(method, count, normal):
         assert np.all(np.isfinite(out))
 
 
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+@pytest.mark.parametrize("m, parts", [(1, 1), (17, 2), (1000, 3), (4099, 2), (4099, 7)])
+def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, parts):
+    # The fused kernel draws u, v itself, part by part; it must equal the points of take()
+    # put through the uv kernel, bit for bit, whatever the number of parts.
+    basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
+    source = BasePoints("random", 21, total=m + 5)
+    for dtype in (np.float64, np.float32):
+        expected = _kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
+        bounds = _kernels.part_bounds(m, parts)
+        assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) >= 0)
+        got = np.full((m * count, 3), np.nan, dtype)
+        _kernels.fill_random_orbits(source.generators(5 + bounds[:-1]), bounds, method, count, basis, got)
+        assert np.array_equal(got, expected)
+
+
+def test_random_points_are_numpys_pcg64_stream():
+    # Independent reference: numpy's own PCG64 stream from the documented seed, drawn in one go.
+    source = BasePoints("random", 8, total=3 * BLOCK)
+    seed = np.random.SeedSequence(source.root_entropy, spawn_key=(0,))
+    expected = np.random.Generator(np.random.PCG64(seed)).random((3 * BLOCK, 2))
+    assert np.array_equal(source.take(0, 3 * BLOCK), expected)
+    assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
+    (rng,) = source.generators([101])
+    assert rng.random() == expected[101, 0] and rng.random() == expected[101, 1]
+    with pytest.raises(ValueError, match="no random stream"):
+        BasePoints("sobol", 8, total=16).generators([0])
+
+
 def test_kernel_exact_signs_and_permutations():
     # Without a frame the orbit stores are exact copies: compare against the tables.
     uv = np.random.default_rng(1).random((100, 2))

@@ -30,11 +30,10 @@ import time
 
 import numpy as np
 
-from ._kernels import fill_orbits
 from ._validation import check_count
 from .integrate import _block_partial, _finish, _plan
 from .points import BLOCK
-from .sampling import _prepare
+from .sampling import _fill_range, _prepare
 
 __all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client", "close_client"]
 
@@ -235,7 +234,7 @@ def _directions_task(source, method, count, basis, dtype, start, stop):
     _single_threaded_kernels()
     source = copy.deepcopy(source)  # QMC engines are stateful, and tasks may share a process
     out = np.empty(((stop - start) * count, 3), dtype=dtype)
-    return fill_orbits(source.take(start, stop), method, count, basis, out)
+    return _fill_range(source, start, stop, method, count, basis, out)
 
 
 def _single_threaded_kernels():

@@ -9,10 +9,14 @@ any ``scipy.stats.qmc.QMCEngine`` with ``d == 2``, used from its current state (
 
 Points are addressed by index, so that any stretch ``[start, stop)`` can be made on
 its own and every chunking of a run gives the same points (:class:`BasePoints`).
-Random points come in blocks of :data:`BLOCK` points, block ``b`` drawn from
-``SeedSequence(root_entropy, spawn_key=(0, b))``: the numbers depend on the root
-seed and the block index only, not on how the run is split into chunks or workers.
-QMC points are consecutive segments of one scrambled sequence (``fast_forward``).
+Random points are one stream of numpy's ``PCG64`` seeded by
+``SeedSequence(root_entropy, spawn_key=(0,))``: point ``i`` is ``(u, v)`` = draws
+``2i`` and ``2i + 1`` of ``Generator.random``, and a stretch starting at ``i`` is
+reached by ``PCG64.advance(2 i)`` (a jump of O(log i) steps), so the numbers depend
+on the root seed and the index only, not on how the run is split into chunks,
+threads or workers.  QMC points are consecutive segments of one scrambled sequence
+(``fast_forward``).  :data:`BLOCK` is the unit in which the integrator and the
+distributed code cut their work.
 """
 
 from __future__ import annotations
@@ -29,9 +33,9 @@ __all__ = ["POINT_SETS", "BLOCK", "BasePoints", "unit_square_points", "check_poi
 POINT_SETS = ("random", "stratified", "sobol", "halton")
 
 BLOCK = 4096
-"""Random points per seeding block."""
+"""Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""
 
-_BLOCK_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequence
+_STREAM_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequence
 _SOBOL_WARNING = "The balance properties of Sobol' points require n to be a power of 2."
 
 
@@ -109,7 +113,14 @@ class BasePoints:
             self._offset = self._engine.num_generated
             if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
                 warnings.warn(_SOBOL_WARNING, UserWarning, stacklevel=3)
-        self._cached_block = (None, None)
+        else:
+            stream_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_STREAM_KEY,))
+            self._stream_start = np.random.PCG64(stream_seed).state
+
+    @property
+    def kind(self):
+        """``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'`` or ``'engine'``."""
+        return self._kind
 
     def take(self, start, stop):
         """Points ``start ... stop - 1`` of the run, shape (stop - start, 2), float64."""
@@ -124,24 +135,22 @@ class BasePoints:
         corner = np.stack([cells // self._side, cells % self._side], axis=-1)
         return (corner + jitter) / self._side
 
-    def _take_random(self, start, stop):
-        first, last = start // BLOCK, (stop - 1) // BLOCK if stop > start else start // BLOCK
-        pieces = []
-        for block in range(first, last + 1):
-            values = self._block(block)
-            lo = max(start - block * BLOCK, 0)
-            hi = min(stop - block * BLOCK, BLOCK)
-            pieces.append(values[lo:hi])
-        return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+    def generators(self, starts):
+        """numpy Generators whose ``random()`` draws u, v, u, v, ... of the random points
+        from each index in *starts* on (``'random'`` and ``'stratified'`` only: the
+        jitter of the latter)."""
+        if self._engine is not None:
+            raise ValueError(f"points={self._kind!r} has no random stream")
+        return tuple(self._generator_at(int(start)) for start in starts)
 
-    def _block(self, block):
-        cached_index, cached_values = self._cached_block
-        if cached_index == block:
-            return cached_values
-        seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_BLOCK_KEY, block))
-        values = np.random.default_rng(seed).random((BLOCK, 2))
-        self._cached_block = (block, values)
-        return values
+    def _generator_at(self, index):
+        bit_generator = np.random.PCG64()
+        bit_generator.state = self._stream_start
+        bit_generator.advance(2 * index)  # two draws per point
+        return np.random.Generator(bit_generator)
+
+    def _take_random(self, start, stop):
+        return self._generator_at(start).random((stop - start, 2))
 
     def _take_engine(self, start, stop):
         engine = self._engine

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import frames
-from ._kernels import fill_orbits
+from ._kernels import fill_orbits, fill_random_orbits, part_bounds
 from ._validation import check_count, check_directions, check_dtype, check_normal, check_out
 from .maps import get_map
 from .points import BasePoints
@@ -237,7 +237,7 @@ def _sample(n, count, normal, method, points, rng, dtype, out):
         check_out(out, (n, 3), dtype)
     else:
         out = np.empty((n, 3), dtype=dtype)
-    return fill_orbits(source.take(0, n // count), method, count, basis, out)
+    return _fill_range(source, 0, n // count, method, count, basis, out)
 
 
 def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
@@ -255,9 +255,17 @@ def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
                 block = np.empty(((stop - start) * count, 3), dtype=dtype)
             else:
                 block = out[start * count : stop * count]
-            yield fill_orbits(source.take(start, stop), method, count, basis, block)
+            yield _fill_range(source, start, stop, method, count, basis, block)
 
     return blocks()
+
+
+def _fill_range(source, start, stop, method, count, basis, out):
+    """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
+    if source.kind == "random":  # the kernel draws the points itself, in parallel
+        bounds = part_bounds(stop - start)
+        return fill_random_orbits(source.generators(start + bounds[:-1]), bounds, method, count, basis, out)
+    return fill_orbits(source.take(start, stop), method, count, basis, out)
 
 
 def _reference_orbits(uv, method, count, basis):
