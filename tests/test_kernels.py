@@ -44,7 +44,7 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
         bounds = _kernels.part_bounds(m, parts)
         assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) >= 0)
         got = np.full((m * count, 3), np.nan, dtype)
-        _kernels.fill_random_orbits(source.generators(5 + bounds[:-1]), bounds, method, count, basis, got)
+        _kernels.fill_random_orbits(source.streams(5 + bounds[:-1]), bounds, method, count, basis, got)
         assert np.array_equal(got, expected)
 
 
@@ -55,10 +55,12 @@ def test_random_points_are_numpys_pcg64_stream():
     expected = np.random.Generator(np.random.PCG64(seed)).random((3 * BLOCK, 2))
     assert np.array_equal(source.take(0, 3 * BLOCK), expected)
     assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
-    (rng,) = source.generators([101])
-    assert rng.random() == expected[101, 0] and rng.random() == expected[101, 1]
+    # The kernels' inlined PCG64 step continues numpy's stream from any index.
+    draw = njit(lambda stream, k: [_kernels.pcg64_random(stream) for _ in range(k)])
+    (stream,) = source.streams([101])
+    assert np.array_equal(draw(stream, 2 * 400), expected[101:501].ravel())
     with pytest.raises(ValueError, match="no random stream"):
-        BasePoints("sobol", 8, total=16).generators([0])
+        BasePoints("sobol", 8, total=16).streams([0])
 
 
 def test_kernel_exact_signs_and_permutations():

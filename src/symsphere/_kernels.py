@@ -13,8 +13,9 @@ so a new process with a warm cache pays no compilation.
 from __future__ import annotations
 
 import numpy as np
-from numba import get_num_threads, njit, prange
-from numba.extending import register_jitable
+from llvmlite import ir
+from numba import get_num_threads, njit, prange, types
+from numba.extending import intrinsic, register_jitable
 
 from . import _orbit_stores, maps, symmetry
 from ._numba_cache import invalidate_if_changed
@@ -74,6 +75,43 @@ def orbit_member(x, y, z, k):
     )
 
 
+# numpy's PCG64 (O'Neill 2014: 128-bit LCG, XSL-RR output), for drawing base points inside
+# the kernels.  numba can call a numpy Generator itself, but through the bit generator's
+# function pointer: measured 3x slower than this inlined step.  Bit for bit numpy's
+# ``Generator(PCG64).random()`` (test_kernels checks it against numpy's own stream).
+_PCG64_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
+_MUL_HI = np.uint64(_PCG64_MULTIPLIER >> 64)
+_MUL_LO = np.uint64(_PCG64_MULTIPLIER & (2**64 - 1))
+_U0, _U1, _U11, _U58, _U63, _U64 = (np.uint64(k) for k in (0, 1, 11, 58, 63, 64))
+
+
+@intrinsic
+def _mul_high(typingctx, a, b):
+    """The high 64 bits of the 128-bit product of two uint64 (one machine instruction)."""
+
+    def codegen(context, builder, signature, args):
+        wide = ir.IntType(128)
+        product = builder.mul(builder.zext(args[0], wide), builder.zext(args[1], wide))
+        return builder.trunc(builder.lshr(product, ir.Constant(wide, 64)), ir.IntType(64))
+
+    return types.uint64(types.uint64, types.uint64), codegen
+
+
+@register_jitable
+def pcg64_random(stream):
+    """Next ``Generator.random()`` of the PCG64 *stream* (uint64[4]: state hi, lo; inc hi, lo)."""
+    hi, lo = stream[0], stream[1]
+    product_lo = lo * _MUL_LO
+    product_hi = _mul_high(lo, _MUL_LO) + hi * _MUL_LO + lo * _MUL_HI
+    lo = product_lo + stream[3]
+    hi = product_hi + stream[2] + (_U1 if lo < product_lo else _U0)
+    stream[0], stream[1] = hi, lo
+    mixed = hi ^ lo
+    rotation = hi >> _U58
+    bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
+    return np.float64(bits >> _U11) * (1.0 / 9007199254740992.0)  # numpy's next_double: 53 bits
+
+
 # Base points are handled in batches of _BATCH: first the map for the whole batch, into
 # arrays (structure of arrays), then the orbit stores.  The equal-area map has no libm call
 # (its sine is a polynomial), so LLVM vectorises the batch loop (AVX-512: 8 doubles a lane);
@@ -100,16 +138,21 @@ def _map_batch(u, v, code, base):
 
 
 @njit(inline="always")
+def _store_one(x, y, z, i, kind, basis, rows):
+    """Store the orbit of (x, y, z) in row i."""
+    if kind == _SPHERE:
+        store_orbit_48(rows, i, x, y, z)
+    elif kind == _HEMISPHERE:
+        store_orbit_24(rows, i, x, y, z)
+    else:
+        store_orbit_24_rotated(rows, i, x, y, z, basis)
+
+
+@njit(inline="always")
 def _store_batch(base, first, stop, kind, basis, rows):
     """Store the orbits of base[:, :stop - first] in rows first ... stop - 1."""
     for j in range(stop - first):
-        x, y, z = base[0, j], base[1, j], base[2, j]
-        if kind == _SPHERE:
-            store_orbit_48(rows, first + j, x, y, z)
-        elif kind == _HEMISPHERE:
-            store_orbit_24(rows, first + j, x, y, z)
-        else:
-            store_orbit_24_rotated(rows, first + j, x, y, z, basis)
+        _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, basis, rows)
 
 
 @njit(parallel=True, **_OPTIONS)
@@ -130,22 +173,30 @@ def _fill(uv, bounds, code, kind, basis, rows):
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(generators, bounds, code, kind, basis, rows):
-    # As _fill, but each part draws its own uniforms, u then v per point, from its own
-    # numpy Generator (numba calls the bit generator's C function, so the numbers are
-    # numpy's): no (m, 2) array of base points, and the draws run in parallel.
+def _fill_random(streams, bounds, code, kind, basis, rows):
+    # As _fill, but each part draws its own points, u then v per point, from its own PCG64
+    # stream (a row of *streams*, numpy's state after ``advance``): no (m, 2) array of base
+    # points, and the draws run in parallel.  The next batch's points are drawn between the
+    # current batch's orbit stores, so that the generator's dependent chain of 128-bit
+    # multiplications overlaps the stores instead of following them.
     for part in prange(len(bounds) - 1):
-        rng = generators[part]
+        stream = streams[part].copy()
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
-        for first in range(bounds[part], bounds[part + 1], _BATCH):
-            stop = min(first + _BATCH, bounds[part + 1])
-            for j in range(stop - first):
-                u[j] = rng.random()
-                v[j] = rng.random()
+        lo, hi = bounds[part], bounds[part + 1]
+        for j in range(min(_BATCH, hi - lo)):
+            u[j] = pcg64_random(stream)
+            v[j] = pcg64_random(stream)
+        for first in range(lo, hi, _BATCH):
+            stop = min(first + _BATCH, hi)
             _map_batch(u, v, code, base)
-            _store_batch(base, first, stop, kind, basis, rows)
+            upcoming = min(_BATCH, hi - stop)
+            for j in range(stop - first):
+                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, basis, rows)
+                if j < upcoming:
+                    u[j] = pcg64_random(stream)
+                    v[j] = pcg64_random(stream)
 
 
 def fill_orbits(uv, method, count, basis, out):
@@ -160,14 +211,14 @@ def fill_orbits(uv, method, count, basis, out):
     return out
 
 
-def fill_random_orbits(generators, bounds, method, count, basis, out):
-    """As :func:`fill_orbits`, drawing the points: part p (rows ``bounds[p] ... bounds[p+1] - 1``
-    of the base points) takes u, v, u, v, ... from ``generators[p].random()``.
+def fill_random_orbits(streams, bounds, method, count, basis, out):
+    """As :func:`fill_orbits`, drawing the points: part p (base points ``bounds[p] ...
+    bounds[p+1] - 1``) takes u, v, u, v, ... from the PCG64 stream ``streams[p]``.
 
-    The parts come from :meth:`symsphere.points.BasePoints.random_parts`.
+    *streams* come from :meth:`symsphere.points.BasePoints.streams`.
     """
     rows, kind, frame = _layout(int(bounds[-1]), count, basis, out)
-    _fill_random(tuple(generators), bounds, METHOD_CODES[method], kind, frame, rows)
+    _fill_random(streams, bounds, METHOD_CODES[method], kind, frame, rows)
     return out
 
 

@@ -36,6 +36,7 @@ BLOCK = 4096
 """Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""
 
 _STREAM_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequence
+_LOW64 = 2**64 - 1
 _SOBOL_WARNING = "The balance properties of Sobol' points require n to be a power of 2."
 
 
@@ -135,13 +136,18 @@ class BasePoints:
         corner = np.stack([cells // self._side, cells % self._side], axis=-1)
         return (corner + jitter) / self._side
 
-    def generators(self, starts):
-        """numpy Generators whose ``random()`` draws u, v, u, v, ... of the random points
-        from each index in *starts* on (``'random'`` and ``'stratified'`` only: the
-        jitter of the latter)."""
+    def streams(self, starts):
+        """PCG64 states from which ``Generator.random()`` draws u, v, u, v, ... of the random
+        points from each index in *starts* on ('random' and 'stratified' only: the jitter of
+        the latter): a uint64 array (len(starts), 4) of state (high, low), increment (high, low),
+        for :func:`symsphere._kernels.pcg64_random`."""
         if self._engine is not None:
             raise ValueError(f"points={self._kind!r} has no random stream")
-        return tuple(self._generator_at(int(start)) for start in starts)
+        streams = np.empty((len(starts), 4), dtype=np.uint64)
+        for row, start in zip(streams, starts):
+            state = self._generator_at(int(start)).bit_generator.state["state"]
+            row[:] = [state["state"] >> 64, state["state"] & _LOW64, state["inc"] >> 64, state["inc"] & _LOW64]
+        return streams
 
     def _generator_at(self, index):
         bit_generator = np.random.PCG64()

@@ -264,7 +264,7 @@ def _fill_range(source, start, stop, method, count, basis, out):
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
     if source.kind == "random":  # the kernel draws the points itself, in parallel
         bounds = part_bounds(stop - start)
-        return fill_random_orbits(source.generators(start + bounds[:-1]), bounds, method, count, basis, out)
+        return fill_random_orbits(source.streams(start + bounds[:-1]), bounds, method, count, basis, out)
     return fill_orbits(source.take(start, stop), method, count, basis, out)
 
 
