@@ -18,18 +18,19 @@ faster than the reference):
                         ``llvm_ad_rgb`` variant (float32 only), from an (n, 2) numpy
                         array of uniforms to an (n, 3) numpy array (target >= 1).
 
-A second table (``--no-profile`` skips it) times the pieces of
-``sample_sphere``/``sample_hemisphere`` separately -- base points, the kernel
-alone, the map alone, the orbit stores alone, a two-thread fill, and two
-experimental kernels compiled here (not library code) -- to show which piece
-keeps a target out of reach.
+``integrate()`` is timed with a trivial integrand next to sample_sphere + numpy
+(``--no-integrate`` skips it).  A second table (``--no-profile`` skips it) times
+the pieces of ``sample_sphere``/``sample_hemisphere`` separately -- the PCG64
+states, the draws alone, the map alone, the orbit stores alone, the kernel with
+given points and drawing its own, and a two-thread fill -- each built from the
+library's own inlined functions, to show which piece keeps a target out of reach.
 
 Usage::
 
     python benchmarks/bench_sample.py                       # n = 48 * 2**16, 21 repeats
     python benchmarks/bench_sample.py --n 480000 --repeats 31 --json results.json
     python benchmarks/bench_sample.py --no-mitsuba
-    python benchmarks/bench_sample.py --integrate            # also the integrate() hook (no target yet)
+    python benchmarks/bench_sample.py --no-integrate --no-profile   # the main table only
 
 Mitsuba is optional (``pip install -e ".[bench]"``).  drjit 1.5 needs a recent
 LLVM (Debian: ``apt-get install libllvm19``); if ``DRJIT_LIBLLVM_PATH`` is unset,
@@ -187,25 +188,18 @@ def symsphere_cases(n, rng):
     return cases
 
 
-# --- integrate() hook -----------------------------------------------------------
+# --- integrate() -----------------------------------------------------------------
 
 
 def integrate_cases(n, rng):
-    """HOOK for integrate() throughput: OFF by default (``--integrate`` turns it on); no target yet.
+    """integrate() throughput with a trivial integrand, next to sampling + numpy.
 
-    The issue asks for integrate() throughput too, but integrate() did not
-    exist when this benchmark was written and its interface may still change.
-    With ``--integrate``, this times ``symsphere.integrate`` with a trivial
-    integrand (f(w) = z, whose cost is one strided read) next to the same
-    directions drawn by sample_sphere and averaged by numpy, so that
-    directions/s and "vs empty+fill" show the overhead of integrating over
-    sampling.  Edit here when integrate() settles.
+    f(w) = z costs one strided read, so the time is integrate()'s own: drawing the
+    directions block by block (BLOCK orbits at a time), the per-orbit means and the
+    running variance.  The reference draws all n directions at once with
+    sample_sphere and averages f with numpy (no error estimate).
     """
-    try:
-        from symsphere import integrate
-    except ImportError as error:
-        print(f"integrate: skipped ({error})", file=sys.stderr)
-        return []
+    from symsphere import integrate
 
     def f(w):
         return w[:, 2]
@@ -214,9 +208,11 @@ def integrate_cases(n, rng):
         return f(sample_sphere(n, rng=rng)).mean()
 
     return [
-        Case("symsphere", "integrate(f(w) = z), sphere [hook]", "float64", "fresh",
-             lambda: integrate(f, n=n, rng=rng), n),
-        Case("symsphere", "sample_sphere + f + mean [hook]", "float64", "fresh", sample_and_average, n),
+        Case("integrate", "integrate(f(w) = z), random points", "float64", "fresh",
+             lambda: integrate(f, n=n, rng=rng), n, "per-orbit standard error"),
+        Case("integrate", "integrate(f(w) = z), points='sobol'", "float64", "fresh",
+             lambda: integrate(f, n=n, points="sobol", rng=rng), n, "8 scrambled replicates"),
+        Case("integrate", "sample_sphere + f + mean (no error estimate)", "float64", "fresh", sample_and_average, n),
     ]
 
 
@@ -346,121 +342,104 @@ def mitsuba_cases(n, rng):
 
 
 def profile_cases(n, rng):
-    """The pieces of sample_sphere / sample_hemisphere, each timed alone (kind 'piece')."""
+    """The pieces of sample_sphere / sample_hemisphere, each timed alone (kind 'piece').
+
+    Each piece runs the library's own inlined functions (``pcg64_random``, ``_map_batch``,
+    the orbit stores) in the kernel's layout -- one part per numba thread, batches of
+    ``_BATCH`` base points -- with the other pieces left out, so that the sum of the
+    pieces against the whole kernel shows how much of them overlaps.
+    """
     import numba
     from numba import njit, prange
 
-    from symsphere._kernels import fill_orbits, triangle_point
-    from symsphere._orbit_stores import store_orbit_48
+    from symsphere._kernels import _BATCH, _map_batch, fill_orbits, fill_random_orbits, part_bounds, pcg64_random
+    from symsphere._orbit_stores import store_orbit_24, store_orbit_48
     from symsphere.points import BasePoints
-    from symsphere.symmetry import SIGNS, SOURCES
-
-    m48, m24 = n // 48, n // 24
-    uv48 = BasePoints("random", 1, m48, per_point=48).take(0, m48)
-    uv24 = BasePoints("random", 2, m24, per_point=24).take(0, m24)
-    basis = symsphere.frames.frame(np.asarray(NORMAL))
 
     @njit(parallel=True, cache=False)
-    def map_only(uv, points):
-        # the map evaluation alone: one triangle_point per base point, 3 values stored
-        for i in prange(uv.shape[0]):
-            x, y, z = triangle_point(uv[i, 0], uv[i, 1], 0)
-            points[i, 0] = x
-            points[i, 1] = y
-            points[i, 2] = z
+    def draws_only(streams, bounds, sink):
+        # the base points' uniforms alone: two PCG64 draws per point, summed (nothing stored)
+        for part in prange(len(bounds) - 1):
+            stream = streams[part].copy()
+            total = 0.0
+            for _ in range(bounds[part], bounds[part + 1]):
+                total += pcg64_random(stream) + pcg64_random(stream)
+            sink[part] = total
 
     @njit(parallel=True, cache=False)
-    def stores_only(uv, rows):
-        # the library's orbit stores alone (store_orbit_48 on the row view rows[i]); no trig
-        for i in prange(uv.shape[0]):
-            store_orbit_48(rows[i], uv[i, 0], uv[i, 1], 0.5)
-
-    # The same 144 stores written by index into the 2-D array, without a row view per point
-    # (generated from the symmetry tables, as symsphere._codegen does for the library).
-    lines = ["def store_by_index(rows, i, x, y, z):"]
-    names = ("x", "y", "z")
-    for k in range(48):
-        for c in range(3):
-            sign = "-" if SIGNS[k, c] < 0 else ""
-            lines.append(f"    rows[i, {3 * k + c}] = {sign}{names[int(SOURCES[k, c])]}")
-    namespace = {}
-    exec("\n".join(lines), namespace)  # noqa: S102 - generated from the library's own tables
-    store_by_index = njit(inline="always")(namespace["store_by_index"])
-
-    @njit(parallel=True, cache=False)
-    def stores_by_index(uv, rows):
-        for i in prange(uv.shape[0]):
-            store_by_index(rows, i, uv[i, 0], uv[i, 1], 0.5)
+    def map_only(uv, bounds, sink):
+        # the vectorised map alone, batch by batch as in the kernel (a checksum, nothing stored)
+        for part in prange(len(bounds) - 1):
+            u = np.full(_BATCH, 0.5)
+            v = np.full(_BATCH, 0.5)
+            base = np.empty((3, _BATCH))
+            total = 0.0
+            for first in range(bounds[part], bounds[part + 1], _BATCH):
+                stop = min(first + _BATCH, bounds[part + 1])
+                for j in range(stop - first):
+                    u[j] = uv[first + j, 0]
+                    v[j] = uv[first + j, 1]
+                _map_batch(u, v, 0, base)
+                total += base[0, 0] + base[1, _BATCH - 1]
+            sink[part] = total
 
     @njit(parallel=True, cache=False)
-    def fused_by_index(uv, rows):
-        # experiment: the library's map, then the stores by index, everything inlined in one loop body
-        for i in prange(uv.shape[0]):
-            x, y, z = triangle_point(uv[i, 0], uv[i, 1], 0)
-            store_by_index(rows, i, x, y, z)
-
-    batch = 16
-
-    @njit(parallel=True, cache=False)
-    def batched_by_index(uv, rows):
-        # experiment: the map for `batch` base points first (independent chains overlap), then their stores
-        blocks = (uv.shape[0] + batch - 1) // batch
-        for b in prange(blocks):
-            lo = b * batch
-            hi = min(lo + batch, uv.shape[0])
-            base = np.empty((batch, 3))
-            for j in range(hi - lo):
-                x, y, z = triangle_point(uv[lo + j, 0], uv[lo + j, 1], 0)
-                base[j, 0] = x
-                base[j, 1] = y
-                base[j, 2] = z
-            for j in range(hi - lo):
-                store_by_index(rows, lo + j, base[j, 0], base[j, 1], base[j, 2])
+    def stores_only(bounds, count, rows):
+        # the orbit stores alone, of a fixed point (no draws, no map)
+        for part in prange(len(bounds) - 1):
+            for i in range(bounds[part], bounds[part + 1]):
+                if count == 48:
+                    store_orbit_48(rows, i, 0.25, 0.125, 0.5)
+                else:
+                    store_orbit_24(rows, i, 0.25, 0.125, 0.5)
 
     @njit(parallel=True, cache=False)
     def parallel_fill(flat, value):
         for i in prange(flat.shape[0]):
             flat[i] = value
 
-    points = np.empty((m48, 3))
-    cases = [
-        Case("base points", "BasePoints('random').take(0, n/48)", "float64", "piece",
-             lambda: BasePoints("random", rng, m48, per_point=48).take(0, m48), 0,
-             f"{m48} points, {-(-m48 // 4096)} seeded blocks of 4096", "sample_sphere, out="),
-        Case("base points", "rng.random((n/48, 2)), one Generator", "float64", "piece",
-             lambda: rng.random((m48, 2)), 0, "the same uniforms without per-block seeding", "sample_sphere, out="),
-        Case("base points", "BasePoints('random').take(0, n/24)", "float64", "piece",
-             lambda: BasePoints("random", rng, m24, per_point=24).take(0, m24), 0, f"{m24} points (hemisphere)",
-             "sample_hemisphere, out="),
-        Case("map", "map only: triangle_point per base point", "float64", "piece",
-             lambda: map_only(uv48, points), 0, f"{m48} evaluations, (n/48, 3) stored", "sample_sphere, out="),
-    ]
-    for dtype in DTYPES:
-        name = np.dtype(dtype).name
-        out = np.full((n, 3), FILL_VALUE, dtype=dtype)
-        rows48 = out.reshape(m48, 144)
-        flat = out.reshape(-1)
+    basis = symsphere.frames.frame(np.asarray(NORMAL))
+    sink = np.zeros(numba.get_num_threads() + 1)
+    cases = []
+    for count, whole in ((48, "sample_sphere, out="), (24, "sample_hemisphere, out=")):
+        m = n // count
+        source = BasePoints("random", 1, m, per_point=count)
+        uv = source.take(0, m)
+        bounds = part_bounds(m)
+        starts = bounds[:-1]
+        domain = "sphere" if count == 48 else "hemisphere"
         cases += [
-            Case("kernel", "fill_orbits sphere (kernel alone, touched out)", name, "piece",
-                 lambda o=out: fill_orbits(uv48, "equal_area", 48, None, o), n, "", "sample_sphere, out="),
-            Case("kernel", "fill_orbits hemisphere (kernel alone)", name, "piece",
-                 lambda o=out: fill_orbits(uv24, "equal_area", 24, None, o), n, "", "sample_hemisphere, out="),
-            Case("kernel", "fill_orbits hemisphere rotated (kernel alone)", name, "piece",
-                 lambda o=out: fill_orbits(uv24, "equal_area", 24, basis, o), n, "",
-                 "sample_hemisphere, normal=(1,1,1), out="),
-            Case("stores", "stores only: store_orbit_48(rows[i], ...)", name, "piece",
-                 lambda r=rows48: stores_only(uv48, r), n, "the library's stores, no trig", "sample_sphere, out="),
-            Case("stores", "stores only, by index rows[i, j] (no row view)", name, "piece",
-                 lambda r=rows48: stores_by_index(uv48, r), n, "experiment, not the library", "sample_sphere, out="),
-            Case("kernel", "experiment: map + stores by index, one inlined loop", name, "piece",
-                 lambda r=rows48: fused_by_index(uv48, r), n, "the library's loop, inlined; not the library",
-                 "sample_sphere, out="),
-            Case("kernel", f"experiment: map for {batch} base points, then their stores", name, "piece",
-                 lambda r=rows48: batched_by_index(uv48, r), n, "hides the map's latency; not the library",
-                 "sample_sphere, out="),
-            Case("limit", f"fill, numba prange ({numba.get_num_threads()} threads)", name, "piece",
-                 lambda f=flat: parallel_fill(f, FILL_VALUE), n, "the write limit with all threads"),
+            Case("base points", f"{domain}: PCG64 states of the parts (Python)", "float64", "piece",
+                 lambda s=source, st=starts: s.streams(st), 0, f"{len(starts)} parts, advance + state", whole),
+            Case("base points", f"{domain}: draws only (2 per point, parallel)", "float64", "piece",
+                 lambda s=source, st=starts, b=bounds: draws_only(s.streams(st), b, sink), 0, f"{m} points", whole),
+            Case("map", f"{domain}: map only (vectorised, batches of {_BATCH})", "float64", "piece",
+                 lambda u=uv, b=bounds: map_only(u, b, sink), 0, f"{m} evaluations, nothing stored", whole),
         ]
+        for dtype in DTYPES:
+            name = np.dtype(dtype).name
+            out = np.full((n, 3), FILL_VALUE, dtype=dtype)
+            rows = out.reshape(m, 3 * count)
+            cases += [
+                Case("stores", f"{domain}: stores only", name, "piece",
+                     lambda b=bounds, r=rows, c=count: stores_only(b, c, r), n, "a fixed point, no draws, no map", whole),
+                Case("kernel", f"{domain}: kernel, points given (fill_orbits)", name, "piece",
+                     lambda u=uv, o=out, c=count: fill_orbits(u, "equal_area", c, None, o), n, "map + stores", whole),
+                Case("kernel", f"{domain}: kernel drawing its points (fill_random_orbits)", name, "piece",
+                     lambda s=source, st=starts, b=bounds, o=out, c=count: fill_random_orbits(
+                         s.streams(st), b, "equal_area", c, None, o), n, "draws + map + stores", whole),
+            ]
+            if count == 24:
+                cases.append(
+                    Case("kernel", "hemisphere: kernel drawing its points, normal=(1,1,1)", name, "piece",
+                         lambda s=source, st=starts, b=bounds, o=out: fill_random_orbits(
+                             s.streams(st), b, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
+                         "sample_hemisphere, normal=(1,1,1), out="))
+            if count == 48:
+                flat = out.reshape(-1)
+                cases.append(
+                    Case("limit", f"fill, numba prange ({numba.get_num_threads()} threads)", name, "piece",
+                         lambda f=flat: parallel_fill(f, FILL_VALUE), n, "the write limit with all threads"))
     return cases
 
 
@@ -646,7 +625,7 @@ def main(argv=None):
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON to FILE")
     parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba 3 cases")
     parser.add_argument("--no-profile", action="store_true", help="skip the profile pieces")
-    parser.add_argument("--integrate", action="store_true", help="also time integrate() (the hook; off by default)")
+    parser.add_argument("--no-integrate", action="store_true", help="skip the integrate() cases")
     parser.add_argument(
         "--find-llvm",
         action="store_true",
@@ -670,7 +649,7 @@ def main(argv=None):
     rng = np.random.default_rng(12345)
     load_before = os.getloadavg()
     cases = reference_cases(n, rng) + symsphere_cases(n, rng)
-    if args.integrate:
+    if not args.no_integrate:
         cases += integrate_cases(n, rng)
     meta = {}
     if args.no_mitsuba:

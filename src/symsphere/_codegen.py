@@ -31,7 +31,6 @@ def orbit_store_source() -> str:
     ]
     for count in (48, 24):
         lines += _plain_store(count)
-    lines += _rotated_store(24)
     return "\n".join(lines) + "\n"
 
 
@@ -49,26 +48,6 @@ def _plain_store(count):
     for k in range(count):
         for j in range(3):
             body.append(f"    rows[i, {3 * k + j}] = {_term(SIGNS[k, j], _COORDS[SOURCES[k, j]])}")
-    return body + [""]
-
-
-def _rotated_store(count):
-    body = [
-        "",
-        '@njit(inline="always")',
-        f"def store_orbit_{count}_rotated(rows, i, x, y, z, basis):",
-        f'    """rows[i, 3k:3k+3] = ((x, y, z) @ SPHERE_MAPS[k]) @ basis for k < {count}."""',
-    ]
-    # products coordinate * basis[i, j], shared by all images
-    for c in _COORDS:
-        for i in range(3):
-            for j in range(3):
-                body.append(f"    {c}{i}{j} = {c} * basis[{i}, {j}]")
-    for k in range(count):
-        for j in range(3):
-            terms = [(SIGNS[k, i], f"{_COORDS[SOURCES[k, i]]}{i}{j}") for i in range(3)]
-            a, b, c = (_term(s, name) for s, name in terms)
-            body.append(f"    rows[i, {3 * k + j}] = ({a} + {b}) + {c}".replace("+ -", "- "))
     return body + [""]
 
 

@@ -19,7 +19,7 @@ from numba.extending import intrinsic, register_jitable
 
 from . import _orbit_stores, maps, symmetry
 from ._numba_cache import invalidate_if_changed
-from ._orbit_stores import store_orbit_24, store_orbit_24_rotated, store_orbit_48
+from ._orbit_stores import store_orbit_24, store_orbit_48
 from .maps import (
     METHODS,
     _equal_area_density,
@@ -29,7 +29,7 @@ from .maps import (
     _paper2_density,
     _paper2_point,
 )
-from .symmetry import SIGNS, SOURCES
+from .symmetry import SIGNS, SOURCES, SPHERE_MAPS
 
 __all__ = ["METHOD_CODES", "fill_orbits", "fill_random_orbits", "part_bounds", "triangle_point", "triangle_density", "orbit_member"]
 
@@ -138,25 +138,28 @@ def _map_batch(u, v, code, base):
 
 
 @njit(inline="always")
-def _store_one(x, y, z, i, kind, basis, rows):
+def _store_one(x, y, z, i, kind, weights, rows):
     """Store the orbit of (x, y, z) in row i."""
     if kind == _SPHERE:
         store_orbit_48(rows, i, x, y, z)
     elif kind == _HEMISPHERE:
         store_orbit_24(rows, i, x, y, z)
     else:
-        store_orbit_24_rotated(rows, i, x, y, z, basis)
+        # image k = x W[0, 3k:3k+3] + y W[1, ...] + z W[2, ...], W from _layout
+        # (a loop over 72 contiguous columns, which LLVM vectorises).
+        for column in range(weights.shape[1]):
+            rows[i, column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
 
 
 @njit(inline="always")
-def _store_batch(base, first, stop, kind, basis, rows):
+def _store_batch(base, first, stop, kind, weights, rows):
     """Store the orbits of base[:, :stop - first] in rows first ... stop - 1."""
     for j in range(stop - first):
-        _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, basis, rows)
+        _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill(uv, bounds, code, kind, basis, rows):
+def _fill(uv, bounds, code, kind, weights, rows):
     # One part per thread (not one prange step per batch): the batch buffers are allocated once
     # per part.
     for part in prange(len(bounds) - 1):
@@ -169,11 +172,11 @@ def _fill(uv, bounds, code, kind, basis, rows):
                 u[j] = uv[first + j, 0]
                 v[j] = uv[first + j, 1]
             _map_batch(u, v, code, base)
-            _store_batch(base, first, stop, kind, basis, rows)
+            _store_batch(base, first, stop, kind, weights, rows)
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(streams, bounds, code, kind, basis, rows):
+def _fill_random(streams, bounds, code, kind, weights, rows):
     # As _fill, but each part draws its own points, u then v per point, from its own PCG64
     # stream (a row of *streams*, numpy's state after ``advance``): no (m, 2) array of base
     # points, and the draws run in parallel.  The next batch's points are drawn between the
@@ -193,7 +196,7 @@ def _fill_random(streams, bounds, code, kind, basis, rows):
             _map_batch(u, v, code, base)
             upcoming = min(_BATCH, hi - stop)
             for j in range(stop - first):
-                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, basis, rows)
+                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
                 if j < upcoming:
                     u[j] = pcg64_random(stream)
                     v[j] = pcg64_random(stream)
@@ -206,8 +209,8 @@ def fill_orbits(uv, method, count, basis, out):
     (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
     C-contiguous float32 or float64.
     """
-    rows, kind, frame = _layout(len(uv), count, basis, out)
-    _fill(uv, part_bounds(len(uv)), METHOD_CODES[method], kind, frame, rows)
+    rows, kind, weights = _layout(len(uv), count, basis, out)
+    _fill(uv, part_bounds(len(uv)), METHOD_CODES[method], kind, weights, rows)
     return out
 
 
@@ -217,8 +220,8 @@ def fill_random_orbits(streams, bounds, method, count, basis, out):
 
     *streams* come from :meth:`symsphere.points.BasePoints.streams`.
     """
-    rows, kind, frame = _layout(int(bounds[-1]), count, basis, out)
-    _fill_random(streams, bounds, METHOD_CODES[method], kind, frame, rows)
+    rows, kind, weights = _layout(int(bounds[-1]), count, basis, out)
+    _fill_random(streams, bounds, METHOD_CODES[method], kind, weights, rows)
     return out
 
 
@@ -234,10 +237,11 @@ def part_bounds(m, parts=None):
 
 
 def _layout(m, count, basis, out):
+    """(rows of *out*, kind of store, the weights of a rotated store or a placeholder)."""
     rows = out.reshape(m, 3 * count)
-    if count == 48:
-        kind = _SPHERE
-    else:
-        kind = _HEMISPHERE if basis is None else _HEMISPHERE_ROTATED
-    frame = np.eye(3) if basis is None else np.ascontiguousarray(basis, dtype=np.float64)
-    return rows, kind, frame
+    if basis is None:
+        return rows, (_SPHERE if count == 48 else _HEMISPHERE), np.eye(3)
+    # ((x, y, z) @ M_k) @ basis = (x, y, z) @ (M_k @ basis): the rows of M_k @ basis are signed
+    # rows of basis (M_k permutes), so the weights are exact and W[c, 3k + j] = (M_k @ basis)[c, j].
+    weights = np.einsum("kcj->ckj", SPHERE_MAPS[:count] @ np.asarray(basis, dtype=np.float64))
+    return rows, _HEMISPHERE_ROTATED, np.ascontiguousarray(weights.reshape(3, 3 * count))
