@@ -55,6 +55,7 @@ def test_random_points_are_numpys_pcg64_stream():
     expected = np.random.Generator(np.random.PCG64(seed)).random((3 * BLOCK, 2))
     assert np.array_equal(source.take(0, 3 * BLOCK), expected)
     assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
+    assert np.array_equal(source.take(np.int64(7), np.int32(9)), expected[7:9])  # numpy integers too
     # The kernels' inlined PCG64 step continues numpy's stream from any index.
     draw = njit(lambda stream, k: [_kernels.pcg64_random(stream) for _ in range(k)])
     (stream,) = source.streams([101])

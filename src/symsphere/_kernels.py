@@ -37,9 +37,6 @@ METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
-invalidate_if_changed(__file__, [maps.__file__, _orbit_stores.__file__, symmetry.__file__])
-
-
 @register_jitable
 def triangle_point(u, v, code):
     """The map *code* of METHOD_CODES at (u, v): a point (x, y, z) of T0."""
@@ -200,6 +197,9 @@ def _fill_random(streams, bounds, code, kind, weights, rows):
                 if j < upcoming:
                     u[j] = pcg64_random(stream)
                     v[j] = pcg64_random(stream)
+
+
+invalidate_if_changed(_fill, [maps.__file__, _orbit_stores.__file__, symmetry.__file__])
 
 
 def fill_orbits(uv, method, count, basis, out):

@@ -1,8 +1,8 @@
 """Scale-out on a Dask cluster, with results independent of the cluster.
 
 Work is cut at the block boundaries of :mod:`symsphere.points` (``BLOCK`` base
-points, seeded by ``(root seed, block index)``; QMC blocks are consecutive
-segments of one scrambled sequence).  Every task computes whole blocks exactly
+points; random block ``b`` is the stretch of one PCG64 stream from draw
+``2 b BLOCK`` on, QMC blocks are consecutive segments of one scrambled sequence).  Every task computes whole blocks exactly
 as a single process would, and the client combines the blocks in block order,
 so the results are **bit-identical** to :func:`symsphere.sample_sphere` and
 :func:`symsphere.integrate` with the same arguments, whatever the number of

@@ -150,9 +150,9 @@ class BasePoints:
         return streams
 
     def _generator_at(self, index):
-        bit_generator = np.random.PCG64()
+        bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
         bit_generator.state = self._stream_start
-        bit_generator.advance(2 * index)  # two draws per point
+        bit_generator.advance(2 * int(index))  # two draws per point; advance takes Python ints only
         return np.random.Generator(bit_generator)
 
     def _take_random(self, start, stop):

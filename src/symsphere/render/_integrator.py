@@ -63,9 +63,6 @@ MATERIAL_COLUMNS = 11  # kind, colour (3), transmittance (3), ior, emission (3)
 CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image plane at distance 1 (3 each), near
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
-invalidate_if_changed(
-    __file__, [_random.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__, symmetry.__file__]
-)
 _PI = math.pi
 _INV_PI = 1.0 / math.pi
 _RR_CAP = 0.95
@@ -480,3 +477,8 @@ def frame_matrix(nx, ny, nz):
         out[1, j] = b[j]
     out[2, 0], out[2, 1], out[2, 2] = nx, ny, nz
     return out
+
+
+invalidate_if_changed(
+    render_pass, [_random.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__, symmetry.__file__]
+)

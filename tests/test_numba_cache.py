@@ -1,0 +1,50 @@
+"""numba's disk cache is dropped when a file that a cached kernel inlines changes."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+KERNEL = textwrap.dedent(
+    """
+    from numba import njit
+    from symsphere._numba_cache import invalidate_if_changed
+    import helper
+
+    @njit(cache=True)
+    def kernel(x):
+        return helper.scale(x)
+
+    invalidate_if_changed(kernel, [helper.__file__])
+    print(kernel(2.0))
+    """
+)
+
+
+def _run(folder, env):
+    result = subprocess.run(
+        [sys.executable, "-c", "import kernel"], cwd=folder, env=env, capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    return float(result.stdout.split()[-1])
+
+
+@pytest.mark.parametrize("own_cache_dir", [False, True], ids=["next-to-source", "NUMBA_CACHE_DIR"])
+def test_editing_an_inlined_file_drops_the_cached_kernel(tmp_path, own_cache_dir):
+    source = tmp_path / "src"
+    source.mkdir()
+    (source / "kernel.py").write_text(KERNEL)
+    helper = source / "helper.py"
+    helper.write_text("from numba.extending import register_jitable\n\n@register_jitable\ndef scale(x):\n    return 3 * x\n")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = os.pathsep.join([str(source), *sys.path])
+    if own_cache_dir:
+        env["NUMBA_CACHE_DIR"] = str(tmp_path / "cache")
+    assert _run(source, env) == 6.0
+    assert _run(source, env) == 6.0  # from the cache
+    cached = list((tmp_path / "cache").rglob("kernel.*.nbi")) if own_cache_dir else list(source.rglob("kernel.*.nbi"))
+    assert cached, "numba did not cache the kernel where expected"
+    helper.write_text(helper.read_text().replace("3 * x", "5 * x"))
+    assert _run(source, env) == 10.0  # numba alone would still return 6.0 (kernel.py did not change)
