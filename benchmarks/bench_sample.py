@@ -352,15 +352,17 @@ def profile_cases(n, rng):
     import numba
     from numba import njit, prange
 
-    from symsphere._kernels import _BATCH, _map_batch, fill_orbits, fill_random_orbits, part_bounds, pcg64_random
+    from symsphere._kernels import (
+        _BATCH, _map_batch, fill_orbits, fill_random_orbits, part_bounds, pcg64_advanced, pcg64_random,
+    )
     from symsphere._orbit_stores import store_orbit_24, store_orbit_48
     from symsphere.points import BasePoints
 
     @njit(parallel=True, cache=False)
-    def draws_only(streams, bounds, sink):
-        # the base points' uniforms alone: two PCG64 draws per point, summed (nothing stored)
+    def draws_only(stream_start, bounds, sink):
+        # the base points' uniforms alone: each part's jump, then two PCG64 draws per point, summed
         for part in prange(len(bounds) - 1):
-            stream = streams[part].copy()
+            stream = pcg64_advanced(stream_start, 2 * bounds[part])
             total = 0.0
             for _ in range(bounds[part], bounds[part + 1]):
                 total += pcg64_random(stream) + pcg64_random(stream)
@@ -406,13 +408,13 @@ def profile_cases(n, rng):
         source = BasePoints("random", 1, m, per_point=count)
         uv = source.take(0, m)
         bounds = part_bounds(m)
-        starts = bounds[:-1]
         domain = "sphere" if count == 48 else "hemisphere"
         cases += [
-            Case("base points", f"{domain}: PCG64 states of the parts (Python)", "float64", "piece",
-                 lambda s=source, st=starts: s.streams(st), 0, f"{len(starts)} parts, advance + state", whole),
+            Case("base points", f"{domain}: BasePoints('random', ...) (Python)", "float64", "piece",
+                 lambda c=count, k=m: BasePoints("random", rng, k, per_point=c).stream_start, 0,
+                 "root seed, PCG64 state of point 0", whole),
             Case("base points", f"{domain}: draws only (2 per point, parallel)", "float64", "piece",
-                 lambda s=source, st=starts, b=bounds: draws_only(s.streams(st), b, sink), 0, f"{m} points", whole),
+                 lambda s=source, b=bounds: draws_only(s.stream_start, b, sink), 0, f"{m} points", whole),
             Case("map", f"{domain}: map only (vectorised, batches of {_BATCH})", "float64", "piece",
                  lambda u=uv, b=bounds: map_only(u, b, sink), 0, f"{m} evaluations, nothing stored", whole),
         ]
@@ -426,14 +428,14 @@ def profile_cases(n, rng):
                 Case("kernel", f"{domain}: kernel, points given (fill_orbits)", name, "piece",
                      lambda u=uv, o=out, c=count: fill_orbits(u, "equal_area", c, None, o), n, "map + stores", whole),
                 Case("kernel", f"{domain}: kernel drawing its points (fill_random_orbits)", name, "piece",
-                     lambda s=source, st=starts, b=bounds, o=out, c=count: fill_random_orbits(
-                         s.streams(st), b, "equal_area", c, None, o), n, "draws + map + stores", whole),
+                     lambda s=source, o=out, c=count, k=m: fill_random_orbits(
+                         s.stream_start, 0, k, "equal_area", c, None, o), n, "draws + map + stores", whole),
             ]
             if count == 24:
                 cases.append(
                     Case("kernel", "hemisphere: kernel drawing its points, normal=(1,1,1)", name, "piece",
-                         lambda s=source, st=starts, b=bounds, o=out: fill_random_orbits(
-                             s.streams(st), b, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
+                         lambda s=source, o=out, k=m: fill_random_orbits(
+                             s.stream_start, 0, k, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
                          "sample_hemisphere, normal=(1,1,1), out="))
             if count == 48:
                 flat = out.reshape(-1)

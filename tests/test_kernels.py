@@ -44,7 +44,7 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
         bounds = _kernels.part_bounds(m, parts)
         assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) >= 0)
         got = np.full((m * count, 3), np.nan, dtype)
-        _kernels.fill_random_orbits(source.streams(5 + bounds[:-1]), bounds, method, count, basis, got)
+        _kernels.fill_random_orbits(source.stream_start, 5, m, method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
 
 
@@ -56,12 +56,30 @@ def test_random_points_are_numpys_pcg64_stream():
     assert np.array_equal(source.take(0, 3 * BLOCK), expected)
     assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
     assert np.array_equal(source.take(np.int64(7), np.int32(9)), expected[7:9])  # numpy integers too
-    # The kernels' inlined PCG64 step continues numpy's stream from any index.
-    draw = njit(lambda stream, k: [_kernels.pcg64_random(stream) for _ in range(k)])
-    (stream,) = source.streams([101])
-    assert np.array_equal(draw(stream, 2 * 400), expected[101:501].ravel())
-    with pytest.raises(ValueError, match="no random stream"):
-        BasePoints("sobol", 8, total=16).streams([0])
+    # The kernels' inlined PCG64 jump and step continue numpy's stream from any index.
+    @njit
+    def draw(start, index, k):
+        stream = _kernels.pcg64_advanced(start, 2 * index)
+        return [_kernels.pcg64_random(stream) for _ in range(k)]
+
+    assert np.array_equal(draw(source.stream_start, 101, 2 * 400), expected[101:501].ravel())
+    assert BasePoints("sobol", 8, total=16).stream_start is None
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pcg64_jump_ahead_equals_numpys_advance(seed):
+    rng = np.random.default_rng(seed)
+    start = BasePoints("random", seed, total=1).stream_start
+    jump = njit(_kernels.pcg64_advanced)
+    for draws in [0, 1, 2, 3, 2**32 + 5, 2**62 + 999, 2**63 - 1, *rng.integers(0, 2**63, size=20)]:
+        bit_generator = np.random.PCG64(0)
+        bit_generator.state = {"bit_generator": "PCG64", "has_uint32": 0, "uinteger": 0, "state": {
+            "state": int(start[0]) << 64 | int(start[1]), "inc": int(start[2]) << 64 | int(start[3])}}
+        bit_generator.advance(int(draws))
+        state = bit_generator.state["state"]
+        got = jump(start, np.uint64(draws))
+        assert int(got[0]) << 64 | int(got[1]) == state["state"]
+        assert int(got[2]) << 64 | int(got[3]) == state["inc"]
 
 
 def test_kernel_exact_signs_and_permutations():

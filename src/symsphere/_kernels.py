@@ -31,7 +31,7 @@ from .maps import (
 )
 from .symmetry import SIGNS, SOURCES, SPHERE_MAPS
 
-__all__ = ["METHOD_CODES", "fill_orbits", "fill_random_orbits", "part_bounds", "triangle_point", "triangle_density", "orbit_member"]
+__all__ = ["METHOD_CODES", "fill_orbits", "fill_random_orbits", "part_bounds", "pcg64_random", "pcg64_advanced", "triangle_point", "triangle_density", "orbit_member"]
 
 METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
@@ -95,18 +95,56 @@ def _mul_high(typingctx, a, b):
 
 
 @register_jitable
+def _mul128(a_hi, a_lo, b_hi, b_lo):
+    """(a * b) mod 2**128 of 128-bit numbers given as (high, low) uint64 halves."""
+    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo
+
+
+@register_jitable
+def _add128(a_hi, a_lo, b_hi, b_lo):
+    """(a + b) mod 2**128."""
+    lo = a_lo + b_lo
+    return a_hi + b_hi + (_U1 if lo < a_lo else _U0), lo
+
+
+@register_jitable
 def pcg64_random(stream):
     """Next ``Generator.random()`` of the PCG64 *stream* (uint64[4]: state hi, lo; inc hi, lo)."""
-    hi, lo = stream[0], stream[1]
-    product_lo = lo * _MUL_LO
-    product_hi = _mul_high(lo, _MUL_LO) + hi * _MUL_LO + lo * _MUL_HI
-    lo = product_lo + stream[3]
-    hi = product_hi + stream[2] + (_U1 if lo < product_lo else _U0)
+    hi, lo = _mul128(stream[0], stream[1], _MUL_HI, _MUL_LO)
+    hi, lo = _add128(hi, lo, stream[2], stream[3])
     stream[0], stream[1] = hi, lo
     mixed = hi ^ lo
     rotation = hi >> _U58
     bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
     return np.float64(bits >> _U11) * (1.0 / 9007199254740992.0)  # numpy's next_double: 53 bits
+
+
+@register_jitable
+def pcg64_advanced(start, draws):
+    """The PCG64 stream *start* after *draws* draws, as numpy's ``PCG64.advance`` (a new array).
+
+    Jump-ahead of an LCG in O(log draws) steps (Brown, "Random number generation with
+    arbitrary strides", 1994; O'Neill's ``pcg_advance_lcg_128``): x -> M x + c applied
+    *draws* times is x -> A x + C, built from the binary digits of *draws*.
+    """
+    mult_hi, mult_lo = _MUL_HI, _MUL_LO
+    plus_hi, plus_lo = start[2], start[3]
+    acc_mult_hi, acc_mult_lo = _U0, _U1
+    acc_plus_hi, acc_plus_lo = _U0, _U0
+    remaining = np.uint64(draws)
+    while remaining > _U0:
+        if remaining & _U1:
+            acc_mult_hi, acc_mult_lo = _mul128(acc_mult_hi, acc_mult_lo, mult_hi, mult_lo)
+            acc_plus_hi, acc_plus_lo = _mul128(acc_plus_hi, acc_plus_lo, mult_hi, mult_lo)
+            acc_plus_hi, acc_plus_lo = _add128(acc_plus_hi, acc_plus_lo, plus_hi, plus_lo)
+        next_hi, next_lo = _add128(mult_hi, mult_lo, _U0, _U1)
+        plus_hi, plus_lo = _mul128(next_hi, next_lo, plus_hi, plus_lo)
+        mult_hi, mult_lo = _mul128(mult_hi, mult_lo, mult_hi, mult_lo)
+        remaining = remaining >> _U1
+    stream = start.copy()
+    stream[0], stream[1] = _mul128(acc_mult_hi, acc_mult_lo, start[0], start[1])
+    stream[0], stream[1] = _add128(stream[0], stream[1], acc_plus_hi, acc_plus_lo)
+    return stream
 
 
 # Base points are handled in batches of _BATCH: first the map for the whole batch, into
@@ -173,14 +211,14 @@ def _fill(uv, bounds, code, kind, weights, rows):
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(streams, bounds, code, kind, weights, rows):
-    # As _fill, but each part draws its own points, u then v per point, from its own PCG64
-    # stream (a row of *streams*, numpy's state after ``advance``): no (m, 2) array of base
-    # points, and the draws run in parallel.  The next batch's points are drawn between the
-    # current batch's orbit stores, so that the generator's dependent chain of 128-bit
-    # multiplications overlaps the stores instead of following them.
+def _fill_random(stream_start, first_point, bounds, code, kind, weights, rows):
+    # As _fill, but each part draws its own points, u then v per point, from numpy's PCG64
+    # stream *stream_start* (the state of point 0) jumped ahead to the part's first point: no
+    # (m, 2) array of base points, and the jumps and draws run in parallel.  The next batch's
+    # points are drawn between the current batch's orbit stores, so that the generator's
+    # dependent chain of 128-bit multiplications overlaps the stores instead of following them.
     for part in prange(len(bounds) - 1):
-        stream = streams[part].copy()
+        stream = pcg64_advanced(stream_start, 2 * (first_point + bounds[part]))
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
@@ -214,14 +252,13 @@ def fill_orbits(uv, method, count, basis, out):
     return out
 
 
-def fill_random_orbits(streams, bounds, method, count, basis, out):
-    """As :func:`fill_orbits`, drawing the points: part p (base points ``bounds[p] ...
-    bounds[p+1] - 1``) takes u, v, u, v, ... from the PCG64 stream ``streams[p]``.
-
-    *streams* come from :meth:`symsphere.points.BasePoints.streams`.
-    """
-    rows, kind, weights = _layout(int(bounds[-1]), count, basis, out)
-    _fill_random(streams, bounds, METHOD_CODES[method], kind, weights, rows)
+def fill_random_orbits(stream_start, first_point, m, method, count, basis, out, parts=None):
+    """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
+    point i is draws 2i, 2i + 1 of numpy's PCG64 stream whose state at point 0 is
+    *stream_start* (:attr:`symsphere.points.BasePoints.stream_start`).  *parts*: see
+    :func:`part_bounds` (the output does not depend on it)."""
+    rows, kind, weights = _layout(m, count, basis, out)
+    _fill_random(stream_start, first_point, part_bounds(m, parts), METHOD_CODES[method], kind, weights, rows)
     return out
 
 

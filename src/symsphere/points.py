@@ -136,18 +136,16 @@ class BasePoints:
         corner = np.stack([cells // self._side, cells % self._side], axis=-1)
         return (corner + jitter) / self._side
 
-    def streams(self, starts):
-        """PCG64 states from which ``Generator.random()`` draws u, v, u, v, ... of the random
-        points from each index in *starts* on ('random' and 'stratified' only: the jitter of
-        the latter): a uint64 array (len(starts), 4) of state (high, low), increment (high, low),
-        for :func:`symsphere._kernels.pcg64_random`."""
+    @property
+    def stream_start(self):
+        """The PCG64 state at point 0 of the random points ('random' and 'stratified': the
+        jitter of the latter) as uint64 [state high, low, increment high, low], for the kernels'
+        :func:`symsphere._kernels.pcg64_random`; None for QMC points."""
         if self._engine is not None:
-            raise ValueError(f"points={self._kind!r} has no random stream")
-        streams = np.empty((len(starts), 4), dtype=np.uint64)
-        for row, start in zip(streams, starts):
-            state = self._generator_at(int(start)).bit_generator.state["state"]
-            row[:] = [state["state"] >> 64, state["state"] & _LOW64, state["inc"] >> 64, state["inc"] & _LOW64]
-        return streams
+            return None
+        state = self._stream_start["state"]
+        halves = [state["state"] >> 64, state["state"] & _LOW64, state["inc"] >> 64, state["inc"] & _LOW64]
+        return np.array(halves, dtype=np.uint64)
 
     def _generator_at(self, index):
         bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import frames
-from ._kernels import fill_orbits, fill_random_orbits, part_bounds
+from ._kernels import fill_orbits, fill_random_orbits
 from ._validation import check_count, check_directions, check_dtype, check_normal, check_out
 from .maps import get_map
 from .points import BasePoints
@@ -263,8 +263,7 @@ def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
 def _fill_range(source, start, stop, method, count, basis, out):
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
     if source.kind == "random":  # the kernel draws the points itself, in parallel
-        bounds = part_bounds(stop - start)
-        return fill_random_orbits(source.streams(start + bounds[:-1]), bounds, method, count, basis, out)
+        return fill_random_orbits(source.stream_start, start, stop - start, method, count, basis, out)
     return fill_orbits(source.take(start, stop), method, count, basis, out)
 
 
