@@ -353,16 +353,17 @@ def profile_cases(n, rng):
     from numba import njit, prange
 
     from symsphere._kernels import (
-        _BATCH, _map_batch, fill_orbits, fill_random_orbits, part_bounds, pcg64_advanced, pcg64_random,
+        _BATCH, _map_batch, fill_orbits, fill_random_orbits, part_bounds, pcg64_advanced, pcg64_random, pcg64_seeded,
     )
     from symsphere._orbit_stores import store_orbit_24, store_orbit_48
     from symsphere.points import BasePoints
 
     @njit(parallel=True, cache=False)
-    def draws_only(stream_start, bounds, sink):
-        # the base points' uniforms alone: each part's jump, then two PCG64 draws per point, summed
+    def draws_only(seed_words, bounds, sink):
+        # the base points' uniforms alone: seeding, each part's jump, then two PCG64 draws per point
+        start = pcg64_seeded(seed_words)
         for part in prange(len(bounds) - 1):
-            stream = pcg64_advanced(stream_start, 2 * bounds[part])
+            stream = pcg64_advanced(start, 2 * bounds[part])
             total = 0.0
             for _ in range(bounds[part], bounds[part + 1]):
                 total += pcg64_random(stream) + pcg64_random(stream)
@@ -411,10 +412,10 @@ def profile_cases(n, rng):
         domain = "sphere" if count == 48 else "hemisphere"
         cases += [
             Case("base points", f"{domain}: BasePoints('random', ...) (Python)", "float64", "piece",
-                 lambda c=count, k=m: BasePoints("random", rng, k, per_point=c).stream_start, 0,
-                 "root seed, PCG64 state of point 0", whole),
+                 lambda c=count, k=m: BasePoints("random", rng, k, per_point=c).seed_words, 0,
+                 "root seed, the stream's seed words", whole),
             Case("base points", f"{domain}: draws only (2 per point, parallel)", "float64", "piece",
-                 lambda s=source, b=bounds: draws_only(s.stream_start, b, sink), 0, f"{m} points", whole),
+                 lambda s=source, b=bounds: draws_only(s.seed_words, b, sink), 0, f"{m} points", whole),
             Case("map", f"{domain}: map only (vectorised, batches of {_BATCH})", "float64", "piece",
                  lambda u=uv, b=bounds: map_only(u, b, sink), 0, f"{m} evaluations, nothing stored", whole),
         ]
@@ -429,13 +430,13 @@ def profile_cases(n, rng):
                      lambda u=uv, o=out, c=count: fill_orbits(u, "equal_area", c, None, o), n, "map + stores", whole),
                 Case("kernel", f"{domain}: kernel drawing its points (fill_random_orbits)", name, "piece",
                      lambda s=source, o=out, c=count, k=m: fill_random_orbits(
-                         s.stream_start, 0, k, "equal_area", c, None, o), n, "draws + map + stores", whole),
+                         s.seed_words, 0, k, "equal_area", c, None, o), n, "draws + map + stores", whole),
             ]
             if count == 24:
                 cases.append(
                     Case("kernel", "hemisphere: kernel drawing its points, normal=(1,1,1)", name, "piece",
                          lambda s=source, o=out, k=m: fill_random_orbits(
-                             s.stream_start, 0, k, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
+                             s.seed_words, 0, k, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
                          "sample_hemisphere, normal=(1,1,1), out="))
             if count == 48:
                 flat = out.reshape(-1)

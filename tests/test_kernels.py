@@ -41,10 +41,8 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
     source = BasePoints("random", 21, total=m + 5)
     for dtype in (np.float64, np.float32):
         expected = _kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
-        bounds = _kernels.part_bounds(m, parts)
-        assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) >= 0)
         got = np.full((m * count, 3), np.nan, dtype)
-        _kernels.fill_random_orbits(source.stream_start, 5, m, method, count, basis, got, parts=parts)
+        _kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
 
 
@@ -56,30 +54,45 @@ def test_random_points_are_numpys_pcg64_stream():
     assert np.array_equal(source.take(0, 3 * BLOCK), expected)
     assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
     assert np.array_equal(source.take(np.int64(7), np.int32(9)), expected[7:9])  # numpy integers too
-    # The kernels' inlined PCG64 jump and step continue numpy's stream from any index.
+    # The kernels' own PCG64 (seeding, jump, step) continues numpy's stream from any index.
     @njit
-    def draw(start, index, k):
-        stream = _kernels.pcg64_advanced(start, 2 * index)
+    def draw(words, index, k):
+        stream = _kernels.pcg64_advanced(_kernels.pcg64_seeded(words), 2 * index)
         return [_kernels.pcg64_random(stream) for _ in range(k)]
 
-    assert np.array_equal(draw(source.stream_start, 101, 2 * 400), expected[101:501].ravel())
-    assert BasePoints("sobol", 8, total=16).stream_start is None
+    assert np.array_equal(draw(source.seed_words, 101, 2 * 400), expected[101:501].ravel())
+    assert BasePoints("sobol", 8, total=16).seed_words is None
+
+
+def _numpy_state(bit_generator):
+    state = bit_generator.state["state"]
+    return state["state"], state["inc"]
+
+
+def _as_int128(stream):
+    return int(stream[0]) << 64 | int(stream[1]), int(stream[2]) << 64 | int(stream[3])
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_pcg64_jump_ahead_equals_numpys_advance(seed):
+def test_pcg64_seeding_and_jump_ahead_equal_numpys(seed):
     rng = np.random.default_rng(seed)
-    start = BasePoints("random", seed, total=1).stream_start
+    sequence = np.random.SeedSequence(rng.integers(0, 2**63, size=4).tolist(), spawn_key=(0,))
+    words = sequence.generate_state(4, np.uint64)
+    start = njit(_kernels.pcg64_seeded)(words)
+    assert _as_int128(start) == _numpy_state(np.random.PCG64(sequence))
     jump = njit(_kernels.pcg64_advanced)
     for draws in [0, 1, 2, 3, 2**32 + 5, 2**62 + 999, 2**63 - 1, *rng.integers(0, 2**63, size=20)]:
-        bit_generator = np.random.PCG64(0)
-        bit_generator.state = {"bit_generator": "PCG64", "has_uint32": 0, "uinteger": 0, "state": {
-            "state": int(start[0]) << 64 | int(start[1]), "inc": int(start[2]) << 64 | int(start[3])}}
+        bit_generator = np.random.PCG64(sequence)
         bit_generator.advance(int(draws))
-        state = bit_generator.state["state"]
-        got = jump(start, np.uint64(draws))
-        assert int(got[0]) << 64 | int(got[1]) == state["state"]
-        assert int(got[2]) << 64 | int(got[3]) == state["inc"]
+        assert _as_int128(jump(start, np.uint64(draws))) == _numpy_state(bit_generator)
+
+
+def test_parts_cover_the_points_in_order():
+    for m in [1, 15, 16, 17, 100, 4099]:
+        for parts in [1, 2, 3, 7, 1000]:
+            bounds = _kernels.part_bounds(m, parts)
+            assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) > 0)
+            assert np.all(bounds[1:-1] % 16 == 0) and len(bounds) - 1 == min(parts, -(-m // 16))
 
 
 def test_kernel_exact_signs_and_permutations():

@@ -31,7 +31,20 @@ from .maps import (
 )
 from .symmetry import SIGNS, SOURCES, SPHERE_MAPS
 
-__all__ = ["METHOD_CODES", "fill_orbits", "fill_random_orbits", "part_bounds", "pcg64_random", "pcg64_advanced", "triangle_point", "triangle_density", "orbit_member"]
+__all__ = [
+    "METHOD_CODES",
+    "fill_orbits",
+    "fill_random_orbits",
+    "part_bounds",
+    "part_range",
+    "part_count",
+    "pcg64_random",
+    "pcg64_advanced",
+    "pcg64_seeded",
+    "triangle_point",
+    "triangle_density",
+    "orbit_member",
+]
 
 METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
@@ -108,15 +121,35 @@ def _add128(a_hi, a_lo, b_hi, b_lo):
 
 
 @register_jitable
-def pcg64_random(stream):
-    """Next ``Generator.random()`` of the PCG64 *stream* (uint64[4]: state hi, lo; inc hi, lo)."""
+def _pcg64_step(stream):
+    """state = M state + inc (mod 2**128); returns the new state (high, low)."""
     hi, lo = _mul128(stream[0], stream[1], _MUL_HI, _MUL_LO)
     hi, lo = _add128(hi, lo, stream[2], stream[3])
     stream[0], stream[1] = hi, lo
+    return hi, lo
+
+
+@register_jitable
+def pcg64_random(stream):
+    """Next ``Generator.random()`` of the PCG64 *stream* (uint64[4]: state hi, lo; inc hi, lo)."""
+    hi, lo = _pcg64_step(stream)
     mixed = hi ^ lo
     rotation = hi >> _U58
     bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
     return np.float64(bits >> _U11) * (1.0 / 9007199254740992.0)  # numpy's next_double: 53 bits
+
+
+@register_jitable
+def pcg64_seeded(words):
+    """The stream of numpy's ``PCG64(seed_sequence)``, from ``seed_sequence.generate_state(4,
+    np.uint64)`` (O'Neill's ``pcg_setseq_128_srandom_r``, as numpy seeds it)."""
+    stream = np.zeros(4, dtype=np.uint64)
+    stream[2] = (words[2] << _U1) | (words[3] >> _U63)  # inc = (initseq << 1) | 1
+    stream[3] = (words[3] << _U1) | _U1
+    _pcg64_step(stream)
+    stream[0], stream[1] = _add128(stream[0], stream[1], words[0], words[1])
+    _pcg64_step(stream)
+    return stream
 
 
 @register_jitable
@@ -193,16 +226,35 @@ def _store_batch(base, first, stop, kind, weights, rows):
         _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
 
 
+@register_jitable
+def part_range(m, parts, part):
+    """Points ``lo ... hi - 1`` of part *part* when m points are split into *parts* stretches of
+    whole batches (fewer parts than asked if there are fewer batches: see :func:`part_count`)."""
+    batches = (m + _BATCH - 1) // _BATCH
+    lo = min(m, (batches * part // parts) * _BATCH)
+    hi = min(m, (batches * (part + 1) // parts) * _BATCH)
+    return lo, hi
+
+
+@register_jitable
+def part_count(m, parts):
+    """How many parts m points are split into: *parts*, but at most one per batch, at least one."""
+    return max(1, min(parts, (m + _BATCH - 1) // _BATCH))
+
+
 @njit(parallel=True, **_OPTIONS)
-def _fill(uv, bounds, code, kind, weights, rows):
+def _fill(uv, parts, code, kind, weights, rows):
     # One part per thread (not one prange step per batch): the batch buffers are allocated once
     # per part.
-    for part in prange(len(bounds) - 1):
+    m = uv.shape[0]
+    count = part_count(m, parts)
+    for part in prange(count):
+        lo, hi = part_range(m, count, part)
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
-        for first in range(bounds[part], bounds[part + 1], _BATCH):
-            stop = min(first + _BATCH, bounds[part + 1])
+        for first in range(lo, hi, _BATCH):
+            stop = min(first + _BATCH, hi)
             for j in range(stop - first):
                 u[j] = uv[first + j, 0]
                 v[j] = uv[first + j, 1]
@@ -211,18 +263,20 @@ def _fill(uv, bounds, code, kind, weights, rows):
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(stream_start, first_point, bounds, code, kind, weights, rows):
+def _fill_random(seed_words, first_point, m, parts, code, kind, weights, rows):
     # As _fill, but each part draws its own points, u then v per point, from numpy's PCG64
-    # stream *stream_start* (the state of point 0) jumped ahead to the part's first point: no
-    # (m, 2) array of base points, and the jumps and draws run in parallel.  The next batch's
-    # points are drawn between the current batch's orbit stores, so that the generator's
-    # dependent chain of 128-bit multiplications overlaps the stores instead of following them.
-    for part in prange(len(bounds) - 1):
-        stream = pcg64_advanced(stream_start, 2 * (first_point + bounds[part]))
+    # stream seeded by *seed_words* and jumped ahead to the part's first point: no (m, 2) array
+    # of base points, and the jumps and draws run in parallel.  The next batch's points are
+    # drawn between the current batch's orbit stores, so that the generator's dependent chain
+    # of 128-bit multiplications overlaps the stores instead of following them.
+    start = pcg64_seeded(seed_words)
+    count = part_count(m, parts)
+    for part in prange(count):
+        lo, hi = part_range(m, count, part)
+        stream = pcg64_advanced(start, 2 * (first_point + lo))
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
-        lo, hi = bounds[part], bounds[part + 1]
         for j in range(min(_BATCH, hi - lo)):
             u[j] = pcg64_random(stream)
             v[j] = pcg64_random(stream)
@@ -240,45 +294,44 @@ def _fill_random(stream_start, first_point, bounds, code, kind, weights, rows):
 invalidate_if_changed(_fill, [maps.__file__, _orbit_stores.__file__, symmetry.__file__])
 
 
-def fill_orbits(uv, method, count, basis, out):
+def fill_orbits(uv, method, count, basis, out, parts=0):
     """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
 
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
     (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
-    C-contiguous float32 or float64.
+    C-contiguous float32 or float64.  *parts*: how many stretches to split the points
+    into (0: numba's thread count; the output does not depend on it).
     """
-    rows, kind, weights = _layout(len(uv), count, basis, out)
-    _fill(uv, part_bounds(len(uv)), METHOD_CODES[method], kind, weights, rows)
+    kind, weights = _store_kind(count, basis)
+    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, weights, out.reshape(len(uv), 3 * count))
     return out
 
 
-def fill_random_orbits(stream_start, first_point, m, method, count, basis, out, parts=None):
+def fill_random_orbits(seed_words, first_point, m, method, count, basis, out, parts=0):
     """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
-    point i is draws 2i, 2i + 1 of numpy's PCG64 stream whose state at point 0 is
-    *stream_start* (:attr:`symsphere.points.BasePoints.stream_start`).  *parts*: see
-    :func:`part_bounds` (the output does not depend on it)."""
-    rows, kind, weights = _layout(m, count, basis, out)
-    _fill_random(stream_start, first_point, part_bounds(m, parts), METHOD_CODES[method], kind, weights, rows)
+    point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
+    *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
+    (:attr:`symsphere.points.BasePoints.seed_words`)."""
+    kind, weights = _store_kind(count, basis)
+    rows = out.reshape(m, 3 * count)
+    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, weights, rows)
     return out
 
 
-def part_bounds(m, parts=None):
-    """Split ``range(m)`` into *parts* (default: numba's thread count) stretches of whole batches."""
-    if parts is None:
-        parts = get_num_threads()
-    batches = -(-m // _BATCH)
-    parts = max(1, min(parts, batches))
-    bounds = np.array([min(m, (batches * p // parts) * _BATCH) for p in range(parts + 1)], dtype=np.int64)
-    bounds[-1] = m
-    return bounds
+def part_bounds(m, parts=0):
+    """The bounds of the parts of the kernels (for benchmarks and tests): an int64 array."""
+    count = part_count(m, parts or get_num_threads())
+    return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
-def _layout(m, count, basis, out):
-    """(rows of *out*, kind of store, the weights of a rotated store or a placeholder)."""
-    rows = out.reshape(m, 3 * count)
+_NO_WEIGHTS = np.eye(3)
+
+
+def _store_kind(count, basis):
+    """(kind of store, the weights of a rotated store or a placeholder)."""
     if basis is None:
-        return rows, (_SPHERE if count == 48 else _HEMISPHERE), np.eye(3)
+        return (_SPHERE if count == 48 else _HEMISPHERE), _NO_WEIGHTS
     # ((x, y, z) @ M_k) @ basis = (x, y, z) @ (M_k @ basis): the rows of M_k @ basis are signed
     # rows of basis (M_k permutes), so the weights are exact and W[c, 3k + j] = (M_k @ basis)[c, j].
     weights = np.einsum("kcj->ckj", SPHERE_MAPS[:count] @ np.asarray(basis, dtype=np.float64))
-    return rows, _HEMISPHERE_ROTATED, np.ascontiguousarray(weights.reshape(3, 3 * count))
+    return _HEMISPHERE_ROTATED, np.ascontiguousarray(weights.reshape(3, 3 * count))

@@ -36,7 +36,6 @@ BLOCK = 4096
 """Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""
 
 _STREAM_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequence
-_LOW64 = 2**64 - 1
 _SOBOL_WARNING = "The balance properties of Sobol' points require n to be a power of 2."
 
 
@@ -110,13 +109,17 @@ class BasePoints:
             engine_class = qmc.Sobol if self._kind == "sobol" else qmc.Halton
             scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
             self._engine = engine_class(d=2, scramble=True, rng=np.random.default_rng(scramble_seed))
+        self.seed_words = None  # the random stream's seed, for the kernels (below)
         if self._engine is not None:
             self._offset = self._engine.num_generated
             if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
                 warnings.warn(_SOBOL_WARNING, UserWarning, stacklevel=3)
         else:
-            stream_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_STREAM_KEY,))
-            self._stream_start = np.random.PCG64(stream_seed).state
+            self._stream_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_STREAM_KEY,))
+            # What numpy's PCG64 takes from the SeedSequence (uint64[4]): the kernels seed their
+            # own copy of the stream from it (symsphere._kernels.pcg64_seeded).
+            self.seed_words = self._stream_seed.generate_state(4, np.uint64)
+            self._stream_start = None  # numpy's PCG64 state at point 0, made when take() needs it
 
     @property
     def kind(self):
@@ -136,18 +139,9 @@ class BasePoints:
         corner = np.stack([cells // self._side, cells % self._side], axis=-1)
         return (corner + jitter) / self._side
 
-    @property
-    def stream_start(self):
-        """The PCG64 state at point 0 of the random points ('random' and 'stratified': the
-        jitter of the latter) as uint64 [state high, low, increment high, low], for the kernels'
-        :func:`symsphere._kernels.pcg64_random`; None for QMC points."""
-        if self._engine is not None:
-            return None
-        state = self._stream_start["state"]
-        halves = [state["state"] >> 64, state["state"] & _LOW64, state["inc"] >> 64, state["inc"] & _LOW64]
-        return np.array(halves, dtype=np.uint64)
-
     def _generator_at(self, index):
+        if self._stream_start is None:
+            self._stream_start = np.random.PCG64(self._stream_seed).state
         bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
         bit_generator.state = self._stream_start
         bit_generator.advance(2 * int(index))  # two draws per point; advance takes Python ints only

@@ -263,7 +263,7 @@ def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
 def _fill_range(source, start, stop, method, count, basis, out):
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
     if source.kind == "random":  # the kernel draws the points itself, in parallel
-        return fill_random_orbits(source.stream_start, start, stop - start, method, count, basis, out)
+        return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
     return fill_orbits(source.take(start, stop), method, count, basis, out)
 
 
