@@ -29,7 +29,7 @@ from .maps import (
     _paper2_density,
     _paper2_point,
 )
-from .symmetry import SIGNS, SOURCES, SPHERE_MAPS
+from .symmetry import SIGNS, SOURCES
 
 __all__ = [
     "METHOD_CODES",
@@ -213,7 +213,7 @@ def _store_one(x, y, z, i, kind, weights, rows):
     elif kind == _HEMISPHERE:
         store_orbit_24(rows, i, x, y, z)
     else:
-        # image k = x W[0, 3k:3k+3] + y W[1, ...] + z W[2, ...], W from _layout
+        # image k = x W[0, 3k:3k+3] + y W[1, ...] + z W[2, ...], W from _rotated_weights
         # (a loop over 72 contiguous columns, which LLVM vectorises).
         for column in range(weights.shape[1]):
             rows[i, column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
@@ -224,6 +224,21 @@ def _store_batch(base, first, stop, kind, weights, rows):
     """Store the orbits of base[:, :stop - first] in rows first ... stop - 1."""
     for j in range(stop - first):
         _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
+
+
+@register_jitable
+def _rotated_weights(basis, count):
+    """W (3, 3 count) with image k of p = p @ M_k @ basis = p @ W[:, 3k:3k+3].
+
+    M_k moves coordinate SOURCES[k, l] to place l with sign SIGNS[k, l], so row
+    SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.
+    """
+    weights = np.zeros((3, 3 * count))
+    for k in range(count):
+        for l in range(3):
+            for j in range(3):
+                weights[_SOURCES[k, l], 3 * k + j] = _SIGNS[k, l] * basis[l, j]
+    return weights
 
 
 @register_jitable
@@ -243,10 +258,11 @@ def part_count(m, parts):
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill(uv, parts, code, kind, weights, rows):
+def _fill(uv, parts, code, kind, basis, rows):
     # One part per thread (not one prange step per batch): the batch buffers are allocated once
     # per part.
     m = uv.shape[0]
+    weights = _rotated_weights(basis, rows.shape[1] // 3)
     count = part_count(m, parts)
     for part in prange(count):
         lo, hi = part_range(m, count, part)
@@ -263,13 +279,14 @@ def _fill(uv, parts, code, kind, weights, rows):
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(seed_words, first_point, m, parts, code, kind, weights, rows):
+def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows):
     # As _fill, but each part draws its own points, u then v per point, from numpy's PCG64
     # stream seeded by *seed_words* and jumped ahead to the part's first point: no (m, 2) array
     # of base points, and the jumps and draws run in parallel.  The next batch's points are
     # drawn between the current batch's orbit stores, so that the generator's dependent chain
     # of 128-bit multiplications overlaps the stores instead of following them.
     start = pcg64_seeded(seed_words)
+    weights = _rotated_weights(basis, rows.shape[1] // 3)
     count = part_count(m, parts)
     for part in prange(count):
         lo, hi = part_range(m, count, part)
@@ -302,8 +319,8 @@ def fill_orbits(uv, method, count, basis, out, parts=0):
     C-contiguous float32 or float64.  *parts*: how many stretches to split the points
     into (0: numba's thread count; the output does not depend on it).
     """
-    kind, weights = _store_kind(count, basis)
-    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, weights, out.reshape(len(uv), 3 * count))
+    kind, frame = _store_kind(count, basis)
+    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, frame, out.reshape(len(uv), 3 * count))
     return out
 
 
@@ -312,9 +329,9 @@ def fill_random_orbits(seed_words, first_point, m, method, count, basis, out, pa
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
     (:attr:`symsphere.points.BasePoints.seed_words`)."""
-    kind, weights = _store_kind(count, basis)
+    kind, frame = _store_kind(count, basis)
     rows = out.reshape(m, 3 * count)
-    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, weights, rows)
+    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows)
     return out
 
 
@@ -324,14 +341,11 @@ def part_bounds(m, parts=0):
     return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
-_NO_WEIGHTS = np.eye(3)
+_IDENTITY = np.eye(3)
 
 
 def _store_kind(count, basis):
-    """(kind of store, the weights of a rotated store or a placeholder)."""
+    """(kind of store, the frame: the identity when there is none)."""
     if basis is None:
-        return (_SPHERE if count == 48 else _HEMISPHERE), _NO_WEIGHTS
-    # ((x, y, z) @ M_k) @ basis = (x, y, z) @ (M_k @ basis): the rows of M_k @ basis are signed
-    # rows of basis (M_k permutes), so the weights are exact and W[c, 3k + j] = (M_k @ basis)[c, j].
-    weights = np.einsum("kcj->ckj", SPHERE_MAPS[:count] @ np.asarray(basis, dtype=np.float64))
-    return _HEMISPHERE_ROTATED, np.ascontiguousarray(weights.reshape(3, 3 * count))
+        return (_SPHERE if count == 48 else _HEMISPHERE), _IDENTITY
+    return _HEMISPHERE_ROTATED, np.ascontiguousarray(basis, dtype=np.float64)
