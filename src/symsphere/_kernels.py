@@ -1,10 +1,13 @@
-"""numba kernels: map + orbit (+ frame) fused in one pass, parallel over all cores.
+"""numba kernels: (draws +) map + orbit (+ frame) fused in one pass, parallel over all cores.
 
 The map formulas are the elementwise functions of :mod:`symsphere.maps`
 (``register_jitable``), the orbit stores are generated from the tables of
-:mod:`symsphere.symmetry` (:mod:`symsphere._codegen`), so nothing here restates
-a formula.  The numpy path (``maps.TriangleMap.forward`` + ``symmetry._orbit`` +
-``frames.to_world``) is the reference the tests compare against.
+:mod:`symsphere.symmetry` (:mod:`symsphere._codegen`; about a normal, a weights
+table built from the same tables), so nothing here restates a formula.  The
+numpy path (``maps.TriangleMap.forward`` + ``symmetry._orbit`` +
+``frames.to_world``) is the reference the tests compare against.  Random base
+points are drawn inside the kernel from numpy's PCG64 stream, seeded, jumped and
+stepped here exactly as numpy does it (tested bit for bit against numpy).
 
 Kernels compile lazily per output dtype and are cached on disk (``cache=True``),
 so a new process with a warm cache pays no compilation.
@@ -182,7 +185,7 @@ def pcg64_advanced(start, draws):
 
 # Base points are handled in batches of _BATCH: first the map for the whole batch, into
 # arrays (structure of arrays), then the orbit stores.  The equal-area map has no libm call
-# (its sine is a polynomial), so LLVM vectorises the batch loop (AVX-512: 8 doubles a lane);
+# (its sine is a polynomial), so LLVM vectorises the batch loop (AVX-512: 8 doubles a vector);
 # the stores of one point no longer wait for the next point's dependent chain of square roots
 # and divisions.  Measured for 48 * 2**16 directions, two threads: float32 kernel 2.96 ms (one
 # point at a time) -> 2.05 ms (batched) -> ~1.2 ms (vectorised map).
