@@ -207,11 +207,18 @@ def integrate_cases(n, rng):
     def sample_and_average():
         return f(sample_sphere(n, rng=rng)).mean()
 
+    weights = np.array([0.3, -0.2, 0.9])
+
+    def f_blas(w):
+        return w @ weights  # numpy's BLAS, with its own threads
+
     return [
         Case("integrate", "integrate(f(w) = z), random points", "float64", "fresh",
              lambda: integrate(f, n=n, rng=rng), n, "per-orbit standard error"),
         Case("integrate", "integrate(f(w) = z), points='sobol'", "float64", "fresh",
              lambda: integrate(f, n=n, points="sobol", rng=rng), n, "8 scrambled replicates"),
+        Case("integrate", "integrate(f(w) = w @ a), random points", "float64", "fresh",
+             lambda: integrate(f_blas, n=n, rng=rng), n, "BLAS threads next to numba's"),
         Case("integrate", "sample_sphere + f + mean (no error estimate)", "float64", "fresh", sample_and_average, n),
     ]
 

@@ -160,3 +160,20 @@ def test_base_points_any_stretch():
         assert np.array_equal(source.take(start, stop), whole[start:stop])
     with pytest.raises(ValueError, match="'start'"):
         source.take(2, 1)
+
+
+@pytest.mark.parametrize("preset", [None, "active"])
+def test_openmp_waits_passively_unless_the_user_says_otherwise(preset):
+    # Spinning OpenMP threads starve numpy's BLAS threads (docs/design.md, "Threads"): the
+    # kernels' module sets OMP_WAIT_POLICY=passive before libgomp is loaded, and keeps a user's value.
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    if preset:
+        env["OMP_WAIT_POLICY"] = preset
+    code = "import os, symsphere; symsphere.sample_sphere(48); print(os.environ['OMP_WAIT_POLICY'])"
+    result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-1] == (preset or "passive")

@@ -15,6 +15,8 @@ so a new process with a warm cache pays no compilation.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from llvmlite import ir
 from numba import get_num_threads, njit, prange, types
@@ -33,6 +35,15 @@ from .maps import (
     _paper2_point,
 )
 from .symmetry import SIGNS, SOURCES
+
+# numba's OpenMP threads (GNU libgomp) busy-wait for a while after each parallel kernel.  With as
+# many threads as cores, they then hold the cores that numpy's BLAS threads need, and the next
+# kernel waits for the spinning BLAS threads in turn: measured on 2 cores, integrate(lambda w: w @ a)
+# took 128 ms instead of 5.6 ms, and a loop of sample_sphere and `d @ a` ~30x longer.  Passive
+# waiting costs the kernels nothing measurable (docs/design.md, "Threads").  libgomp reads the
+# variable once, when numba first loads it (at the first parallel kernel): a default set here takes
+# effect unless the user has set it, or another library has loaded libgomp before.
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 __all__ = [
     "METHOD_CODES",
