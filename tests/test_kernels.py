@@ -33,7 +33,7 @@ def test_kernel_matches_numpy_reference(method, count, normal):
 
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
-@pytest.mark.parametrize("m, parts", [(1, 1), (17, 2), (1000, 3), (4099, 2), (4099, 7)])
+@pytest.mark.parametrize("m, parts", [(1, 1), (15, 7), (17, 2), (1000, 3), (4099, 2), (4099, 7)])
 def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, parts):
     # The fused kernel draws u, v itself, part by part; it must equal the points of take()
     # put through the uv kernel, bit for bit, whatever the number of parts.
@@ -44,6 +44,14 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
         got = np.full((m * count, 3), np.nan, dtype)
         _kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
+
+
+def test_random_kernel_far_into_the_stream():
+    first = 1_000_003
+    source = BasePoints("random", 22, total=first + 333)
+    expected = _kernels.fill_orbits(source.take(first, first + 333), "equal_area", 48, None, np.empty((333 * 48, 3)))
+    got = _kernels.fill_random_orbits(source.seed_words, first, 333, "equal_area", 48, None, np.empty((333 * 48, 3)))
+    assert np.array_equal(got, expected)
 
 
 def test_random_points_are_numpys_pcg64_stream():
@@ -170,10 +178,15 @@ def test_openmp_waits_passively_unless_the_user_says_otherwise(preset):
     import subprocess
     import sys
 
+    import numba
+
     env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    env["OMP_DISPLAY_ENV"] = "true"  # libgomp prints the settings it took, when it is loaded
     if preset:
         env["OMP_WAIT_POLICY"] = preset
     code = "import os, symsphere; symsphere.sample_sphere(48); print(os.environ['OMP_WAIT_POLICY'])"
     result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split()[-1] == (preset or "passive")
+    if numba.config.THREADING_LAYER in ("default", "omp") and "OPENMP DISPLAY ENVIRONMENT" in result.stderr:
+        assert f"OMP_WAIT_POLICY = '{(preset or 'passive').upper()}'" in result.stderr
