@@ -33,6 +33,7 @@ from ._kernels import fill_orbits
 from ._validation import check_choice, check_count, check_normal, check_rng
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
+from .sampling import _fill_range
 from .symmetry import DOMAINS
 
 __all__ = ["IntegrationResult", "integrate"]
@@ -211,16 +212,19 @@ def _block_partial(plan, replicate, block):
     """(orbits, sum of orbit estimates, sum of squared deviations from their mean) of one block."""
     start = block * BLOCK
     stop = min(start + BLOCK, plan.orbits_per_replicate)
-    uv = plan.sources[replicate].take(start, stop)
-    directions = fill_orbits(uv, plan.method, plan.count, plan.basis, np.empty(((stop - start) * plan.count, 3)))
-    values = _evaluate(plan.f, directions)
+    source = plan.sources[replicate]
     triangle_map = get_map(plan.method)
+    directions = np.empty(((stop - start) * plan.count, 3))
     if triangle_map.uniform:
+        _fill_range(source, start, stop, plan.method, plan.count, plan.basis, directions)  # random: drawn in the kernel
         weight = np.full(stop - start, 4 * np.pi if plan.count == 48 else 2 * np.pi)
     else:
+        uv = source.take(start, stop)  # the weights need the base points
+        fill_orbits(uv, plan.method, plan.count, plan.basis, directions)
         # 1 / pdf of the scheme = count / pdf_T0(base), shared by the whole orbit
         with np.errstate(divide="ignore"):
             weight = plan.count / triangle_map.pdf(triangle_map.forward(uv))
+    values = _evaluate(plan.f, directions)
     estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
     mean = estimates.mean(axis=0)
     return stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)

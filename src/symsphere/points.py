@@ -155,7 +155,8 @@ class BasePoints:
         position = self._offset + start
         if engine.num_generated != position:
             engine.reset()
-            engine.fast_forward(position)
+            if position:  # scipy's Sobol.fast_forward(0) raises (it computes n - 1)
+                engine.fast_forward(position)
         with warnings.catch_warnings():
             # The balance warning is given once, for the whole run, at construction.
             warnings.filterwarnings("ignore", message="The balance properties of Sobol")
