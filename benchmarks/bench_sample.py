@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import symsphere
+from _machine import cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
 from symsphere import sample_hemisphere, sample_sphere
 
 FILL_VALUE = 0.5
@@ -468,29 +469,6 @@ def measure(cases, repeats, warmup=2):
             t0 = time.perf_counter()
             case.run()
             case.times.append(time.perf_counter() - t0)
-
-
-def cpu_snapshot():
-    """(busy CPU-seconds of the whole machine, CPU-seconds of this process), or None off Linux."""
-    import resource
-
-    try:
-        with open("/proc/stat", encoding="utf-8") as handle:
-            fields = [int(x) for x in handle.readline().split()[1:]]
-    except (OSError, ValueError):
-        return None
-    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
-    busy = (sum(fields[:8]) - idle) / os.sysconf("SC_CLK_TCK")  # user nice system idle iowait irq softirq steal
-    own = resource.getrusage(resource.RUSAGE_SELF)
-    return busy, own.ru_utime + own.ru_stime
-
-
-def others_cpu(before, after, wall):
-    """CPU-seconds that other processes used while the cases ran (machine busy time minus ours)."""
-    if before is None or after is None:
-        return None
-    seconds = max((after[0] - before[0]) - (after[1] - before[1]), 0.0)
-    return {"cpu_s": seconds, "wall_s": wall, "share_of_all_cpus": seconds / (wall * (os.cpu_count() or 1))}
 
 
 def _find(cases, group, label, dtype):

@@ -29,6 +29,8 @@ import sys
 import tempfile
 import time
 
+from _machine import cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
+
 TARGET_SECONDS = 1.0
 
 # What any numba-based first call pays at least: importing numba and the one-time set-up of its
@@ -59,23 +61,6 @@ def run_child(code, env=None, *args):
     if proc.returncode != 0:
         raise RuntimeError(f"child failed ({proc.returncode}): {code!r}\n{proc.stderr}")
     return seconds, proc.stdout, proc.stderr
-
-
-def cpu_snapshot():
-    """(busy CPU-seconds of the machine, CPU-seconds of this process and its children), or None."""
-    import resource
-
-    try:
-        with open("/proc/stat", encoding="utf-8") as handle:
-            fields = [int(x) for x in handle.readline().split()[1:]]
-    except (OSError, ValueError):
-        return None
-    busy = (sum(fields[:8]) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
-    ours = sum(
-        usage.ru_utime + usage.ru_stime
-        for usage in (resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN))
-    )
-    return busy, ours
 
 
 def cold_env():
@@ -177,11 +162,7 @@ def main(argv=None):
         finally:
             _rmtree(directory)
 
-    after, wall = cpu_snapshot(), time.perf_counter() - wall
-    others = None
-    if snapshot is not None and after is not None:
-        cpu = max((after[0] - snapshot[0]) - (after[1] - snapshot[1]), 0.0)
-        others = {"cpu_s": cpu, "wall_s": wall, "share_of_all_cpus": cpu / (wall * (os.cpu_count() or 1))}
+    others = others_cpu(snapshot, cpu_snapshot(), time.perf_counter() - wall)
 
     import numba
     import numpy

@@ -1,0 +1,33 @@
+"""How busy the machine was while a benchmark timed: shared by the benchmark scripts."""
+
+from __future__ import annotations
+
+import os
+
+__all__ = ["cpu_snapshot", "others_cpu"]
+
+
+def cpu_snapshot():
+    """(busy CPU-seconds of the machine, CPU-seconds of this process and its children), or None off Linux."""
+    import resource
+
+    try:
+        with open("/proc/stat", encoding="utf-8") as handle:
+            fields = [int(x) for x in handle.readline().split()[1:]]
+    except (OSError, ValueError):
+        return None
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)  # idle + iowait
+    busy = (sum(fields[:8]) - idle) / os.sysconf("SC_CLK_TCK")  # user nice system idle iowait irq softirq steal
+    ours = sum(
+        usage.ru_utime + usage.ru_stime
+        for usage in (resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN))
+    )
+    return busy, ours
+
+
+def others_cpu(before, after, wall):
+    """CPU-seconds that other processes used while the cases ran (machine busy time minus ours)."""
+    if before is None or after is None:
+        return None
+    seconds = max((after[0] - before[0]) - (after[1] - before[1]), 0.0)
+    return {"cpu_s": seconds, "wall_s": wall, "share_of_all_cpus": seconds / (wall * (os.cpu_count() or 1))}
