@@ -429,3 +429,17 @@ def test_fibonacci_integrates_exp():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+@pytest.mark.parametrize("name", list(P.PEERS))
+def test_peer_facts_agree_with_the_peer(name):
+    """The fields a study reads instead of testing names: orbit size, uniformity, point sets."""
+    peer = P.PEERS[name]
+    assert (peer.orbit_size == 1) == peer.independent_rows
+    if peer.orbit_size not in (1, None):
+        assert peer.multiple % peer.orbit_size == 0
+    d = peer.sample(96, rng=3)
+    density = peer.pdf(d)
+    area = 4 * np.pi if peer.domain == "sphere" else 2 * np.pi
+    assert np.allclose(density, 1 / area, rtol=1e-12) == peer.uniform
+    assert peer.point_sets == (P.POINT_SETS if peer.is_map else ("random",))

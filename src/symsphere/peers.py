@@ -58,7 +58,7 @@ from ._validation import (
     check_rng,
     check_uv,
 )
-from .points import check_points, unit_square_points
+from .points import POINT_SETS, check_points, unit_square_points
 from .symmetry import orbit
 
 __all__ = [
@@ -135,6 +135,13 @@ class Peer:
         48): a chi-square test needs independent rows.
     multiple : int
         ``n`` must be a multiple of this (48 for ``arvo``).
+    orbit_size : int or None
+        Rows per group of dependent rows: 1 if the rows are independent, 48 for
+        ``arvo`` (one random point of T0 and its 48 images), None if no subset of
+        rows is independent (the rotated Fibonacci set shares one rotation).
+        A chi-square test takes one row per orbit.
+    uniform : bool
+        Whether the density is uniform on the domain (False for ``cosine``).
     forward, inverse : callable or None
         The map ``(m, 2) -> (m, 3)`` onto the domain and its inverse (the
         public, validating ``square_to_*`` / ``*_to_square`` functions).  None
@@ -152,6 +159,8 @@ class Peer:
     is_map: bool
     independent_rows: bool
     multiple: int = 1
+    orbit_size: int | None = 1
+    uniform: bool = True
     forward: Callable | None = None
     inverse: Callable | None = None
     reference: str = ""
@@ -171,6 +180,18 @@ class Peer:
                 f"the unit square; got {points!r}"
             )
         return self.sampler(n, points=points, rng=rng, dtype=dtype)
+
+    @property
+    def point_sets(self) -> tuple[str, ...]:
+        """The named base point sets :meth:`sample` accepts (all of ``POINT_SETS`` for a map, else 'random').
+
+        Examples
+        --------
+        >>> from symsphere.peers import PEERS
+        >>> PEERS["gaussian"].point_sets
+        ('random',)
+        """
+        return POINT_SETS if self.is_map else ("random",)
 
 
 def get_peer(name) -> Peer:
@@ -1132,12 +1153,14 @@ def _build_peers():
              forward=square_to_octahedral_hemisphere, inverse=octahedral_hemisphere_to_square,
              reference="Clarberg, JGT 2008 (hemisphere variant)"),
         Peer("fibonacci", "sphere", _fibonacci_sampler(False), uniform_sphere_pdf, False, False, False,
+             orbit_size=None,
              reference="Keinert et al., Spherical Fibonacci Mapping, SIGGRAPH Asia 2015"),
         Peer("fibonacci_rotated", "sphere", _fibonacci_sampler(True), uniform_sphere_pdf, True, False, False,
+             orbit_size=None,
              reference="Keinert et al. 2015, under a uniformly random rotation"),
-        Peer("arvo", "sphere", sample_arvo, uniform_sphere_pdf, True, True, False, multiple=48,
+        Peer("arvo", "sphere", sample_arvo, uniform_sphere_pdf, True, True, False, multiple=48, orbit_size=48,
              reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995; on T0, then 48 images"),
-        Peer("cosine", "hemisphere", sample_cosine, cosine_hemisphere_pdf, True, True, True,
+        Peer("cosine", "hemisphere", sample_cosine, cosine_hemisphere_pdf, True, True, True, uniform=False,
              forward=square_to_cosine_hemisphere, inverse=cosine_hemisphere_to_square,
              reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere"),
     ]
