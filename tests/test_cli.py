@@ -142,7 +142,7 @@ def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monk
     out = tmp_path / "d.npy"
     out.write_bytes(b"previous run")
     calls = []
-    original = symsphere.sampling._fill_range
+    original = symsphere._blocks.fill_range
 
     def interrupted_on_third_chunk(*args):
         calls.append(1)
@@ -150,7 +150,7 @@ def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monk
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(symsphere.sampling, "_fill_range", interrupted_on_third_chunk)
+    monkeypatch.setattr(symsphere._blocks, "fill_range", interrupted_on_third_chunk)
     assert main(["sample", "--n", "960", "--chunk", "96", "--seed", "1", "--out", str(out)]) == 130
     assert len(calls) == 3
     assert "interrupted" in capsys.readouterr().err

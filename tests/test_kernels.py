@@ -8,7 +8,7 @@ from symsphere import METHODS, iter_hemisphere, iter_sphere, sample_hemisphere, 
 from symsphere import _codegen, _kernels
 from symsphere.frames import frame
 from symsphere.points import BLOCK, BasePoints
-from symsphere.sampling import _reference_orbits
+from symsphere._blocks import reference_orbits
 from symsphere.symmetry import SPHERE_MAPS
 
 
@@ -22,7 +22,7 @@ def test_kernel_matches_numpy_reference(method, count, normal):
     uv = np.random.default_rng(0).random((5000, 2))
     uv[:4] = [[0, 0], [0, 1], [1, 0], [1, 1]]
     basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
-    reference = _reference_orbits(uv, method, count, basis)
+    reference = reference_orbits(uv, method, count, basis)
     for dtype in (np.float64, np.float32):
         out = np.empty((len(uv) * count, 3), dtype)
         _kernels.fill_orbits(uv, method, count, basis, out)
@@ -176,25 +176,3 @@ def test_base_points_any_stretch():
         assert np.array_equal(source.take(start, stop), whole[start:stop])
     with pytest.raises(ValueError, match="'start'"):
         source.take(2, 1)
-
-
-@pytest.mark.parametrize("preset", [None, "active"])
-def test_openmp_waits_passively_unless_the_user_says_otherwise(preset):
-    # Spinning OpenMP threads starve numpy's BLAS threads (docs/design.md, "Threads"): the
-    # kernels' module sets OMP_WAIT_POLICY=passive before libgomp is loaded, and keeps a user's value.
-    import os
-    import subprocess
-    import sys
-
-    import numba
-
-    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
-    env["OMP_DISPLAY_ENV"] = "true"  # libgomp prints the settings it took, when it is loaded
-    if preset:
-        env["OMP_WAIT_POLICY"] = preset
-    code = "import os, symsphere; symsphere.sample_sphere(48); print(os.environ['OMP_WAIT_POLICY'])"
-    result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
-    assert result.returncode == 0, result.stderr
-    assert result.stdout.split()[-1] == (preset or "passive")
-    if numba.config.THREADING_LAYER in ("default", "omp") and "OPENMP DISPLAY ENVIRONMENT" in result.stderr:
-        assert f"OMP_WAIT_POLICY = '{(preset or 'passive').upper()}'" in result.stderr

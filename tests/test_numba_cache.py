@@ -48,3 +48,30 @@ def test_editing_an_inlined_file_drops_the_cached_kernel(tmp_path, own_cache_dir
     assert cached, "numba did not cache the kernel where expected"
     helper.write_text(helper.read_text().replace("3 * x", "5 * x"))
     assert _run(source, env) == 10.0  # numba alone would still return 6.0 (kernel.py did not change)
+
+
+def test_dependencies_are_derived_from_the_kernel_modules_imports():
+    # Independent reference: the files whose functions or tables the sampling kernels inline, by reading the code.
+    from pathlib import Path
+
+    from symsphere import _kernels
+    from symsphere._numba_cache import kernel_dependencies
+
+    names = {Path(p).name for p in kernel_dependencies(_kernels._fill)}
+    assert {"_kernels.py", "maps.py", "_orbit_stores.py", "symmetry.py"} <= names
+    assert "sampling.py" not in names and "__init__.py" not in names  # consumers are not dependencies
+
+
+def test_importing_the_kernels_touches_no_cache(tmp_path):
+    # No side effect at import: the digest stamp is written only when a kernel is first run.  (numba itself
+    # creates the empty cache directory when a cache=True kernel is defined: directories are not counted.)
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["NUMBA_CACHE_DIR"] = str(tmp_path)
+    code = "import symsphere, symsphere._kernels; import pathlib, sys; print(sum(p.is_file() for p in pathlib.Path(sys.argv[1]).rglob('*')))"
+    result = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[-1] == "0"
+    code = "import symsphere, pathlib, sys; symsphere.sample_sphere(48); print(len(list(pathlib.Path(sys.argv[1]).rglob('*.deps-sha256'))))"
+    result = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert int(result.stdout.split()[-1]) >= 1

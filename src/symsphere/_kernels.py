@@ -4,7 +4,7 @@ The map formulas are the elementwise functions of :mod:`symsphere.maps`
 (``register_jitable``), the orbit stores are generated from the tables of
 :mod:`symsphere.symmetry` (:mod:`symsphere._codegen`; about a normal, a weights
 table built from the same tables), so nothing here restates a formula.  The
-numpy path (``maps.TriangleMap.forward`` + ``symmetry._orbit`` +
+numpy path (``maps.TriangleMap.forward`` + ``symmetry.orbit`` +
 ``frames.to_world``) is the reference the tests compare against.  Random base
 points are drawn inside the kernel from numpy's PCG64 stream, seeded, jumped and
 stepped here exactly as numpy does it (tested bit for bit against numpy).
@@ -15,35 +15,17 @@ so a new process with a warm cache pays no compilation.
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 from llvmlite import ir
 from numba import get_num_threads, njit, prange, types
 from numba.extending import intrinsic, register_jitable
 
-from . import _orbit_stores, maps, symmetry
 from ._numba_cache import invalidate_if_changed
+from ._threads import start_threads
 from ._orbit_stores import store_orbit_24, store_orbit_48
-from .maps import (
-    METHODS,
-    _equal_area_density,
-    _equal_area_point,
-    _paper1_density,
-    _paper1_point,
-    _paper2_density,
-    _paper2_point,
-)
+from .maps import METHODS, get_map
 from .symmetry import SIGNS, SOURCES
 
-# numba's OpenMP threads (GNU libgomp) busy-wait for a while after each parallel kernel.  With as
-# many threads as cores, they then hold the cores that numpy's BLAS threads need, and the next
-# kernel waits for the spinning BLAS threads in turn: measured on 2 cores, integrate(lambda w: w @ a)
-# took 128 ms instead of 5.6 ms, and a loop of sample_sphere and `d @ a` ~30x longer.  Passive
-# waiting costs the kernels nothing measurable (docs/design.md, "Threads").  libgomp reads the
-# variable once, when numba first loads it (at the first parallel kernel): a default set here takes
-# effect unless the user has set it, or another library has loaded libgomp before.
-os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 __all__ = [
     "METHOD_CODES",
@@ -62,6 +44,10 @@ __all__ = [
 
 METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
+# The maps' own elementwise formulas (register_jitable in symsphere.maps), taken from the registry.
+_EQUAL_AREA, _PAPER1, _PAPER2 = (get_map(name) for name in METHODS)
+_equal_area_point, _paper1_point, _paper2_point = _EQUAL_AREA.point, _PAPER1.point, _PAPER2.point
+_equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PAPER1.density, _PAPER2.density
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 @register_jitable
@@ -322,7 +308,16 @@ def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows):
                     v[j] = pcg64_random(stream)
 
 
-invalidate_if_changed(_fill, [maps.__file__, _orbit_stores.__file__, symmetry.__file__])
+_ready = False
+
+
+def _prepare_kernels():
+    """Before the first kernel runs: drop a stale disk cache, start the threads (nothing at import)."""
+    global _ready
+    if not _ready:
+        invalidate_if_changed(_fill)  # the module's cache directory holds _fill_random's entries too
+        start_threads()
+        _ready = True
 
 
 def fill_orbits(uv, method, count, basis, out, parts=0):
@@ -333,6 +328,7 @@ def fill_orbits(uv, method, count, basis, out, parts=0):
     C-contiguous float32 or float64.  *parts*: how many stretches to split the points
     into (0: numba's thread count; the output does not depend on it).
     """
+    _prepare_kernels()
     kind, frame = _store_kind(count, basis)
     _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, frame, out.reshape(len(uv), 3 * count))
     return out
@@ -343,6 +339,7 @@ def fill_random_orbits(seed_words, first_point, m, method, count, basis, out, pa
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
     (:attr:`symsphere.points.BasePoints.seed_words`)."""
+    _prepare_kernels()
     kind, frame = _store_kind(count, basis)
     rows = out.reshape(m, 3 * count)
     _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows)
@@ -351,6 +348,7 @@ def fill_random_orbits(seed_words, first_point, m, method, count, basis, out, pa
 
 def part_bounds(m, parts=0):
     """The bounds of the parts of the kernels (for benchmarks and tests): an int64 array."""
+    _prepare_kernels()
     count = part_count(m, parts or get_num_threads())
     return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 

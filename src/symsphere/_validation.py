@@ -12,6 +12,7 @@ import numbers
 import numpy as np
 
 __all__ = [
+    "as_float_array",
     "check_choice",
     "check_count",
     "check_directions",
@@ -94,7 +95,7 @@ def check_rng(rng, name="rng"):
     )
 
 
-def _as_float_array(a, name):
+def as_float_array(a, name):
     if isinstance(a, (str, bytes)):
         raise TypeError(f"'{name}' must be an array of numbers, got {type(a).__name__}")
     try:
@@ -110,7 +111,7 @@ def _as_float_array(a, name):
 
 def check_uv(uv, name="uv"):
     """Return points of the unit square as a float array of shape (..., 2)."""
-    arr = _as_float_array(uv, name)
+    arr = as_float_array(uv, name)
     if arr.ndim == 0 or arr.shape[-1] != 2:
         raise ValueError(f"'{name}' must have shape (..., 2), got {arr.shape}")
     if not np.all((arr >= 0) & (arr <= 1)):  # also rejects NaN
@@ -120,7 +121,7 @@ def check_uv(uv, name="uv"):
 
 def check_directions(d, name="d"):
     """Return finite vectors as a float array of shape (..., 3)."""
-    arr = _as_float_array(d, name)
+    arr = as_float_array(d, name)
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise ValueError(f"'{name}' must have shape (..., 3), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -132,7 +133,7 @@ def check_normal(normal, name="normal"):
     """Return *normal* as a unit float64 3-vector, or None."""
     if normal is None:
         return None
-    arr = _as_float_array(normal, name).astype(np.float64)
+    arr = as_float_array(normal, name).astype(np.float64)
     if arr.shape != (3,):
         raise ValueError(f"'{name}' must be a 3-vector, got shape {arr.shape}")
     norm = np.linalg.norm(arr)

@@ -31,9 +31,10 @@ import time
 import numpy as np
 
 from ._validation import check_count
-from .integrate import _block_partial, _finish, _plan
+from ._blocks import fill_range, prepare
+from ._integration import block_partial, finish, plan
+from ._threads import start_threads
 from .points import BLOCK
-from .sampling import _fill_range, _prepare
 
 __all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client", "close_client"]
 
@@ -105,24 +106,24 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     """
     from distributed import as_completed
 
-    plan = _plan(f, **_integrate_arguments(kwargs))
+    work = plan(f, **_integrate_arguments(kwargs))
     chunk_blocks = check_count(chunk_blocks, "chunk_blocks")
     tasks = [
-        (replicate, first, min(first + chunk_blocks, plan.blocks_per_replicate))
-        for replicate in range(plan.replicates)
-        for first in range(0, plan.blocks_per_replicate, chunk_blocks)
+        (replicate, first, min(first + chunk_blocks, work.blocks_per_replicate))
+        for replicate in range(work.replicates)
+        for first in range(0, work.blocks_per_replicate, chunk_blocks)
     ]
     with _client_or_local(client) as active:
-        plan_future = active.scatter(plan, broadcast=True, hash=False)  # a fresh key: no clash with a release in flight
+        plan_future = active.scatter(work, broadcast=True, hash=False)  # a fresh key: no clash with a release in flight
         futures = [active.submit(_partials_task, plan_future, *task, pure=False) for task in tasks]
         index_of = {future.key: index for index, future in enumerate(futures)}
         results = {}
         for future in _progress(as_completed(futures), len(futures), progress, "integrating"):
             results[index_of[future.key]] = future.result()
-    partials = [[] for _ in range(plan.replicates)]
+    partials = [[] for _ in range(work.replicates)]
     for index, (replicate, _, _) in enumerate(tasks):
         partials[replicate].extend(results[index])
-    return _finish(plan, partials)
+    return finish(work, partials)
 
 
 def render(
@@ -216,11 +217,11 @@ def _integrate_arguments(kwargs):
     return {**defaults, **kwargs}
 
 
-def _partials_task(plan, replicate, first, stop):
+def _partials_task(work, replicate, first, stop):
     _single_threaded_kernels()
     # A private copy of the point sources: QMC engines are stateful, and tasks may share a process.
-    plan = dataclasses.replace(plan, sources=tuple(copy.deepcopy(source) for source in plan.sources))
-    return [_block_partial(plan, replicate, block) for block in range(first, stop)]
+    work = dataclasses.replace(work, sources=tuple(copy.deepcopy(source) for source in work.sources))
+    return [block_partial(work, replicate, block) for block in range(first, stop)]
 
 
 def _render_task(plan, first_pass, stop_pass):
@@ -234,7 +235,7 @@ def _directions_task(source, method, count, basis, dtype, start, stop):
     _single_threaded_kernels()
     source = copy.deepcopy(source)  # QMC engines are stateful, and tasks may share a process
     out = np.empty(((stop - start) * count, 3), dtype=dtype)
-    return _fill_range(source, start, stop, method, count, basis, out)
+    return fill_range(source, start, stop, method, count, basis, out)
 
 
 def _single_threaded_kernels():
@@ -245,6 +246,7 @@ def _single_threaded_kernels():
         get_worker()
         import numba
 
+        start_threads()  # before set_num_threads launches them: passive waiting, as in the client
         numba.set_num_threads(1)
 
 
@@ -252,7 +254,7 @@ def _dask_directions(n, chunks, count, normal, method, points, rng, dtype):
     import dask
     import dask.array as da
 
-    n, dtype, method, source, basis = _prepare(n, count, normal, method, points, rng, dtype)
+    n, dtype, method, source, basis = prepare(n, count, normal, method, points, rng, dtype)
     chunks = check_count(chunks, "chunks", multiple=count * BLOCK)
     per_chunk = chunks // count
     total = n // count

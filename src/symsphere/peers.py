@@ -49,7 +49,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._validation import (
-    _as_float_array,
+    as_float_array,
     check_choice,
     check_count,
     check_directions,
@@ -668,7 +668,7 @@ def concentric_disk_to_square(p):
     array([[0.5, 0.5],
            [0.5, 1. ]])
     """
-    arr = _as_float_array(p, "p")
+    arr = as_float_array(p, "p")
     if arr.ndim == 0 or arr.shape[-1] != 2:
         raise ValueError(f"'p' must have shape (..., 2), got {arr.shape}")
     if not np.all(np.isfinite(arr)):

@@ -11,12 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import frames
-from ._kernels import fill_orbits, fill_random_orbits
-from ._validation import check_count, check_directions, check_dtype, check_normal, check_out
+from . import _blocks, frames
+from ._validation import check_count, check_directions, check_normal, check_out
 from .maps import get_map
-from .points import BasePoints
-from .symmetry import _fold, _orbit
+from .symmetry import fold
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
 
@@ -180,7 +178,7 @@ def sphere_pdf(d, method="equal_area"):
     """
     d = check_directions(d, "d")
     triangle_map = get_map(method)
-    _, base = _fold(d.astype(np.float64))
+    _, base = fold(d.astype(np.float64))
     return (triangle_map.pdf(base) / 48).astype(d.dtype, copy=False)
 
 
@@ -213,7 +211,7 @@ def hemisphere_pdf(d, method="equal_area", normal=None):
     local = d.astype(np.float64)
     if normal is not None:
         local = frames.to_local(local, frames.frame(normal))
-    _, base = _fold(local)
+    _, base = fold(local)
     density = np.where(local[..., 2] >= 0, triangle_map.pdf(base) / 24, 0.0)
     return density.astype(d.dtype, copy=False)
 
@@ -221,28 +219,18 @@ def hemisphere_pdf(d, method="equal_area", normal=None):
 # --- private ------------------------------------------------------------------
 
 
-def _prepare(n, count, normal, method, points, rng, dtype):
-    """Validate; return (n, dtype, method, base point source, frame or None)."""
-    n = check_count(n, "n", multiple=count)
-    dtype = check_dtype(dtype)
-    get_map(method)
-    source = BasePoints(points, rng, n // count, per_point=count)
-    basis = None if normal is None else frames.frame(normal)
-    return n, dtype, method, source, basis
-
-
 def _sample(n, count, normal, method, points, rng, dtype, out):
-    n, dtype, method, source, basis = _prepare(n, count, normal, method, points, rng, dtype)
+    n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype)
     if out is not None:
         check_out(out, (n, 3), dtype)
     else:
         out = np.empty((n, 3), dtype=dtype)
-    return _fill_range(source, 0, n // count, method, count, basis, out)
+    return _blocks.fill_range(source, 0, n // count, method, count, basis, out)
 
 
 def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
     # Validate now, not at the first next(): a generator function would defer the errors.
-    n_total, dtype, method, source, basis = _prepare(n_total, count, normal, method, points, rng, dtype)
+    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype)
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
     total = n_total // count
     if out is not None:
@@ -255,21 +243,6 @@ def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
                 block = np.empty(((stop - start) * count, 3), dtype=dtype)
             else:
                 block = out[start * count : stop * count]
-            yield _fill_range(source, start, stop, method, count, basis, block)
+            yield _blocks.fill_range(source, start, stop, method, count, basis, block)
 
     return blocks()
-
-
-def _fill_range(source, start, stop, method, count, basis, out):
-    """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
-    if source.kind == "random":  # the kernel draws the points itself, in parallel
-        return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
-    return fill_orbits(source.take(start, stop), method, count, basis, out)
-
-
-def _reference_orbits(uv, method, count, basis):
-    """The numpy path (map, orbit, frame): what the kernels must reproduce."""
-    directions = _orbit(get_map(method).forward(uv), count)
-    if basis is not None:
-        directions = frames.to_world(directions, basis)
-    return directions.reshape(-1, 3)

@@ -1,0 +1,47 @@
+"""The block seam shared by sampling, integration and Dask: validate once, then fill any range of orbits.
+
+A run is fixed before any work starts (:func:`prepare`: the count, dtype, map,
+base point source and frame); afterwards any range of base points
+``start ... stop - 1`` can be turned into its orbits by :func:`fill_range`, in any
+order, on any thread or process, with identical results.  :mod:`symsphere.sampling`
+fills one range or a stream of chunks, :mod:`symsphere.distributed` one range per
+Dask task, and :mod:`symsphere._integration` one block per partial sum.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import frames
+from ._kernels import fill_orbits, fill_random_orbits
+from ._validation import check_count, check_dtype
+from .maps import get_map
+from .points import BasePoints
+from .symmetry import orbit
+
+__all__ = ["prepare", "fill_range", "reference_orbits"]
+
+
+def prepare(n, count, normal, method, points, rng, dtype):
+    """Validate; return (n, dtype, method, base point source, frame or None)."""
+    n = check_count(n, "n", multiple=count)
+    dtype = check_dtype(dtype)
+    get_map(method)
+    source = BasePoints(points, rng, n // count, per_point=count)
+    basis = None if normal is None else frames.frame(normal)
+    return n, dtype, method, source, basis
+
+
+def fill_range(source, start, stop, method, count, basis, out):
+    """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
+    if source.kind == "random":  # the kernel draws the points itself, in parallel
+        return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
+    return fill_orbits(source.take(start, stop), method, count, basis, out)
+
+
+def reference_orbits(uv, method, count, basis):
+    """The numpy path (map, orbit, frame): what the kernels must reproduce."""
+    directions = orbit(get_map(method).forward(uv), "sphere" if count == 48 else "hemisphere")
+    if basis is not None:
+        directions = frames.to_world(directions, basis)
+    return directions.reshape(-1, 3)
