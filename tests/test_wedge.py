@@ -239,7 +239,10 @@ def test_wedge_maps_are_the_signed_permutations_keeping_z():
         expected.add(m.tobytes())
     assert WEDGE_MAPS.shape == (8, 3, 3)
     assert {np.asarray(m, dtype=int).tobytes() for m in WEDGE_MAPS} == expected
-    np.testing.assert_array_equal(WEDGE_MAPS[0], np.eye(3))
+    # the order documented in WEDGE_MAPS's docstring (rows P0 and P1 of the paper's Table 1)
+    p = np.array([1, 2, 3])
+    images = [tuple(int(c) for c in p @ m) for m in WEDGE_MAPS]
+    assert images == [(1, 2, 3), (-1, 2, 3), (-1, -2, 3), (1, -2, 3), (2, 1, 3), (-2, 1, 3), (-2, -1, 3), (2, -1, 3)]
     assert not WEDGE_MAPS.flags.writeable
 
 

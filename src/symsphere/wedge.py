@@ -70,6 +70,8 @@ __all__ = [
     "cosine_wedge_uv",
 ]
 
+_Real = float | np.ndarray  # the elementwise functions take and return floats or float64 arrays
+
 _QUARTER_PI = np.pi / 4
 _FOUR_OVER_PI = 4 / np.pi
 _WEDGE_DENSITY = 8 / np.pi  # pdf_W / cos(theta)
@@ -218,7 +220,7 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
 
 
 @register_jitable
-def cosine_wedge_point(u, v):
+def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     """Elementwise forward map: (u, v) in [0, 1]^2 to the direction (x, y, z) in W.
 
     ``r = sqrt(u)``, ``phi = (pi/4) v``, ``(x, y) = r (cos phi, sin phi)``,
@@ -259,7 +261,7 @@ def cosine_wedge_point(u, v):
 
 
 @register_jitable
-def cosine_wedge_density(x, y, z):
+def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     """Elementwise pdf: ``8 z / pi`` where x >= y >= 0 and z >= 0, else 0.
 
     Inputs are not validated (use :func:`cosine_wedge_pdf` for that).
@@ -287,7 +289,7 @@ def cosine_wedge_density(x, y, z):
 
 
 @register_jitable
-def cosine_wedge_uv(x, y, z):
+def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     """Elementwise inverse: a unit direction (x, y, z) of W to (u, v) in [0, 1]^2.
 
     ``u = x^2 + y^2``, ``v = (4/pi) atan2(y, x)``, both clipped into [0, 1]; z is
