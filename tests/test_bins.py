@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from scipy import optimize
 
+from symsphere import bins, stats
 from symsphere.bins import bin_probabilities, equal_area_bins
 from symsphere.stats import uniform_pdf
 
@@ -186,8 +187,14 @@ def test_pole_density_normalised():
 
 
 # ---------------------------------------------------------------------------
-# Edges
+# Edges, and the names stats re-exports
 # ---------------------------------------------------------------------------
+
+
+def test_stats_reexports_the_bins():
+    for name in bins.__all__:
+        assert getattr(stats, name) is getattr(bins, name)
+        assert name in stats.__all__
 
 
 def test_equal_area_bins_edges():

@@ -8,7 +8,9 @@ for the type checker only, since ``scipy.stats`` costs 0.3 s at start-up.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Literal, TypeAlias
+from collections.abc import Callable, Mapping
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -28,6 +30,7 @@ __all__ = [
     "MapMethod",
     "PointSet",
     "PointsLike",
+    "Polynomial",
     "RNGLike",
 ]
 
@@ -66,3 +69,6 @@ BoolArray: TypeAlias = npt.NDArray[np.bool_]
 
 Density: TypeAlias = Callable[[FloatArray], "npt.ArrayLike"]
 """A density (or integrand) on directions: ``f(d)`` for ``d`` of shape (m, 3) returns shape (m,)."""
+
+Polynomial: TypeAlias = Mapping[tuple[int, int, int], "float | Fraction"]
+"""A polynomial in x, y, z: ``{(a, b, c): coefficient}`` for the monomials x^a y^b z^c."""

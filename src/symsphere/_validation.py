@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
-from typing import Any, TypeVar, cast
+from typing import Any, TypeVar, cast, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -257,7 +257,7 @@ def check_lm(l: object, m: object) -> tuple[int, int]:
     return degree, order
 
 
-def check_exponents(a: object, b: object, c: object) -> list[int]:
+def check_exponents(a: object, b: object, c: object) -> tuple[int, int, int]:
     """Return the exponents of a monomial x^a y^b z^c as non-negative ints."""
     out = []
     for value, name in ((a, "a"), (b, "b"), (c, "c")):
@@ -266,7 +266,7 @@ def check_exponents(a: object, b: object, c: object) -> list[int]:
         if value < 0:
             raise ValueError(f"exponent '{name}' must be >= 0, got {value}")
         out.append(int(value))
-    return out
+    return out[0], out[1], out[2]
 
 
 def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
@@ -280,10 +280,9 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
     return coeffs
 
 
-def check_triangle(a: object, b: object, c: object) -> Float64Array:
+def check_triangle(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Float64Array:
     """Return the vertices of a non-degenerate spherical triangle as unit vectors, shape (3, 3)."""
-    vertices = [check_normal(v, name) for v, name in ((a, "a"), (b, "b"), (c, "c"))]
-    verts = np.stack(cast("list[Float64Array]", vertices))
+    verts = np.stack([check_normal(v, name) for v, name in ((a, "a"), (b, "b"), (c, "c"))])
     A, B, C = verts
     # Its area by Van Oosterom & Strackee (1983): tan(E/2) = |A.(B x C)| / (1 + A.B + B.C + C.A).
     area = 2.0 * math.atan2(abs(float(np.dot(A, np.cross(B, C)))), 1.0 + A @ B + B @ C + C @ A)
@@ -295,7 +294,15 @@ def check_triangle(a: object, b: object, c: object) -> Float64Array:
     return verts
 
 
-def check_normal(normal: object, name: str = "normal") -> Float64Array | None:
+@overload
+def check_normal(normal: None, name: str = ...) -> None: ...
+
+
+@overload
+def check_normal(normal: npt.ArrayLike, name: str = ...) -> Float64Array: ...
+
+
+def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64Array | None:
     """Return *normal* as a unit float64 3-vector, or None."""
     if normal is None:
         return None

@@ -32,7 +32,7 @@ from ._validation import check_bins, check_choice, check_count, check_pdf
 
 __all__ = ["bin_probabilities", "equal_area_bins"]
 
-_DOMAINS = ("sphere", "hemisphere", "triangle")
+_DOMAINS: tuple[ChiDomain, ...] = ("sphere", "hemisphere", "triangle")
 
 # (phi_min, phi_max, cos_min, cos_max) of each domain's rectangle.
 _RECTANGLES = {

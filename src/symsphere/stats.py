@@ -47,7 +47,7 @@ __all__ = [
     "uniform_pdf",
 ]
 
-_DOMAINS = ("sphere", "hemisphere", "triangle")
+_DOMAINS: tuple[ChiDomain, ...] = ("sphere", "hemisphere", "triangle")
 
 # |integral - 1| above this fails the test: the expected counts would be wrong.
 _INTEGRAL_TOL = 1e-3
