@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any, Literal, TypeAlias
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -32,6 +32,7 @@ __all__ = [
     "PointsLike",
     "Polynomial",
     "RNGLike",
+    "Sampler",
 ]
 
 RNGLike: TypeAlias = "np.random.Generator | np.random.SeedSequence | int | None"
@@ -72,3 +73,11 @@ Density: TypeAlias = Callable[[FloatArray], "npt.ArrayLike"]
 
 Polynomial: TypeAlias = Mapping[tuple[int, int, int], "float | Fraction"]
 """A polynomial in x, y, z: ``{(a, b, c): coefficient}`` for the monomials x^a y^b z^c."""
+
+
+class Sampler(Protocol):
+    """A peer's sampler (:attr:`symsphere.peers.Peer.sampler`): ``n`` directions, shape (n, 3)."""
+
+    def __call__(
+        self, n: int, *, points: PointsLike = ..., rng: RNGLike = ..., dtype: DTypeLike = ...
+    ) -> FloatArray: ...
