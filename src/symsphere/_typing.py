@@ -2,20 +2,21 @@
 
 A private module with public names, like :mod:`symsphere._validation`: import
 them from here in annotations (``from ._typing import RNGLike``).  Only
-numpy and typing are imported at run time; scipy's ``QMCEngine`` is imported
-for the type checker only, since ``scipy.stats`` costs 0.3 s at start-up.
+numpy and typing are imported at run time; scipy's ``QMCEngine`` (``scipy.stats``
+costs 0.3 s at start-up) and ``Fraction`` are imported for the type checker only.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Literal, Protocol, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
 if TYPE_CHECKING:
+    from fractions import Fraction
+
     from scipy.stats.qmc import QMCEngine
 
 __all__ = [
@@ -68,8 +69,8 @@ IntArray: TypeAlias = npt.NDArray[np.int64]
 BoolArray: TypeAlias = npt.NDArray[np.bool_]
 """An array of bools."""
 
-Density: TypeAlias = Callable[[FloatArray], "npt.ArrayLike"]
-"""A density (or integrand) on directions: ``f(d)`` for ``d`` of shape (m, 3) returns shape (m,)."""
+Density: TypeAlias = Callable[[Float64Array], "npt.ArrayLike"]
+"""A density on directions: ``pdf(d)`` for float64 ``d`` of shape (m, 3) returns shape (m,) (or a scalar)."""
 
 Polynomial: TypeAlias = Mapping[tuple[int, int, int], "float | Fraction"]
 """A polynomial in x, y, z: ``{(a, b, c): coefficient}`` for the monomials x^a y^b z^c."""

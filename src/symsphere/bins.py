@@ -1,5 +1,4 @@
-"""Equal-area bins of the sphere, the hemisphere and the triangle T0, and the
-integrals of a density over them.
+"""Equal-area bins on the sphere, the hemisphere and T0, and a density's integrals over them.
 
 The chi-square test of :mod:`symsphere.stats` histograms direction samples on
 these bins and compares the counts with the bins' probabilities under the
@@ -25,6 +24,7 @@ solid angle.
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from ._typing import ChiDomain, Density, Float64Array
@@ -105,7 +105,8 @@ def bin_probabilities(
 
     Examples
     --------
-    >>> from symsphere.stats import bin_probabilities, uniform_pdf
+    >>> from symsphere.bins import bin_probabilities
+    >>> from symsphere.stats import uniform_pdf
     >>> p = bin_probabilities(uniform_pdf("triangle"), "triangle", (8, 8))
     >>> p.shape, round(float(p.sum()), 12)
     ((8, 8), 1.0)
@@ -139,7 +140,7 @@ def equal_area_bins(
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.stats import equal_area_bins
+    >>> from symsphere.bins import equal_area_bins
     >>> phi, cos = equal_area_bins("hemisphere", (4, 2))
     >>> phi / np.pi
     array([-1. , -0.5,  0. ,  0.5,  1. ])

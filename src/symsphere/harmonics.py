@@ -76,7 +76,7 @@ def real_sh(l: int, m: int, d: npt.ArrayLike) -> Float64Array:
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.integrands import real_sh
+    >>> from symsphere.harmonics import real_sh
     >>> round(float(real_sh(0, 0, [0.0, 0.0, 1.0]) * np.sqrt(4 * np.pi)), 14)
     1.0
     >>> round(float(real_sh(1, 1, [1.0, 0.0, 0.0]) ** 2 * 4 * np.pi / 3), 14)   # Y_11 = sqrt(3/(4 pi)) x
@@ -94,7 +94,7 @@ def real_sh_basis(lmax: int, d: npt.ArrayLike) -> Float64Array:
 
     Examples
     --------
-    >>> from symsphere.integrands import real_sh_basis
+    >>> from symsphere.harmonics import real_sh_basis
     >>> real_sh_basis(8, [[0.0, 0.6, 0.8]]).shape
     (1, 81)
     """
@@ -114,7 +114,7 @@ def sh_polynomial(l: int, m: int) -> dict[tuple[int, int, int], float]:
 
     Examples
     --------
-    >>> from symsphere.integrands import sh_polynomial
+    >>> from symsphere.harmonics import sh_polynomial
     >>> {k: round(v, 6) for k, v in sh_polynomial(2, -2).items()}    # sqrt(15/(4 pi)) x y
     {(1, 1, 0): 1.092548}
     """
@@ -167,7 +167,7 @@ def monomial_integral(a: int, b: int, c: int, domain: Domain = "sphere") -> floa
     Examples
     --------
     >>> import math
-    >>> from symsphere.integrands import monomial_integral
+    >>> from symsphere.harmonics import monomial_integral
     >>> monomial_integral(2, 0, 0) / math.pi, monomial_integral(0, 0, 1, "hemisphere") / math.pi
     (1.3333333333333333, 1.0)
     """
@@ -183,7 +183,7 @@ def polynomial_integral(coeffs: Polynomial, domain: Domain = "sphere") -> float:
     Examples
     --------
     >>> import math
-    >>> from symsphere.integrands import polynomial_integral
+    >>> from symsphere.harmonics import polynomial_integral
     >>> from fractions import Fraction
     >>> polynomial_integral({(4, 0, 0): 1, (0, 4, 0): 1, (0, 0, 4): 1, (0, 0, 0): Fraction(-3, 5)})
     0.0
@@ -205,7 +205,7 @@ def evaluate_polynomial(coeffs: Polynomial, d: npt.ArrayLike) -> Float64Array:
 
     Examples
     --------
-    >>> from symsphere.integrands import evaluate_polynomial
+    >>> from symsphere.harmonics import evaluate_polynomial
     >>> float(evaluate_polynomial({(1, 1, 0): 2.0, (0, 0, 0): 1.0}, [0.5, 0.5, 0.7]))
     1.5
     """
@@ -238,7 +238,7 @@ def cubic_harmonic(degree: Literal[4, 6, 8]) -> dict[tuple[int, int, int], float
 
     Examples
     --------
-    >>> from symsphere.integrands import cubic_harmonic, polynomial_integral
+    >>> from symsphere.harmonics import cubic_harmonic, polynomial_integral
     >>> len(cubic_harmonic(6)), polynomial_integral(cubic_harmonic(8))
     (10, 0.0)
     """
