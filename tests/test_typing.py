@@ -2,7 +2,8 @@
 
 ``[tool.mypy]`` is strict and lists the files (``files = ["src/symsphere"]``),
 so this runs exactly what a developer runs.  The cache is kept in pytest's
-cache directory (git-ignored), so that reruns take a second or two.
+cache directory (git-ignored), so that reruns take a second or two (a cold
+run about 15 s).
 """
 
 import subprocess
@@ -14,11 +15,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_mypy_passes(request):
+def test_mypy_passes(request, tmp_path):
     pytest.importorskip("mypy", reason="mypy is in the 'test' extra")
     if not (ROOT / "pyproject.toml").is_file() or not (ROOT / "src" / "symsphere").is_dir():
         pytest.skip("needs the source tree (pyproject.toml and src/symsphere)")
-    cache = request.config.cache.mkdir("mypy")
+    pytest_cache = getattr(request.config, "cache", None)  # None under -p no:cacheprovider
+    cache = pytest_cache.mkdir("mypy") if pytest_cache is not None else tmp_path / "mypy-cache"
     result = subprocess.run(
         [sys.executable, "-m", "mypy", "--cache-dir", str(cache), "--no-color-output"],
         cwd=ROOT,
