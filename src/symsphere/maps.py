@@ -179,7 +179,9 @@ def get_map(method: MapMethod) -> TriangleMap:
 
 
 @register_jitable
-def _clamped_into_t0(x: Float64Array, y: Float64Array, z: Float64Array) -> tuple[Float64Array, Float64Array, Float64Array]:
+def _clamped_into_t0(
+    x: Float64Array, y: Float64Array, z: Float64Array
+) -> tuple[Float64Array, Float64Array, Float64Array]:
     """Clamp rounding errors so that z >= x >= y >= 0."""
     x = np.minimum(x, z)
     return x, np.minimum(np.maximum(y, 0.0), x), z

@@ -215,7 +215,9 @@ def get_peer(name: str) -> Peer:
 # =============================================================================
 
 
-def sample_classic(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+def sample_classic(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere by z = 1 - 2u, phi = 2 pi v.
 
     The map of :func:`square_to_uniform_sphere` (pbrt-v4 ``SampleUniformSphere``,
@@ -298,7 +300,9 @@ def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float6
     return (g / norm[:, None]).astype(dtype)
 
 
-def sample_octahedral(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+def sample_octahedral(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere by Clarberg's octahedral map.
 
     The map of :func:`square_to_octahedral_sphere`; parameters and returns as
@@ -331,7 +335,9 @@ def sample_octahedral_hemisphere(
     return _sample_map(_octahedral_hemisphere, n, points, rng, dtype)
 
 
-def sample_cosine(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+def sample_cosine(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Cosine-weighted directions on the hemisphere z >= 0 (pdf cos(theta)/pi).
 
     Shirley & Chiu's concentric map onto the disk, lifted to the hemisphere
@@ -396,7 +402,9 @@ def sample_fibonacci(
     return d.astype(dtype)
 
 
-def sample_arvo(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+def sample_arvo(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere: Arvo's triangle sampling on T0, then symmetry.
 
     ``n / 48`` points of the unit square are mapped onto T0 by Arvo's
@@ -868,14 +876,18 @@ def fibonacci_points(n: int) -> Float64Array:
 
 
 def _random_only(sampler: Callable[..., FloatArray]) -> Sampler:
-    def wrapped(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+    def wrapped(
+        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
         return sampler(n, rng=rng, dtype=dtype)
 
     return wrapped
 
 
 def _fibonacci_sampler(randomize: bool) -> Sampler:
-    def wrapped(n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
+    def wrapped(
+        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
         return sample_fibonacci(n, randomize=randomize, rng=rng, dtype=dtype)
 
     return wrapped

@@ -117,7 +117,8 @@ class BasePoints:
             engine_class = qmc.Sobol if self._kind == "sobol" else qmc.Halton
             scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
             self._engine = engine_class(d=2, scramble=True, rng=np.random.default_rng(scramble_seed))
-        self.seed_words: npt.NDArray[np.unsignedinteger[Any]] | None = None  # the random stream's seed, for the kernels (below)
+        # The random stream's seed, for the kernels (below).
+        self.seed_words: npt.NDArray[np.unsignedinteger[Any]] | None = None
         if self._engine is not None:
             self._offset = self._engine.num_generated
             if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
