@@ -59,7 +59,7 @@ def bin_probabilities(
     Parameters
     ----------
     pdf : callable
-        Density with respect to solid angle, as for :func:`chi2_test`.
+        Density with respect to solid angle, as for :func:`symsphere.stats.chi2_test`.
     domain : {'sphere', 'hemisphere', 'triangle'}, optional
         Default is 'sphere'.
     bins : tuple of two int, optional

@@ -112,7 +112,7 @@ class Chi2Result:
     integral: float
     message: str
     ratio_range: tuple[float, float]
-    domain: str
+    domain: ChiDomain
     n_samples: int
 
     def __str__(self) -> str:
