@@ -9,6 +9,10 @@ unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
@@ -17,10 +21,14 @@ from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
 __version__ = "0.1.0"
 
-_SUBMODULES = ("distributed", "integrands", "peers", "stats")
+_SUBMODULES = ("bins", "distributed", "harmonics", "integrands", "peers", "stats", "wedge")
 
 
-def __getattr__(name):
+if TYPE_CHECKING:
+    from types import ModuleType
+
+
+def __getattr__(name: str) -> ModuleType:
     # Submodules that need scipy.stats, scipy.integrate or dask are imported on first use
     # (PEP 562), so that ``import symsphere`` and a first sample stay fast.
     if name in _SUBMODULES:
@@ -34,9 +42,12 @@ __all__ = [
     "METHODS",
     "POINT_SETS",
     "SPHERE_MAPS",
+    "bins",
+    "harmonics",
     "integrands",
     "peers",
     "stats",
+    "wedge",
     "fold",
     "IntegrationResult",
     "hemisphere_pdf",

@@ -102,7 +102,8 @@ def check_rng(rng: object, name: str = "rng") -> np.random.Generator:
     )
 
 
-def as_float_array(a, name):
+def as_float_array(a: object, name: str) -> FloatArray:
+    """*a* as a float array (integers and bools become float64); TypeError naming *name* otherwise."""
     if isinstance(a, (str, bytes)):
         raise TypeError(f"'{name}' must be an array of numbers, got {type(a).__name__}")
     try:
@@ -112,8 +113,9 @@ def as_float_array(a, name):
     if arr.dtype.kind not in "biuf":
         raise TypeError(f"'{name}' must be an array of real numbers, got dtype {arr.dtype}")
     if arr.dtype.kind != "f":
-        arr = arr.astype(np.float64)
-    return arr
+        return arr.astype(np.float64)
+    out: FloatArray = arr
+    return out
 
 
 def check_uv(uv: object, name: str = "uv") -> FloatArray:

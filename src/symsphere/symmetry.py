@@ -139,8 +139,9 @@ def fold(d: npt.ArrayLike, domain: Domain = "sphere") -> tuple[IntArray, FloatAr
 # --- private helpers: trust their inputs -----------------------------------
 
 
-def _orbit(p: np.ndarray, count: int) -> np.ndarray:
-    return p[..., SOURCES[:count]] * SIGNS[:count].astype(p.dtype)
+def _orbit(p: FloatArray, count: int) -> FloatArray:
+    images: FloatArray = p[..., SOURCES[:count]] * SIGNS[:count].astype(p.dtype)
+    return images
 
 
 def _fold_key(d: np.ndarray) -> np.ndarray:
@@ -176,5 +177,5 @@ def _build_fold_table() -> np.ndarray:
 _FOLD_TABLE = _build_fold_table()
 
 
-def _fold(d: np.ndarray):
+def _fold(d: FloatArray) -> tuple[IntArray, FloatArray]:
     return _FOLD_TABLE[_fold_key(d)], _base(d)
