@@ -27,11 +27,13 @@ from typing import Callable
 
 import numpy as np
 
-from ._io import atomic_directory
-from ._validation import check_count, check_rng
-from .maps import METHODS, get_map, triangle_pdf
-from .sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
-from .symmetry import fold
+from .. import __version__
+from .._validation import check_count, check_seed
+from ..io import atomic_directory
+from ..maps import METHODS, get_map, triangle_pdf
+from ..sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
+from ..symmetry import fold
+from ._format import format_p
 
 __all__ = ["run_demo", "DEMO_FILES", "FAMILY_SIGNIFICANCE"]
 
@@ -94,18 +96,19 @@ def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> P
 
     Examples
     --------
-    >>> from symsphere.demo import run_demo
+    >>> from symsphere.apps.demo import run_demo
     >>> report = run_demo("/tmp/symsphere-demo", n=48 * 2**10, progress=False)  # doctest: +SKIP
     >>> print(report.read_text())  # doctest: +SKIP
     """
+    # Function-level: tqdm.auto (~60 ms) and scipy.stats (~1 s) load only when a demo runs.
     from tqdm.auto import tqdm
 
-    from .stats import chi2_test, one_per_orbit
+    from ..stats import chi2_test, one_per_orbit
 
     n = check_count(n, "n", multiple=48)
-    seed_sequence = np.random.SeedSequence(_check_seed(seed))
+    seed_sequence = np.random.SeedSequence(check_seed(seed))
     sampling_seeds = seed_sequence.spawn(2 * len(METHODS))
-    choice_rng = check_rng(seed_sequence.spawn(1)[0])
+    choice_rng = np.random.default_rng(seed_sequence.spawn(1)[0])
 
     with atomic_directory(out_dir, replaceable=DEMO_FILES) as build_dir:
         tests, scatter = [], {}
@@ -140,14 +143,8 @@ def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> P
 # --- private ------------------------------------------------------------------
 
 
-def _check_seed(seed):
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"'seed' must be a non-negative integer, got {seed!r}")
-    return int(seed)
-
-
 def _tests_of(method, sphere, hemisphere):
-    from .stats import uniform_pdf
+    from ..stats import uniform_pdf  # function-level: scipy.stats (see run_demo)
 
     _, base = fold(sphere)  # the whole orbit folds to the same point of T0
     tests = [
@@ -171,18 +168,12 @@ def _reference_name(test):
     return f"own: `{own}(·, '{test.method}')`"
 
 
-def _format_p(p):
-    if math.isnan(p):
-        return "n/a"
-    return "< 1e-300" if p == 0 else f"{p:.3g}"  # chi2.sf underflows to 0 below ~1e-308
-
-
 def _format_range(low, high):
     return "n/a" if math.isnan(low) else f"{low:.2f}–{high:.2f}"
 
 
 def _p_equals(p):
-    return "p < 1e-300" if p == 0 else f"p = {_format_p(p)}"
+    return "p < 1e-300" if p == 0 else f"p = {format_p(p)}"
 
 
 def _join(words):
@@ -191,8 +182,6 @@ def _join(words):
 
 
 def _report(tests, results, n, seed):
-    from . import __version__
-
     threshold = results[0].threshold
     lines = [
         "# symsphere demo: are the maps uniform?",
@@ -217,7 +206,7 @@ def _report(tests, results, n, seed):
         low, high = result.ratio_range
         lines.append(
             f"| {test.domain} | {test.method} | {_reference_name(test)} | {result.statistic:.1f} | {result.dof} "
-            f"| {_format_p(result.p_value)} | {_result_word(result)} | {_format_range(low, high)} |"
+            f"| {format_p(result.p_value)} | {_result_word(result)} | {_format_range(low, high)} |"
         )
     lines += ["", "## What this shows", ""]
     lines += [f"- {_verdict(method, tests, results)}" for method in METHODS]
@@ -234,7 +223,7 @@ def _report(tests, results, n, seed):
 
 def _render(path, seed):
     """A small render of smallpt's Cornell box with the paper's scheme; the report's closing section."""
-    from .render import render, save_png
+    from ..render import render, save_png  # function-level: ~0.3 s to import, and numba kernels
 
     result = render("cornell", width=64, height=48, spp=48, sampler="symmetric_sobol", seed=seed)
     save_png(path, result.image)
@@ -279,7 +268,7 @@ def _verdict(method, tests, results):
     if failed:
         sentence = (
             f"**{method} fails** against the uniform density on the {_join(failed)} "
-            f"(smallest p-value {_format_p(smallest_p)}): the paper's map is not uniform, "
+            f"(smallest p-value {format_p(smallest_p)}): the paper's map is not uniform, "
             "measured here."
         )
     else:
@@ -312,12 +301,13 @@ def _result_word(result):
 
 
 def _write_figure(path, tests, results, scatter):
-    # The object-oriented API with an Agg canvas: no pyplot state, no GUI backend.
+    # The object-oriented API with an Agg canvas: no pyplot state, no GUI backend.  Function-level:
+    # matplotlib and scipy.stats load only when a figure is drawn.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import TwoSlopeNorm
     from matplotlib.figure import Figure
 
-    from .stats import equal_area_bins
+    from ..stats import equal_area_bins
 
     triangle = {
         t.method: r for t, r in zip(tests, results) if t.domain == "triangle" and t.reference == "uniform"

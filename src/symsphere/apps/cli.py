@@ -20,13 +20,18 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from . import __version__
-from ._io import DIRECTION_SUFFIXES, check_suffix, stream_directions
-from .maps import METHODS
-from .points import POINT_SETS
+from .. import __version__, integrate, iter_hemisphere, iter_sphere
+from .._validation import check_count, check_seed
+from ..integrands import INTEGRANDS
+from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
+from ..maps import METHODS
+from ..points import BLOCK, POINT_SETS
+from .demo import run_demo
+from .study import add_study_parser
 
 __all__ = ["main", "build_parser"]
 
@@ -172,14 +177,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_cluster_options(render)
     render.set_defaults(handler=_run_render)
 
-    from .study import add_study_parser
-
     add_study_parser(verbs)
     return parser
 
 
 def _render_samplers():
-    from .render.renderer import SAMPLERS  # the tuple only; the kernels load when a render runs
+    # Function-level: symsphere.render takes ~0.3 s to import; the renderer module alone gives the tuple
+    # without loading the kernels.
+    from ..render.renderer import SAMPLERS
 
     return SAMPLERS
 
@@ -201,7 +206,7 @@ def _cluster_client(args):
     """A Dask client for --workers / --scheduler, or None to run in this process."""
     if args.workers is None and args.scheduler is None:
         return None
-    from . import distributed
+    from .. import distributed  # function-level: dask is slow to import and optional
 
     if args.scheduler is not None:
         return distributed.connect(args.scheduler, timeout=args.timeout)
@@ -212,7 +217,7 @@ def _cluster_client(args):
 
 def _close_client(client):
     if client is not None:
-        from .distributed import close_client
+        from ..distributed import close_client  # function-level: dask (see _cluster_client)
 
         close_client(client)
 
@@ -243,19 +248,16 @@ def main(argv=None) -> int:
 
 
 def _run_sample(args) -> int:
-    from tqdm.auto import tqdm
-
-    from .sampling import iter_hemisphere, iter_sphere
+    from tqdm.auto import tqdm  # function-level: ~60 ms, only for the verbs that show progress
 
     if args.normal is not None and args.domain != "hemisphere":
         raise _UsageError("--normal is only valid with --domain hemisphere")
     check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
     seed = args.seed
-    if seed is not None and seed < 0:
-        raise _UsageError(f"--seed must be a non-negative integer, got {seed}")
     if seed is None:
         seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
     start = time.perf_counter()
+    seed = check_seed(seed, "--seed")
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
     count = 48 if args.domain == "sphere" else 24
     chunk = args.chunk if args.chunk is not None else count * 2**16
@@ -284,8 +286,7 @@ def _run_sample(args) -> int:
 
 def _cluster_blocks(client, args, options, chunk):
     """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
-    from . import distributed
-    from .points import BLOCK
+    from .. import distributed  # function-level: dask is slow to import and optional
 
     count = 48 if args.domain == "sphere" else 24
     chunk = max(count * BLOCK, chunk - chunk % (count * BLOCK))  # cluster chunks are whole blocks
@@ -309,15 +310,10 @@ def _cluster_blocks(client, args, options, chunk):
 
 
 def _run_integrate(args) -> int:
-    from .integrands import INTEGRANDS
-    from .integrate import integrate
-
     if args.integrand not in INTEGRANDS:
         raise _UsageError(f"--integrand {args.integrand!r} is not known; use one of {sorted(INTEGRANDS)}")
-    if args.seed is not None and args.seed < 0:
-        raise _UsageError(f"--seed must be a non-negative integer, got {args.seed}")
     integrand = INTEGRANDS[args.integrand]
-    seed = args.seed if args.seed is not None else np.random.SeedSequence().entropy
+    seed = check_seed(args.seed, "--seed") if args.seed is not None else np.random.SeedSequence().entropy
     kwargs = dict(
         domain=integrand.domain, n=args.n, method=args.method, points=args.points, replicates=args.replicates, rng=seed
     )
@@ -327,7 +323,7 @@ def _run_integrate(args) -> int:
         if client is None:
             result = integrate(integrand.f, **kwargs)
         else:
-            from . import distributed
+            from .. import distributed  # function-level: dask is slow to import and optional
 
             result = distributed.integrate(integrand.f, client=client, progress=True, **kwargs)
     finally:
@@ -344,8 +340,6 @@ def _run_integrate(args) -> int:
 
 
 def _run_demo(args) -> int:
-    from .demo import run_demo
-
     start = time.perf_counter()
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
     print(f"report: {report}  (figure: {report.with_name('figure.png')}; {time.perf_counter() - start:.1f} s)")
@@ -353,26 +347,23 @@ def _run_demo(args) -> int:
 
 
 def _run_render(args) -> int:
-    from pathlib import Path
-
-    from .render import render, write_outputs
+    from ..render import render, write_outputs  # function-level: ~0.3 s, only for this verb
 
     out = Path(args.out)
     if out.suffix.lower() not in (".png", ".pfm", ".npy"):
         raise _UsageError(f"--out must end in .png, .pfm or .npy, got {args.out!r}")
     if not out.parent.is_dir():
         raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
-    if args.seed is not None and args.seed < 0:
-        raise _UsageError(f"--seed must be a non-negative integer, got {args.seed}")
-    if not args.exposure > 0:
+    if args.seed is not None:
+        check_seed(args.seed, "--seed")
+    if not args.exposure > 0:  # checked by save_png too, but only after the render: fail first
         raise _UsageError(f"--exposure must be positive, got {args.exposure}")
     scene_file = Path(args.scene)
     if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
         raise _UsageError(f"--scene: file {args.scene!r} does not exist")
-    for name in ("width", "height", "spp", "threads"):
-        value = getattr(args, name)
-        if value is not None and value < 1:
-            raise _UsageError(f"--{name} must be a positive integer, got {value}")
+    for name in ("width", "height", "spp", "threads"):  # render() checks them too, naming 'spp' not '--spp'
+        if getattr(args, name) is not None:
+            check_count(getattr(args, name), f"--{name}")
     options = dict(
         width=args.width,
         height=args.height,
@@ -388,7 +379,7 @@ def _run_render(args) -> int:
         if client is None:
             result = render(args.scene, threads=args.threads, **options)
         else:
-            from . import distributed
+            from .. import distributed  # function-level: dask is slow to import and optional
 
             result = distributed.render(args.scene, client=client, **options)
     finally:
