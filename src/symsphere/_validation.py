@@ -141,7 +141,7 @@ def check_normal(normal, name="normal"):
     return arr / norm
 
 
-def check_seed(seed, name="seed"):
+def check_seed(seed: int, name: str = "seed") -> int:
     """Return *seed* as a non-negative int (not a bool), else raise ValueError naming *name*.
 
     For a seed that must be reproducible and printable (a report, a command line): unlike

@@ -13,7 +13,8 @@ from symsphere.apps.study import CONFIGS, StudyConfig, add_study_parser, run_stu
 from symsphere.apps.study.config import domains
 from symsphere.apps.study.report import report_html
 from symsphere.apps.study.run import chi2_tests
-from symsphere.apps.study.samplers import all_samplers, samplers
+from symsphere.apps.study.samplers import all_samplers
+from symsphere.apps.study.samplers import samplers as domain_samplers
 from symsphere.integrands import INTEGRANDS
 
 
@@ -128,7 +129,7 @@ def test_small_study_end_to_end(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == sorted(study_files(config))
     assert [p.name for p in tmp_path.iterdir()] == ["study"]  # no temporary left behind
 
-    samplers = {domain: samplers(config, domain) for domain in domains(config)}
+    samplers = {domain: domain_samplers(config, domain) for domain in domains(config)}
     fields, rows = _read_csv(out / "convergence.csv")
     assert fields[:8] == ["integrand", "domain", "sampler", "points", "k", "n", "repetitions", "rmse"]
     for column in ("mean_error", "mean_seconds"):

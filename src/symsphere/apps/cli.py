@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -222,7 +223,7 @@ def _close_client(client):
         close_client(client)
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status."""
     parser = build_parser()
     try:

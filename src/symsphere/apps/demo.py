@@ -21,6 +21,7 @@ at random; those are independent, and uniform if and only if the map is.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -56,7 +57,9 @@ class _Test:
     pdf: Callable[[np.ndarray], np.ndarray]
 
 
-def run_demo(out_dir="symsphere-demo", n=48 * 2**14, seed=0, progress=True) -> Path:
+def run_demo(
+    out_dir: str | os.PathLike = "symsphere-demo", n: int = 48 * 2**14, seed: int = 0, progress: bool = True
+) -> Path:
     """Test every map for uniformity and write ``report.md`` and ``figure.png``.
 
     Parameters

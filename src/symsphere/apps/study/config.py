@@ -186,8 +186,8 @@ class StudyConfig:
 
         pairs("sphere_peers", "sphere")
         pairs("hemisphere_peers", "hemisphere")
-        domains = {INTEGRANDS[g].domain for g in self.integrands}
-        for domain in domains:
+        present = {INTEGRANDS[g].domain for g in self.integrands}
+        for domain in present:
             baseline = BASELINE[domain]
             peers = self.sphere_peers if domain == "sphere" else self.hemisphere_peers
             if baseline not in peers:

@@ -264,22 +264,22 @@ def _run_discrepancy(results, cells, bar):
     for sampler, k in cells:
         bar.set_postfix_str(f"discrepancy: {sampler.label}, N = {sampler.n_for(k)}", refresh=False)
         n = sampler.n_for(k)
-        plain, weighted = [], []
+        plain, with_weights = [], []
         for r in range(config.discrepancy_repetitions):
             x = sampler.sample(n, results.seed_sequence(1, key(sampler.label), k, r))
             plain.append(max(cap_discrepancy_squared(x), 0.0))
             if sampler.uniform:
-                weighted.append(plain[-1])
+                with_weights.append(plain[-1])
             else:
                 w = weighted(np.ones(n), n * 4 * math.pi * sampler.pdf(x))
-                weighted.append(max(cap_discrepancy_squared(x, w), 0.0))
-        plain, weighted = np.array(plain), np.array(weighted)
+                with_weights.append(max(cap_discrepancy_squared(x, w), 0.0))
+        plain, with_weights = np.array(plain), np.array(with_weights)
         results.discrepancy.append({
             "sampler": sampler.name, "points": sampler.points, "k": k, "n": n,
             "repetitions": config.discrepancy_repetitions,
             "discrepancy_rms": float(np.sqrt(plain.mean())),
             "discrepancy_min": float(np.sqrt(plain.min())), "discrepancy_max": float(np.sqrt(plain.max())),
-            "weighted_discrepancy_rms": float(np.sqrt(weighted.mean())),
+            "weighted_discrepancy_rms": float(np.sqrt(with_weights.mean())),
             "random_expectation": math.sqrt(1.0 / (3.0 * n)),
         })
         bar.update(1)
