@@ -223,7 +223,19 @@ def _findings(results):
 
 
 def report_markdown(results: Results) -> str:
-    """The text of ``report.md`` for the measurements *results* of a finished study."""
+    """The text of ``report.md`` for the measurements of a finished study.
+
+    Parameters
+    ----------
+    results : Results
+        Every stage run (convergence, discrepancy, chi-square, figures), ``stage_seconds`` filled in.
+
+    Returns
+    -------
+    str
+        Markdown: what was measured, the tables, the findings computed from them, the figures, the
+        files and how to reproduce the run.
+    """
     config = results.config
     by_label = {(s.name, s.points): s for s in all_samplers(config)}
     ks = config.ks
