@@ -316,3 +316,23 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
     if not np.isfinite(norm) or norm == 0:
         raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {arr.tolist()}")
     return arr / norm
+
+
+def check_seed(seed: int, name: str = "seed") -> int:
+    """Return *seed* as a non-negative int (not a bool), else raise ValueError naming *name*.
+
+    For a seed that must be reproducible and printable (a report, a command line): unlike
+    :func:`check_rng` it accepts no Generator or SeedSequence.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_seed
+    >>> check_seed(3)
+    3
+    """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"'{name}' must be a non-negative integer, got {seed!r}")
+    return int(seed)
+
+
+__all__ += ["check_seed"]  # appended here, not in the list above, to keep this addition in one place
