@@ -60,10 +60,7 @@ def sample_sphere(
 
     Examples
     --------
-    >>> from collections.abc import Iterator
-
-import numpy as np
-import numpy.typing as npt
+    >>> import numpy as np
     >>> from symsphere import sample_sphere
     >>> d = sample_sphere(96, rng=1)
     >>> d.shape
@@ -106,10 +103,7 @@ def sample_hemisphere(
 
     Examples
     --------
-    >>> from collections.abc import Iterator
-
-import numpy as np
-import numpy.typing as npt
+    >>> import numpy as np
     >>> from symsphere import sample_hemisphere
     >>> d = sample_hemisphere(48, normal=[1.0, 0.0, 0.0], rng=2)
     >>> bool(np.all(d[:, 0] >= 0))
@@ -152,10 +146,7 @@ def iter_sphere(
 
     Examples
     --------
-    >>> from collections.abc import Iterator
-
-import numpy as np
-import numpy.typing as npt
+    >>> import numpy as np
     >>> from symsphere import iter_sphere, sample_sphere
     >>> blocks = list(iter_sphere(48 * 1000, chunk=48 * 300, rng=5))
     >>> [len(b) for b in blocks]
@@ -181,10 +172,7 @@ def iter_hemisphere(
 
     Examples
     --------
-    >>> from collections.abc import Iterator
-
-import numpy as np
-import numpy.typing as npt
+    >>> import numpy as np
     >>> from symsphere import iter_hemisphere, sample_hemisphere
     >>> blocks = iter_hemisphere(24 * 100, chunk=24 * 64, normal=[1, 0, 0], rng=5)
     >>> bool(np.array_equal(np.concatenate(list(blocks)), sample_hemisphere(2400, normal=[1, 0, 0], rng=5)))
