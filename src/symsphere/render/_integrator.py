@@ -6,7 +6,8 @@ vertices goes through scalar library functions -- the maps and the orbit
 (``triangle_point``, ``triangle_density``, ``orbit_member`` of
 :mod:`symsphere._kernels`), the classic uniform and cosine maps
 (``uniform_hemisphere_point`` etc. of :mod:`symsphere.peers`), the frame
-(:func:`symsphere.frames.frame_rows`) and the cosine-weighted wedge map -- so
+(:func:`symsphere.frames.frame_rows`) and the cosine-weighted wedge map
+(:func:`symsphere.wedge.cosine_wedge_point`) -- so
 no formula is restated.
 
 Estimators (``integrator``)
@@ -79,14 +80,14 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import register_jitable
 
-from .. import _kernels, _orbit_stores, frames, maps, peers, symmetry
+from .. import _kernels, _orbit_stores, frames, maps, peers, symmetry, wedge
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from ..frames import frame_rows
 from ..peers import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
-from . import _random, _wedge
+from ..wedge import cosine_wedge_point
+from . import _random
 from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
-from ._wedge import wedge_point
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
 PATH, BSDF = 0, 1
@@ -179,7 +180,8 @@ def sample_local(sampler, code, full, key, s, depth, state):
     (+-y, +-x, z) (``orbit_member`` 0..7), which keep z and hence the cosine
     density; through transmission n = 16, members 8..15 being the same maps
     followed by z -> -z (``orbit_member`` 24..31).  The base point is the
-    cosine-weighted map onto the wedge 0 <= phi <= pi/4 (:mod:`._wedge`), whose
+    cosine-weighted map onto the wedge 0 <= phi <= pi/4
+    (:func:`symsphere.wedge.cosine_wedge_point`), whose
     8 images tile the hemisphere: each sample is cosine-distributed.
     """
     if sampler == UNIFORM:
@@ -228,7 +230,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
         else:  # point `group` of the sequence scrambled for this (pixel, vertex, orbit size)
             u, v = owen_sobol2(group, vertex_key)
     if cosine:
-        bx, by, bz = wedge_point(u, v)
+        bx, by, bz = cosine_wedge_point(u, v)
         x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
         if full:
             return x, y, z, 2.0, abs(z) * _INV_2PI, state
@@ -794,7 +796,7 @@ def sobol_points(count, key):
 invalidate_if_changed(
     render_pass,
     [
-        _random.__file__, _wedge.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__,
+        _random.__file__, wedge.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__,
         symmetry.__file__, frames.__file__, peers.__file__,
     ],
 )  # fmt: skip
