@@ -28,7 +28,7 @@ Closed-form direct lighting (NEE and MIS)
     ``integrands.sphere_light_irradiance``) and under a square light (Lambert's
     polygon formula, ``integrands.lambert_irradiance``); the light is black, so
     the plane's radiance is exactly (rho / pi) E.  The reference pixel value is
-    that closed form integrated over the pixel by 6 x 6 Gauss-Legendre
+    that closed form integrated over the pixel by 4 x 4 Gauss-Legendre
     quadrature (the box filter).  Per 8 x 8 block, t = mean residual /
     (its standard deviation / 8), 63 degrees of freedom; 2 lights x 4 samplers
     x 6 blocks = 48 tests, Sidak-corrected.
@@ -376,8 +376,8 @@ def test_clipped_sphere_intersection_against_numpy():
     point, normal = np.array([0.0, 0.3, 0.0]), np.array([0.6, 0.8, 0.0])
     spheres, quads = _tables(spheres=(Sphere(tuple(center), radius, "lamp", HalfSpace(tuple(point), tuple(normal))),))
     rng = np.random.default_rng(12)
-    origins = rng.uniform(-3, 3, size=(100_000, 3))
-    directions = rng.normal(size=(100_000, 3))
+    origins = rng.uniform(-3, 3, size=(100_000, 3))  # outside and inside the sphere ...
+    directions = center + rng.uniform(-1.5, 1.5, size=(100_000, 3)) - origins  # ... aimed near it
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     eps = 1e-7
     ts, hits = K.first_hits(origins, directions, spheres, quads, eps)
@@ -397,7 +397,7 @@ def test_clipped_sphere_intersection_against_numpy():
 # --- closed-form direct lighting: NEE with MIS ----------------------------------------------
 
 _RHO, _LE = 0.5, 3.0
-_GL = np.polynomial.legendre.leggauss(6)
+_GL = np.polynomial.legendre.leggauss(4)
 
 
 def _direct_scene(light):
@@ -410,7 +410,7 @@ def _direct_scene(light):
 
 
 def _direct_reference(light, width, height):
-    """Pixel means of (rho / pi) E(x) over the box filter, by 6 x 6 Gauss-Legendre quadrature."""
+    """Pixel means of (rho / pi) E(x) over the box filter, by 4 x 4 Gauss-Legendre quadrature."""
     cam = _direct_scene(light).camera_array(width, height)
     nodes, weights = (_GL[0] + 1) / 2, _GL[1] / 2
     fx, fy = np.meshgrid(nodes, nodes, indexing="ij")
@@ -457,7 +457,7 @@ def test_direct_lighting_matches_the_closed_form(light, sampler, direct_referenc
     assert np.all(np.abs(t) < critical), (t, critical)
     blocks = reference.reshape(2, 8, 3, 8).mean(axis=(1, 3)).ravel()
     assert np.all(residual.std(axis=1, ddof=1) / 8 < 0.03 * blocks)  # the test has teeth: 3 % per block
-    assert reference.min() > 0.02 and reference.max() < 0.5
+    assert reference.min() > 1e-4 and reference.max() < 0.5  # lit everywhere
 
 
 def test_nee_beats_bsdf_sampling_on_the_small_light():
@@ -529,11 +529,11 @@ _TRANSLUCENT_SAMPLERS = ("cosine", "symmetric", "symmetric_cosine_sobol")
 _Z_TESTS = (len(_PAIRS) + len(_TRANSLUCENT_SAMPLERS)) * (_H // _BLOCK) * (_W // _BLOCK) * 3
 
 
-def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.1):
+def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.15):
     z = (block_mean - ref_mean) / np.sqrt(block_variance + ref_variance)
     critical = stats.norm.isf(_sidak(_Z_TESTS) / 2)  # about 4.3
     assert np.all(np.abs(z) < critical), (np.abs(z).max(), critical, np.unravel_index(np.abs(z).argmax(), z.shape))
-    # the blocks are well estimated where there is light
+    # the test has teeth: the blocks are well estimated where there is light (relative standard error)
     lit = ref_mean > 0.05
     assert np.all(np.sqrt(block_variance[lit]) < teeth * ref_mean[lit]), np.max(np.sqrt(block_variance[lit]) / ref_mean[lit])
 
