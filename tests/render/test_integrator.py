@@ -317,7 +317,7 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
     is_quad = isinstance(emitter, Quad)
     spheres, quads = _tables(quads=(emitter,)) if is_quad else _tables(spheres=(emitter,))
     p = np.asarray(point, dtype=np.float64)
-    out = K.emitter_samples(p, 0, np.random.default_rng(3).random((20_000, 2)), spheres, quads)
+    out = K.emitter_samples(p, 0, 3, 20_000, spheres, quads)
     assert np.all(out[:, 5] == 1) and np.all(np.isfinite(out)) and np.all(out[:, 4] > 0)
     w = out[:, :3]
     np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-14)
@@ -342,28 +342,32 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
 
 
 def test_cap_and_cone_and_quad_samples_have_their_distributions():
-    """Kolmogorov-Smirnov: cap heights uniform (Archimedes), cone cosines uniform, quad points uniform; Sidak over 4."""
-    rng = np.random.default_rng(8)
-    uv = rng.random((4000, 2))
-    critical_p = _sidak(4)
+    """Kolmogorov-Smirnov: cap heights and azimuths uniform (Archimedes), cone cosines uniform, quad points uniform.
+
+    Five tests, Sidak-corrected.
+    """
+    critical_p = _sidak(5)
     # cornell's cap: the height y of the sampled point is uniform on [81.33, 81.6]
     spheres, quads = _tables(spheres=(_CORNELL_LIGHT,))
     p = np.array([40.0, 20.0, 70.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 81, 4000, spheres, quads)
     y = p[1] + out[:, 3] * out[:, 1]
     assert y.max() <= 81.6 + 1e-9 and y.min() >= 81.33 - 1e-9
     assert stats.kstest((y - 81.33) / 0.27, "uniform").pvalue > critical_p
+    q = p + out[:, 3:4] * out[:, :3]
+    azimuth = np.arctan2(q[:, 2] - 81.6, q[:, 0] - 50)
+    assert stats.kstest((azimuth + np.pi) / (2 * np.pi), "uniform").pvalue > critical_p
     # a sphere from outside: cos to the centre uniform on [cos theta_max, 1]
     spheres, quads = _tables(spheres=(Sphere((0, 0, 0), 1.0, "lamp"),))
     p = np.array([0.0, 0.0, 3.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 82, 4000, spheres, quads)
     cos_max = math.sqrt(1 - 1 / 9)
     assert stats.kstest((-out[:, 2] - cos_max) / (1 - cos_max), "uniform").pvalue > critical_p
     # a parallelogram: both coordinates uniform
     quad = Quad((-0.5, -0.5, 0), (1, 0, 0), (0.5, 1.5, 0), "lamp")
     spheres, quads = _tables(quads=(quad,))
     p = np.array([0.1, 0.2, -1.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 83, 4000, spheres, quads)
     q = p + out[:, 3:4] * out[:, :3]
     st = np.linalg.solve(np.array([[1, 0.5], [0, 1.5]]), (q[:, :2] - [-0.5, -0.5]).T).T
     for column in st.T:

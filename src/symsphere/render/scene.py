@@ -236,18 +236,24 @@ class Scene:
         return 1e-6 * max(1.0, math.sqrt(sum(c * c for c in self.camera.position)))
 
     def arrays(self, width: int, height: int) -> dict:
-        """The scene packed for the kernels (float64 / int64 arrays), for an image of width x height."""
+        """The scene packed for the kernels (float64 / int64 arrays), for an image of width x height.
+
+        Objects are numbered as the kernels see them: the unclipped spheres
+        in scene order, then the clipped ones, then the quads.
+        """
         names = list(self.materials)
         index = {name: i for i, name in enumerate(names)}
         materials = np.zeros((len(names), _k.MATERIAL_COLUMNS))
         for i, name in enumerate(names):
             m = self.materials[name]
             materials[i] = [_KIND_CODES[m.kind], *m.color, *m.transmittance, m.ior, *m.emission]
-        spheres = np.zeros((len(self.spheres), _k.SPHERE_COLUMNS))
+        # unclipped spheres first (the kernels test them in their own loop), each group in scene order
+        ordered = [s for s in self.spheres if s.clip is None] + [s for s in self.spheres if s.clip is not None]
+        spheres = np.zeros((len(ordered), _k.SPHERE_COLUMNS))
         areas = []
-        for i, s in enumerate(self.spheres):
+        for i, s in enumerate(ordered):
             axis, offset, cap_height = _clip_table(s)
-            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height]
+            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height, 1.0 / s.radius]
             areas.append(2 * math.pi * s.radius * cap_height)  # Archimedes: the area of a cap is 2 pi r h
         quads = np.zeros((len(self.quads), _k.QUAD_COLUMNS))
         for i, q in enumerate(self.quads):
@@ -258,11 +264,11 @@ class Scene:
             quads[i] = [*p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared)]
             areas.append(math.sqrt(squared))
         lights, light_pmf = _light_tables(
-            [materials[index[o.material], 8:11] for o in (*self.spheres, *self.quads)], areas
+            [materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas
         )
         return dict(
             spheres=np.ascontiguousarray(spheres.T),  # structure of arrays: the kernels vectorise over objects
-            sphere_material=np.array([index[s.material] for s in self.spheres], dtype=np.int64),
+            sphere_material=np.array([index[s.material] for s in ordered], dtype=np.int64),
             quads=np.ascontiguousarray(quads.T),
             quad_material=np.array([index[q.material] for q in self.quads], dtype=np.int64),
             materials=materials,
