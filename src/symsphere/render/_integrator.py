@@ -448,8 +448,12 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     if obj < n_spheres:
         r = spheres[3, obj]
         inv_r = spheres[10, obj]
-        ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
         x, y, u, state = disk_point(state)
+        clipped = spheres[8, obj] != -np.inf
+        cone = False
+        ex, ey, ez, d2 = 0.0, 0.0, 0.0, 1.0
+        if not clipped:  # (a clipped sphere is never sampled by its cone: skip the test)
+            ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
         if cone:
             sin2 = spheres[4, obj] / d2
             cos_max = math.sqrt(max(0.0, 1.0 - sin2))
@@ -459,10 +463,10 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
             inv = 1.0 / math.sqrt(d2)
             wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
             return wx, wy, wz, -1.0, _INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0, state
-        if spheres[8, obj] == -np.inf:
-            ax, ay, az = 0.0, 0.0, 1.0
-        else:
+        if clipped:
             ax, ay, az = spheres[5, obj], spheres[6, obj], spheres[7, obj]
+        else:
+            ax, ay, az = 0.0, 0.0, 1.0
         height = spheres[9, obj]
         w = u * height  # depth below the pole c + r a
         scale = math.sqrt(max(0.0, height * (2.0 * r - w)))  # ring radius / sqrt(u)
