@@ -97,8 +97,9 @@ BOX, TENT = 0, 1
 # rows of the (11, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; 0 if
 # unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped), 1 / r
 SPHERE_COLUMNS = 11
-# rows of the (17, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area
-QUAD_COLUMNS = 17
+# rows of the (26, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area,
+# edge1 / |edge1|, edge2 / |edge2| (3 each), |edge1|, |edge2|, 1 if a rectangle (edges orthogonal) else 0
+QUAD_COLUMNS = 26
 MATERIAL_COLUMNS = 11  # kind, colour (3), transmittance (3), ior, emission (3)
 CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image plane at distance 1 (3 each), near
 # lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
@@ -111,6 +112,8 @@ _INV_2PI = 0.5 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if it hits it within this
+_MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
+_ONE_MINUS_EPSILON = 1.0 - 2.0**-53
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -399,6 +402,67 @@ def _sphere_cone(px, py, pz, i, spheres):
 
 
 @register_jitable
+def _angle_between(ax, ay, az, bx, by, bz):
+    """The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 ``AngleBetween``)."""
+    if ax * bx + ay * by + az * bz < 0.0:
+        return _PI - 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((ax + bx) ** 2 + (ay + by) ** 2 + (az + bz) ** 2)))
+    return 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2 + (bz - az) ** 2)))
+
+
+@register_jitable
+def _unit_cross(ax, ay, az, bx, by, bz):
+    cx = ay * bz - az * by
+    cy = az * bx - ax * bz
+    cz = ax * by - ay * bx
+    inv = 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
+    return cx * inv, cy * inv, cz * inv
+
+
+@register_jitable
+def spherical_rectangle(px, py, pz, j, quads):
+    """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
+    Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
+
+    In the frame (x, y, z) of its edges, with z flipped to point away from
+    the rectangle (so z0 < 0), the corners are (x0 | x1, y0 | y1, z0).  The
+    planes through p and each edge have unit normals n0..n3; the spherical
+    rectangle's interior angles are g_i = angle(-n_i, n_(i+1)) and its solid
+    angle S = g0 + g1 + g2 + g3 - 2 pi.  Returns (S, x0, y0, z0, x1, y1,
+    zsign, b0 = n0.z, b1 = n2.z, k = 2 pi - g2 - g3); S = 0 when p is in the
+    rectangle's plane.
+    """
+    ex, ey, ez = quads[17, j], quads[18, j], quads[19, j]
+    fx, fy, fz = quads[20, j], quads[21, j], quads[22, j]
+    gx = ey * fz - ez * fy
+    gy = ez * fx - ex * fz
+    gz = ex * fy - ey * fx
+    dx = quads[0, j] - px
+    dy = quads[1, j] - py
+    dz = quads[2, j] - pz
+    x0 = dx * ex + dy * ey + dz * ez
+    y0 = dx * fx + dy * fy + dz * fz
+    z0 = dx * gx + dy * gy + dz * gz
+    zsign = 1.0
+    if z0 > 0.0:
+        zsign = -1.0
+        z0 = -z0
+    if not z0 < 0.0:
+        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 0.0
+    x1 = x0 + quads[23, j]
+    y1 = y0 + quads[24, j]
+    n0x, n0y, n0z = _unit_cross(x0, y0, z0, x1, y0, z0)
+    n1x, n1y, n1z = _unit_cross(x1, y0, z0, x1, y1, z0)
+    n2x, n2y, n2z = _unit_cross(x1, y1, z0, x0, y1, z0)
+    n3x, n3y, n3z = _unit_cross(x0, y1, z0, x0, y0, z0)
+    g0 = _angle_between(-n0x, -n0y, -n0z, n1x, n1y, n1z)
+    g1 = _angle_between(-n1x, -n1y, -n1z, n2x, n2y, n2z)
+    g2 = _angle_between(-n2x, -n2y, -n2z, n3x, n3y, n3z)
+    g3 = _angle_between(-n3x, -n3y, -n3z, n0x, n0y, n0z)
+    solid_angle = max(0.0, g0 + g1 + g2 + g3 - 2.0 * _PI)
+    return solid_angle, x0, y0, z0, x1, y1, zsign, n0z, n2z, 2.0 * _PI - g2 - g3
+
+
+@register_jitable
 def disk_point(state):
     """A uniform point (x, y) of the unit disk and r^2 = x^2 + y^2 > 0: rejection from the square.
 
@@ -436,7 +500,10 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
       in height by Archimedes' hat-box theorem: ``w = u h`` below the pole
       c + r a, ring radius ``sqrt(w (2 r - w))``, uniform azimuth; area
       ``2 pi r h``;
-    - a parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
+    - a rectangle (a parallelogram with orthogonal edges) seen under a solid
+      angle S >= 1e-3: uniformly in S (:func:`spherical_rectangle`; Urena et
+      al. 2013, section 4), pdf ``1 / S``;
+    - any other parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
 
     For the sphere cases u and the azimuth come from one uniform disk point
     (:func:`disk_point`): u = r^2, (cos, sin) = (x, y) / r, so that e.g. the
@@ -482,6 +549,32 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
         state, b2 = next_u64(state)
         u = u01(b1)
         v = u01(b2)
+        if quads[25, j] != 0.0:
+            solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, k = spherical_rectangle(px, py, pz, j, quads)
+            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
+                au = u * solid_angle + k
+                fu = (math.cos(au) * b0 - b1_) / math.sin(au)
+                cu = math.copysign(1.0 / math.sqrt(fu * fu + b0 * b0), fu)
+                cu = min(max(cu, -_ONE_MINUS_EPSILON), _ONE_MINUS_EPSILON)
+                xu = min(max(-(cu * z0) / math.sqrt(max(0.0, 1.0 - cu * cu)), x0), x1)
+                dd = math.sqrt(xu * xu + z0 * z0)
+                h0 = y0 / math.sqrt(dd * dd + y0 * y0)
+                h1 = y1 / math.sqrt(dd * dd + y1 * y1)
+                hv = h0 + v * (h1 - h0)
+                yv = (hv * dd) / math.sqrt(1.0 - hv * hv) if hv * hv < 1.0 - 1e-12 else y1
+                yv = min(max(yv, y0), y1)
+                lz = z0 * zsign  # back to the frame of the edges
+                gx = quads[18, j] * quads[22, j] - quads[19, j] * quads[21, j]
+                gy = quads[19, j] * quads[20, j] - quads[17, j] * quads[22, j]
+                gz = quads[17, j] * quads[21, j] - quads[18, j] * quads[20, j]
+                wx = xu * quads[17, j] + yv * quads[20, j] + lz * gx
+                wy = xu * quads[18, j] + yv * quads[21, j] + lz * gy
+                wz = xu * quads[19, j] + yv * quads[22, j] + lz * gz
+                dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+                if not dist > 0.0:
+                    return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
+                inv = 1.0 / dist
+                return wx * inv, wy * inv, wz * inv, dist, 1.0 / solid_angle, True, state
         qx = quads[0, j] + u * quads[3, j] + v * quads[6, j]
         qy = quads[1, j] + u * quads[4, j] + v * quads[7, j]
         qz = quads[2, j] + u * quads[5, j] + v * quads[8, j]
@@ -509,7 +602,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
     *cos_l* is |cos| between the ray and the emitter's normal at the hit.
-    The same case analysis as :func:`sample_emitter` (cone, cap, parallelogram).
+    The same case analysis as :func:`sample_emitter` (cone, cap, rectangle, parallelogram).
     """
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
@@ -520,7 +613,12 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
             return _INV_2PI * (1.0 + cos_max) / sin2
         area = 2.0 * _PI * spheres[3, obj] * spheres[9, obj]
     else:
-        area = quads[16, obj - n_spheres]
+        j = obj - n_spheres
+        if quads[25, j] != 0.0:
+            solid_angle = spherical_rectangle(px, py, pz, j, quads)[0]
+            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:
+                return 1.0 / solid_angle
+        area = quads[16, j]
     if not cos_l > 0.0:
         return np.inf
     return t * t / (cos_l * area)

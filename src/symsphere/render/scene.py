@@ -342,7 +342,12 @@ class Scene:
             normal_raw = np.cross(e1, e2)
             squared = float(normal_raw @ normal_raw)
             normal = normal_raw / math.sqrt(squared)
-            quads[i] = [*p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared)]
+            l1, l2 = math.sqrt(float(e1 @ e1)), math.sqrt(float(e2 @ e2))
+            rectangle = abs(float(e1 @ e2)) <= 1e-12 * l1 * l2  # sampled by solid angle (Urena et al. 2013)
+            quads[i] = [
+                *p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared),
+                *(e1 / l1), *(e2 / l2), l1, l2, float(rectangle),
+            ]  # fmt: skip
             areas.append(math.sqrt(squared))
         lights, light_pmf = _light_tables(
             [materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas
