@@ -106,10 +106,10 @@ def test_bad_input(call, error, match):
 def test_render_on_cluster_equals_single_process(client):
     from symsphere.render import render
 
-    from symsphere.render.renderer import _plan
+    from symsphere.render.renderer import plan_passes
 
     options = dict(width=64, height=48, spp=200, sampler="symmetric_sobol", seed=3)
-    assert _plan("cornell", pixel_filter="box", method=None, **options).passes == 4
+    assert plan_passes("cornell", pixel_filter="box", method=None, **options).passes == 4
     single = render("cornell", **options).image
     for passes_per_task in (1, 3):
         clustered = ss_distributed.render("cornell", client=client, passes_per_task=passes_per_task, **options)

@@ -139,6 +139,7 @@ def render(
     method=None,
     pixel_filter="box",
     seed=None,
+    integrator="path",
 ):
     """:func:`symsphere.render.render` with its sample passes on a Dask cluster, the identical image.
 
@@ -150,9 +151,9 @@ def render(
     """
     from distributed import as_completed
 
-    from .render.renderer import _plan as _render_plan
+    from .render.renderer import plan_passes
 
-    plan = _render_plan(scene, width, height, spp, sampler, method, pixel_filter, seed)
+    plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     passes_per_task = check_count(passes_per_task, "passes_per_task")
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
     with _client_or_local(client) as active:

@@ -166,6 +166,11 @@ def build_parser() -> argparse.ArgumentParser:
         "and cosine references (default: %(default)s)",
     )  # fmt: skip
     render.add_argument(
+        "--integrator", choices=("path", "bsdf"), default="path",
+        help="path: next-event estimation and BSDF sampling combined by multiple importance sampling; "
+        "bsdf: BSDF sampling only, smallpt's estimator (default: %(default)s)",
+    )  # fmt: skip
+    render.add_argument(
         "--method", choices=METHODS, default=None,
         help="map onto the triangle for the symmetric samplers (default: equal_area)",
     )  # fmt: skip
@@ -370,6 +375,7 @@ def _run_render(args) -> int:
         height=args.height,
         spp=args.spp,
         sampler=args.sampler,
+        integrator=args.integrator,
         method=args.method,
         pixel_filter=args.filter,
         seed=args.seed,
@@ -391,7 +397,8 @@ def _run_render(args) -> int:
         raise OSError(exc.errno, exc.strerror, args.out) from exc
     method = f" ({result.method})" if result.method else ""
     print(
-        f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp with {result.sampler}{method}, "
+        f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp, {result.integrator} integrator, "
+        f"{result.sampler} sampler{method}, "
         f"seed {result.seed}: {result.paths} paths in {result.seconds:.2f} s = "
         f"{result.paths_per_second / 1e6:.2f} Mpaths/s on {result.threads} threads "
         f"(+{result.startup_seconds:.2f} s compile/load); wrote {', '.join(str(p) for p in paths)}"
