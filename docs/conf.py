@@ -43,6 +43,7 @@ autosummary_ignore_module_all = False  # document exactly the names in __all__ (
 autosummary_imported_members = False
 autodoc_default_options = {"member-order": "bysource"}
 autodoc_typehints = "none"  # the numpydoc Parameters sections carry the types
+autodoc_preserve_defaults = True  # signatures show defaults as written (dtype=np.float64, not <class ...>)
 
 
 def _documented_modules():

@@ -110,11 +110,12 @@ def iter_sphere(
         block is written into its rows and yielded as a view of them, so a run
         can fill a file larger than memory.
 
-    Yields
-    ------
-    ndarray, shape (m, 3)
+    Returns
+    -------
+    iterator of ndarray, shape (m, 3)
         Consecutive blocks; concatenated, they equal ``sample_sphere(n_total, ...)``
-        with the same arguments.
+        with the same arguments.  The arguments are checked at the call, not at the
+        first block.
 
     Examples
     --------
@@ -140,7 +141,25 @@ def iter_hemisphere(
     dtype=np.float64,
     out=None,
 ):
-    """Directions of :func:`sample_hemisphere` in blocks (see :func:`iter_sphere`).
+    """Directions of :func:`sample_hemisphere` in blocks, for runs larger than memory.
+
+    Parameters
+    ----------
+    n_total : int
+        Directions in all, a positive multiple of 24.
+    chunk : int
+        Directions per block (a multiple of 24; the last block may be shorter).
+    normal, method, points, rng, dtype
+        As in :func:`sample_hemisphere`.
+    out : ndarray, optional
+        An (n_total, 3) array of the given dtype (a ``numpy.memmap`` too), filled block by
+        block as in :func:`iter_sphere`.
+
+    Returns
+    -------
+    iterator of ndarray, shape (m, 3)
+        Consecutive blocks; concatenated, they equal ``sample_hemisphere(n_total, ...)``
+        with the same arguments.
 
     Examples
     --------
