@@ -113,7 +113,7 @@ def doc_comment(module_name, name, _seen=None):
 
 def lacking(module_name):
     """Public names of a module without an example (constants: without a doc comment)."""
-    module = importlib.import_module(module_name)
+    module = pytest.importorskip(module_name)  # symsphere.distributed needs the extra "distributed"
     missing = []
     for name in module.__all__:
         obj = getattr(module, name)
@@ -142,7 +142,7 @@ def test_incomplete_names_documented_modules():
 
 def test_documented_modules_have_all():
     for name in documented_modules():
-        module = importlib.import_module(name)
+        module = pytest.importorskip(name)
         assert isinstance(getattr(module, "__all__", None), list | tuple), f"{name} has no __all__"
         assert all(hasattr(module, member) for member in module.__all__), name
 
