@@ -1,4 +1,4 @@
-"""The integrand suite: exact values against quadrature, harmonics, lights, orbit averages.
+"""The integrand suite: exact values against quadrature, lights, orbit averages.
 
 All tests are deterministic (fixed seeds, deterministic quadrature); there is no
 statistical test in this file.  Quadratures are adapted to each integrand:
@@ -8,12 +8,8 @@ region (the cap or the light cone is the whole region), and for the polygon
 light a Gauss-Legendre rule on the polygon itself.
 """
 
-import itertools
-import math
-
 import numpy as np
 import pytest
-from scipy import special
 
 import symsphere as ss
 from symsphere import integrands as I
@@ -79,93 +75,7 @@ def _base_points(k=64, seed=0):
     return ss.square_to_triangle(np.random.default_rng(seed).random((k, 2)))
 
 
-# --- spherical harmonics ----------------------------------------------------------
-
-
-def test_sh_orthonormal():
-    # GL with 20 nodes in z is exact for degree <= 39 and the 40-point trapezoid for
-    # trigonometric degree < 40: products of two l <= 8 harmonics are integrated exactly.
-    d, w = cap_rule(Z_AXIS, -1, 1, 20, 40)
-    basis = I.real_sh_basis(8, d)
-    gram = (basis * w[:, None]).T @ basis
-    assert np.abs(gram - np.eye(81)).max() < 1e-12
-
-
-def test_sh_known_values():
-    d = np.random.default_rng(1).standard_normal((50, 3))
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    x, y, z = d.T
-    c0, c1 = 0.5 / np.sqrt(np.pi), np.sqrt(3 / (4 * np.pi))
-    np.testing.assert_allclose(I.real_sh(0, 0, d), c0, rtol=1e-15)
-    np.testing.assert_allclose(I.real_sh(1, -1, d), c1 * y, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(I.real_sh(1, 0, d), c1 * z, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(I.real_sh(1, 1, d), c1 * x, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(I.real_sh(2, -2, d), 0.5 * np.sqrt(15 / np.pi) * x * y, rtol=1e-14, atol=1e-15)
-    np.testing.assert_allclose(I.real_sh(2, 0, d), 0.25 * np.sqrt(5 / np.pi) * (3 * z * z - 1), rtol=1e-13, atol=1e-15)
-    np.testing.assert_allclose(I.real_sh(3, -2, d), 0.5 * np.sqrt(105 / np.pi) * x * y * z, rtol=1e-13, atol=1e-15)
-    # the basis agrees with the single evaluations, and sh_polynomial with both
-    basis = I.real_sh_basis(8, d)
-    for l in range(9):
-        for m in range(-l, l + 1):
-            np.testing.assert_allclose(basis[:, l * l + l + m], I.real_sh(l, m, d), rtol=0, atol=1e-15)
-            np.testing.assert_allclose(I.evaluate_polynomial(I.sh_polynomial(l, m), d), I.real_sh(l, m, d), rtol=0, atol=1e-13)
-
-
-def test_sh_addition_theorem():
-    # sum_m Y_lm(d)^2 = (2l + 1)/(4 pi) for every direction: checks the normalisation per degree.
-    d = np.random.default_rng(2).standard_normal((100, 3))
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    basis = I.real_sh_basis(8, d)
-    for l in range(9):
-        np.testing.assert_allclose((basis[:, l * l:(l + 1) ** 2] ** 2).sum(axis=1), (2 * l + 1) / (4 * np.pi), rtol=1e-13)
-
-
-# --- moments and cubic harmonics ---------------------------------------------------
-
-
-@pytest.mark.parametrize("domain", ["sphere", "hemisphere"])
-def test_monomial_integrals(domain):
-    d, w = cap_rule(Z_AXIS, -1 if domain == "sphere" else 0, 1, 16, 32)
-    for a, b, c in itertools.product(range(8), repeat=3):
-        quad = np.sum(d[:, 0] ** a * d[:, 1] ** b * d[:, 2] ** c * w)
-        assert I.monomial_integral(a, b, c, domain) == pytest.approx(quad, rel=1e-13, abs=1e-14), (a, b, c)
-        # the Gamma-function form, written independently
-        g = special.gamma
-        if a % 2 or b % 2 or (domain == "sphere" and c % 2):
-            expected = 0.0
-        else:
-            expected = g((a + 1) / 2) * g((b + 1) / 2) * g((c + 1) / 2) / g((a + b + c + 3) / 2)
-            expected *= 2 if domain == "sphere" else 1
-        assert I.monomial_integral(a, b, c, domain) == pytest.approx(expected, rel=1e-13, abs=1e-300)
-
-
-def _laplacian(coeffs):
-    out = {}
-    for (a, b, c), k in coeffs.items():
-        for i, e in enumerate((a, b, c)):
-            if e >= 2:
-                key = [a, b, c]
-                key[i] -= 2
-                out[tuple(key)] = out.get(tuple(key), 0.0) + k * e * (e - 1)
-    return {key: v for key, v in out.items() if v != 0}
-
-
-@pytest.mark.parametrize("degree", [4, 6, 8])
-def test_cubic_harmonics(degree):
-    coeffs = I.cubic_harmonic(degree)
-    assert all(sum(key) == degree for key in coeffs)  # homogeneous
-    assert _laplacian(coeffs) == {}  # harmonic, exactly
-    p = _base_points(32, seed=degree)
-    values = I.evaluate_polynomial(coeffs, ss.orbit(p))  # invariant under the 48 maps
-    np.testing.assert_allclose(values, np.broadcast_to(values[:, :1], values.shape), rtol=1e-13, atol=1e-13)
-    # a pure degree-l harmonic: orthogonal to every Y_l'm' with l' != l (l' <= 8), by exact quadrature
-    d, w = cap_rule(Z_AXIS, -1, 1, 20, 40)
-    basis = I.real_sh_basis(8, d)
-    f = I.evaluate_polynomial(coeffs, d)
-    proj = (basis * w[:, None]).T @ f
-    degrees = np.array([math.isqrt(k) for k in range(81)])
-    assert np.abs(proj[degrees != degree]).max() < 1e-12 * np.sqrt(np.sum(f * f * w))
-    assert I.polynomial_integral(coeffs) == 0.0
+# --- cubic harmonics as integrands (tests/test_harmonics.py: the harmonics themselves) ------
 
 
 def test_cubic4_forms_agree():
@@ -369,20 +279,6 @@ def test_hemisphere_orbit_is_the_even_extension():
 @pytest.mark.parametrize(
     "call, error, word",
     [
-        (lambda: I.real_sh(-1, 0, [0, 0, 1]), ValueError, "'l'"),
-        (lambda: I.real_sh(2, 3, [0, 0, 1]), ValueError, "'m'"),
-        (lambda: I.real_sh(1.5, 0, [0, 0, 1]), TypeError, "'l'"),
-        (lambda: I.real_sh(2, None, [0, 0, 1]), TypeError, "'m'"),
-        (lambda: I.real_sh(2, 0, [0, 1]), ValueError, "'d'"),
-        (lambda: I.real_sh_basis(-2, [0, 0, 1]), ValueError, "'l'"),
-        (lambda: I.sh_polynomial(3, -4), ValueError, "'m'"),
-        (lambda: I.monomial_integral(-1, 0, 0), ValueError, "'a'"),
-        (lambda: I.monomial_integral(0, 1.0, 0), TypeError, "'b'"),
-        (lambda: I.monomial_integral(0, 0, 2, "torus"), ValueError, "domain"),
-        (lambda: I.polynomial_integral([1, 2]), TypeError, "'coeffs'"),
-        (lambda: I.polynomial_integral({(1, 2): 1.0}), ValueError, "'coeffs'"),
-        (lambda: I.evaluate_polynomial({(0, 0, -2): 1.0}, [0, 0, 1]), ValueError, "'c'"),
-        (lambda: I.cubic_harmonic(5), ValueError, "'degree'"),
         (lambda: I.lambert_irradiance([[0, 0, 1], [1, 0, 1]]), ValueError, "'vertices'"),
         (lambda: I.lambert_irradiance([[0, 0, 1], [1, 0, 1], [1, 1, -0.1]]), ValueError, "'vertices'"),
         (lambda: I.lambert_irradiance([[0, 0, 1], [1, 0, 1], [1, 1, 1]], normal=[0, 0, 0]), ValueError, "'normal'"),

@@ -30,6 +30,10 @@ True
 True
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
@@ -38,10 +42,14 @@ from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
 __version__ = "0.1.0"
 
-_SUBMODULES = ("distributed", "integrands", "peers", "stats")
+_SUBMODULES = ("bins", "distributed", "harmonics", "integrands", "peers", "stats", "wedge")
 
 
-def __getattr__(name):
+if TYPE_CHECKING:
+    from types import ModuleType
+
+
+def __getattr__(name: str) -> ModuleType:
     # Submodules that need scipy.stats, scipy.integrate or dask are imported on first use
     # (PEP 562), so that ``import symsphere`` and a first sample stay fast.
     if name in _SUBMODULES:
@@ -55,9 +63,12 @@ __all__ = [
     "METHODS",
     "POINT_SETS",
     "SPHERE_MAPS",
+    "bins",
+    "harmonics",
     "integrands",
     "peers",
     "stats",
+    "wedge",
     "fold",
     "IntegrationResult",
     "hemisphere_pdf",

@@ -1,8 +1,8 @@
-"""``python -m symsphere``: the same as the ``symsphere`` command."""
+"""``python -m symsphere``: the same as the ``symsphere`` command (:func:`symsphere.apps.cli.main`)."""
 
 import sys
 
-from .cli import main
+from .apps.cli import main
 
 if __name__ == "__main__":
     sys.exit(main())

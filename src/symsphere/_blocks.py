@@ -10,7 +10,11 @@ Dask task, and :mod:`symsphere._integration` one block per partial sum.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+
+from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 
 from . import frames
 from ._kernels import fill_orbits, fill_random_orbits
@@ -22,7 +26,15 @@ from .symmetry import orbit
 __all__ = ["prepare", "fill_range", "reference_orbits"]
 
 
-def prepare(n, count, normal, method, points, rng, dtype):
+def prepare(
+    n: int,
+    count: int,
+    normal: Float64Array | None,
+    method: MapMethod,
+    points: PointsLike,
+    rng: RNGLike,
+    dtype: DTypeLike,
+) -> tuple[int, np.dtype[np.floating[Any]], MapMethod, BasePoints, Float64Array | None]:
     """Validate; return (n, dtype, method, base point source, frame or None)."""
     n = check_count(n, "n", multiple=count)
     dtype = check_dtype(dtype)
@@ -32,14 +44,17 @@ def prepare(n, count, normal, method, points, rng, dtype):
     return n, dtype, method, source, basis
 
 
-def fill_range(source, start, stop, method, count, basis, out):
+def fill_range(
+    source: BasePoints, start: int, stop: int, method: MapMethod, count: int, basis: Float64Array | None, out: FloatArray
+) -> FloatArray:
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
     if source.kind == "random":  # the kernel draws the points itself, in parallel
+        assert source.seed_words is not None  # random sources always have the stream's seed
         return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
     return fill_orbits(source.take(start, stop), method, count, basis, out)
 
 
-def reference_orbits(uv, method, count, basis):
+def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:
     """The numpy path (map, orbit, frame): what the kernels must reproduce."""
     directions = orbit(get_map(method).forward(uv), "sphere" if count == 48 else "hemisphere")
     if basis is not None:

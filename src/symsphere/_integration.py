@@ -8,9 +8,12 @@ update), so the result does not depend on how the work is split.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import frames
 from ._blocks import fill_range
@@ -18,7 +21,13 @@ from ._kernels import fill_orbits
 from ._validation import check_choice, check_count, check_normal, check_rng
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
+from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import DOMAINS
+
+Integrand = Callable[[Float64Array], npt.ArrayLike]
+"""What ``f`` is: directions (m, 3) to values (m,) or (m, k)."""
+Partial = tuple[int, Float64Array, Float64Array]
+"""A block's (orbits, sum of orbit estimates, sum of squared deviations from their mean)."""
 
 __all__ = ["DEFAULT_REPLICATES", "IntegrationResult", "Plan", "plan", "block_partial", "evaluate", "combine", "finish"]
 
@@ -71,9 +80,9 @@ class IntegrationResult:
     ('replicate', 8, 'sobol')
     """
 
-    integral: float | np.ndarray
-    standard_error: float | np.ndarray
-    confidence_interval: tuple
+    integral: float | Float64Array
+    standard_error: float | Float64Array
+    confidence_interval: tuple[float | Float64Array, float | Float64Array]
     confidence_level: float
     n_evaluations: int
     n_units: int
@@ -82,7 +91,7 @@ class IntegrationResult:
     method: str
     points: str = field(repr=False)
 
-    def __str__(self):
+    def __str__(self) -> str:
         low, high = self.confidence_interval
         return (
             f"integral = {self.integral} ± {self.standard_error} (standard error; "
@@ -95,22 +104,33 @@ class IntegrationResult:
 class Plan:
     """Everything a block needs, fixed before any work starts (and picklable)."""
 
-    f: object
+    f: Integrand
     domain: str
     count: int
-    method: str
-    points: object
+    method: MapMethod
+    points: PointsLike
     points_name: str
-    sources: tuple  # one BasePoints per replicate
+    sources: tuple[BasePoints, ...]  # one per replicate
     orbits_per_replicate: int
     blocks_per_replicate: int
     replicates: int
     unit: str
-    basis: np.ndarray | None
+    basis: Float64Array | None
     confidence_level: float
 
 
-def plan(f, domain, n, method, points, normal, rng, replicates, confidence_level):
+def plan(
+    f: Integrand,
+    domain: str,
+    n: int,
+    method: MapMethod,
+    points: PointsLike,
+    normal: npt.ArrayLike | None,
+    rng: RNGLike,
+    replicates: int | None,
+    confidence_level: float,
+) -> Plan:
+    """Validate every argument of :func:`symsphere.integrate` and fix the run: sources, blocks, unit."""
     if not callable(f):
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
     domain = check_choice(domain, "domain", DOMAINS)
@@ -154,7 +174,7 @@ def plan(f, domain, n, method, points, normal, rng, replicates, confidence_level
     )
 
 
-def block_partial(plan, replicate, block):
+def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     """(orbits, sum of orbit estimates, sum of squared deviations from their mean) of one block."""
     start = block * BLOCK
     stop = min(start + BLOCK, plan.orbits_per_replicate)
@@ -176,7 +196,8 @@ def block_partial(plan, replicate, block):
     return stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)
 
 
-def evaluate(f, directions):
+def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
+    """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
     values = np.asarray(f(directions), dtype=np.float64)
     m = len(directions)
     if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m)):
@@ -186,7 +207,7 @@ def evaluate(f, directions):
     return values.reshape(m, -1)
 
 
-def combine(partials):
+def combine(partials: Sequence[Partial]) -> Partial:
     """Chan et al.'s pairwise update of (count, sum, M2), in the given order."""
     count, total, m2 = partials[0]
     for n_b, sum_b, m2_b in partials[1:]:
@@ -196,7 +217,7 @@ def combine(partials):
     return count, total, m2
 
 
-def finish(plan, partials):
+def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResult:
     """Reduce per-block partials (a list per replicate, in block order) to the result."""
     per_replicate = [combine(blocks) for blocks in partials]
     if plan.unit == "orbit":

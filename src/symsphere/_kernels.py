@@ -15,13 +15,17 @@ so a new process with a warm cache pays no compilation.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 from llvmlite import ir
 from numba import get_num_threads, njit, prange, types
 from numba.extending import intrinsic, register_jitable
 
 from ._numba_cache import invalidate_if_changed
 from ._threads import start_threads
+from ._typing import FloatArray
 from ._orbit_stores import store_orbit_24, store_orbit_48
 from .maps import METHODS, get_map
 from .symmetry import SIGNS, SOURCES
@@ -320,7 +324,7 @@ def _prepare_kernels():
         _ready = True
 
 
-def fill_orbits(uv, method, count, basis, out, parts=0):
+def fill_orbits(uv: FloatArray, method: str, count: int, basis: Float64Array | None, out: FloatArray, parts: int = 0) -> FloatArray:
     """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
 
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
@@ -334,7 +338,16 @@ def fill_orbits(uv, method, count, basis, out, parts=0):
     return out
 
 
-def fill_random_orbits(seed_words, first_point, m, method, count, basis, out, parts=0):
+def fill_random_orbits(
+    seed_words: npt.NDArray[np.unsignedinteger[Any]],
+    first_point: int,
+    m: int,
+    method: str,
+    count: int,
+    basis: Float64Array | None,
+    out: FloatArray,
+    parts: int = 0,
+) -> FloatArray:
     """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``

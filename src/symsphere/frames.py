@@ -9,11 +9,14 @@ the sphere can be continuous everywhere).  For n = (0, 0, 1) it is the identity.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
+
+from ._typing import Float64Array, FloatArray
 
 __all__ = ["frame", "to_world", "to_local"]
 
 
-def frame(normal):
+def frame(normal: npt.ArrayLike) -> Float64Array:
     """Rows (t, b, n) of a right-handed orthonormal frame with third axis *normal*.
 
     *normal* must be a unit float64 3-vector (validate with
@@ -32,11 +35,11 @@ def frame(normal):
     )
 
 
-def to_world(local, basis):
+def to_world(local: FloatArray, basis: Float64Array) -> FloatArray:
     """Local coordinates (..., 3) to world directions: ``local @ basis``."""
     return local @ basis
 
 
-def to_local(world, basis):
+def to_local(world: FloatArray, basis: Float64Array) -> FloatArray:
     """World directions (..., 3) to local coordinates: ``world @ basis.T``."""
     return world @ basis.T

@@ -11,14 +11,11 @@ derivations and for why the orbit average is exact where it is.
 
 Building blocks, public so that a study can make more integrands:
 
-- :func:`real_sh`, :func:`real_sh_basis`: real orthonormal spherical
-  harmonics (any degree; the suite uses l <= 8), from the associated
-  Legendre recurrence; :func:`sh_polynomial` gives the same functions as
-  polynomials in x, y, z.
-- :func:`monomial_integral`, :func:`polynomial_integral`: exact moments
-  of x^a y^b z^c over the sphere and the upper hemisphere.
-- :func:`cubic_harmonic`: the O_h-invariant harmonic polynomials of degree
-  4, 6 and 8.
+- the spherical harmonics and polynomials of :mod:`symsphere.harmonics`
+  (:func:`real_sh`, :func:`real_sh_basis`, :func:`sh_polynomial`,
+  :func:`monomial_integral`, :func:`polynomial_integral`,
+  :func:`evaluate_polynomial`, :func:`cubic_harmonic`), importable from
+  here too;
 - :func:`lambert_irradiance`, :func:`sphere_light_irradiance`: the closed
   forms of irradiance from a polygonal and from a spherical light.
 - :func:`orbit_average`: the mean of ``f`` over the orbit of a point.
@@ -27,16 +24,27 @@ Building blocks, public so that a study can make more integrands:
 from __future__ import annotations
 
 import math
-import numbers
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from types import MappingProxyType
-from typing import Callable, Mapping
+from typing import Any, Literal
 
 import numpy as np
+import numpy.typing as npt
 from scipy import integrate, special
 
-from ._validation import check_choice, check_directions, check_normal
+from ._typing import BoolArray, Domain, Float64Array, FloatArray
+from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive
+from .harmonics import (
+    cubic_harmonic,
+    evaluate_polynomial,
+    monomial_integral,
+    polynomial_integral,
+    real_sh,
+    real_sh_basis,
+    sh_polynomial,
+)
 from .symmetry import orbit, orbit_size
 
 __all__ = [
@@ -55,7 +63,7 @@ __all__ = [
     "orbit_average",
 ]
 
-_DOMAINS = ("sphere", "hemisphere")
+_DOMAINS: tuple[Domain, ...] = ("sphere", "hemisphere")
 _AREA = {"sphere": 4.0 * math.pi, "hemisphere": 2.0 * math.pi}
 
 
@@ -91,21 +99,21 @@ class Integrand:
     """
 
     name: str
-    domain: str
-    f: Callable[[np.ndarray], np.ndarray]
+    domain: Domain
+    f: Callable[[FloatArray], Float64Array]
     exact: float
     description: str
     smooth: bool
     invariant: bool
     orbit_exact: bool
-    params: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    params: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
 
-    def __call__(self, d):
+    def __call__(self, d: FloatArray) -> Float64Array:
         """``self.f(d)``."""
         return self.f(d)
 
 
-def suite(domain=None):
+def suite(domain: Domain | None = None) -> list[Integrand]:
     """The registered integrands, optionally only those of one domain.
 
     Parameters
@@ -135,223 +143,13 @@ def suite(domain=None):
 
 
 # =============================================================================
-# Spherical harmonics
-# =============================================================================
-
-
-def real_sh(l, m, d):
-    """Real orthonormal spherical harmonic Y_lm at unit directions.
-
-    ``Y_l0 = K_l0 P_l(z)``, ``Y_lm = sqrt 2 K_lm P_l^m(z) cos(m phi)`` for m > 0 and
-    ``sqrt 2 K_l|m| P_l^|m|(z) sin(|m| phi)`` for m < 0, with
-    ``K_lm = sqrt((2l + 1)/(4 pi) (l - m)!/(l + m)!)`` and the associated
-    Legendre functions *without* the Condon-Shortley phase (graphics'
-    convention; the sign does not affect orthonormality).  It is evaluated without angles: ``P_l^m(z) cos(m phi) = Q_l^m(z) Re (x + i y)^m``
-    for unit vectors, where ``Q_m^m = (2m - 1)!!``, ``Q_{m+1}^m = (2m + 1) z Q_m^m``
-    and ``(l - m) Q_l^m = (2l - 1) z Q_{l-1}^m - (l + m - 1) Q_{l-2}^m``.
-
-    Parameters
-    ----------
-    l : int
-        Degree, >= 0.
-    m : int
-        Order, -l <= m <= l.
-    d : array_like, shape (..., 3)
-        Unit directions.
-
-    Returns
-    -------
-    ndarray, shape (...)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from symsphere.integrands import real_sh
-    >>> round(float(real_sh(0, 0, [0.0, 0.0, 1.0]) * np.sqrt(4 * np.pi)), 14)
-    1.0
-    >>> round(float(real_sh(1, 1, [1.0, 0.0, 0.0]) ** 2 * 4 * np.pi / 3), 14)   # Y_11 = sqrt(3/(4 pi)) x
-    1.0
-    """
-    l, m = _check_lm(l, m)
-    d = check_directions(d, "d").astype(np.float64)
-    return _sh(l, m, d[..., 0], d[..., 1], d[..., 2])
-
-
-def real_sh_basis(lmax, d):
-    """All real spherical harmonics of degree <= lmax: shape (..., (lmax + 1)^2).
-
-    Column ``l^2 + l + m`` is :func:`real_sh` ``(l, m, d)``.
-
-    Examples
-    --------
-    >>> from symsphere.integrands import real_sh_basis
-    >>> real_sh_basis(8, [[0.0, 0.6, 0.8]]).shape
-    (1, 81)
-    """
-    lmax, _ = _check_lm(lmax, 0)
-    d = check_directions(d, "d").astype(np.float64)
-    x, y, z = d[..., 0], d[..., 1], d[..., 2]
-    cols = [_sh(l, m, x, y, z) for l in range(lmax + 1) for m in range(-l, l + 1)]
-    return np.stack(cols, axis=-1)
-
-
-def sh_polynomial(l, m):
-    """Y_lm as a polynomial in x, y, z: a dict ``{(a, b, c): coefficient}``.
-
-    The same function as :func:`real_sh` on the unit sphere, built from the
-    coefficients of Q_l^m (exact rationals) and of Re/Im (x + i y)^m, for use
-    with :func:`polynomial_integral` (e.g. over the hemisphere).
-
-    Examples
-    --------
-    >>> from symsphere.integrands import sh_polynomial
-    >>> {k: round(v, 6) for k, v in sh_polynomial(2, -2).items()}    # sqrt(15/(4 pi)) x y
-    {(1, 1, 0): 1.092548}
-    """
-    l, m = _check_lm(l, m)
-    am = abs(m)
-    q = _legendre_q_coefficients(l, am)  # Fractions, index = power of z
-    scale = _sh_norm(l, am) * (math.sqrt(2.0) if m else 1.0)
-    coeffs = {}
-    for k in range(am + 1):
-        if (k % 2 == 0) != (m >= 0):  # Re: even powers of i y; Im: odd
-            continue
-        sign = (-1) ** (k // 2)
-        for j, qj in enumerate(q):
-            if qj:
-                key = (am - k, k, j)
-                coeffs[key] = coeffs.get(key, 0.0) + scale * sign * math.comb(am, k) * float(qj)
-    return coeffs
-
-
-# =============================================================================
-# Moments and polynomials
-# =============================================================================
-
-
-def monomial_integral(a, b, c, domain="sphere"):
-    """Exact integral of x^a y^b z^c over the unit sphere or the hemisphere z >= 0.
-
-    Sphere: ``2 G((a+1)/2) G((b+1)/2) G((c+1)/2) / G((a+b+c+3)/2)`` (G = Gamma) if
-    a, b, c are all even, else 0; for even exponents this is
-    ``4 pi (a-1)!! (b-1)!! (c-1)!! / (a+b+c+1)!!``.
-
-    Hemisphere z >= 0: 0 if a or b is odd (x -> -x maps the hemisphere onto
-    itself); otherwise ``G((a+1)/2) G((b+1)/2) G((c+1)/2) / G((a+b+c+3)/2)`` for
-    *every* c >= 0 -- half the sphere's value when c is even, and for odd c
-    the same expression, ``pi (a-1)!! (b-1)!! / 2^((a+b)/2) * ((c-1)/2)! / ((a+b+c+1)/2)!``.
-    (In spherical coordinates the phi integral is ``2 B((a+1)/2, (b+1)/2)`` and
-    the theta integral over [0, pi/2] is ``B((a+b+2)/2, (c+1)/2) / 2``.)
-
-    Parameters
-    ----------
-    a, b, c : int
-        Non-negative exponents.
-    domain : {'sphere', 'hemisphere'}
-
-    Returns
-    -------
-    float
-        A rational multiple of pi, rounded once.
-
-    Examples
-    --------
-    >>> import math
-    >>> from symsphere.integrands import monomial_integral
-    >>> monomial_integral(2, 0, 0) / math.pi, monomial_integral(0, 0, 1, "hemisphere") / math.pi
-    (1.3333333333333333, 1.0)
-    """
-    return float(_monomial_integral_over_pi(*_check_exponents(a, b, c), check_choice(domain, "domain", _DOMAINS))) * math.pi
-
-
-def polynomial_integral(coeffs, domain="sphere"):
-    """Exact integral of a polynomial ``{(a, b, c): coefficient}`` (see :func:`monomial_integral`).
-
-    Coefficients may be floats, ints or ``fractions.Fraction``; the sum is
-    formed exactly in rationals (times pi) and rounded once.
-
-    Examples
-    --------
-    >>> import math
-    >>> from symsphere.integrands import polynomial_integral
-    >>> from fractions import Fraction
-    >>> polynomial_integral({(4, 0, 0): 1, (0, 4, 0): 1, (0, 0, 4): 1, (0, 0, 0): Fraction(-3, 5)})
-    0.0
-    >>> polynomial_integral({(2, 0, 2): 1}, "hemisphere") / math.pi     # 2/15
-    0.13333333333333333
-    """
-    domain = check_choice(domain, "domain", _DOMAINS)
-    # Summed exactly (a float coefficient is converted to the Fraction it equals), rounded once.
-    total = sum(
-        (Fraction(coef) * _monomial_integral_over_pi(*_check_exponents(*key), domain)
-         for key, coef in _check_coeffs(coeffs).items()),
-        Fraction(0),
-    )
-    return float(total) * math.pi
-
-
-def evaluate_polynomial(coeffs, d):
-    """Evaluate ``{(a, b, c): coefficient}`` at points of shape (..., 3).
-
-    Examples
-    --------
-    >>> from symsphere.integrands import evaluate_polynomial
-    >>> float(evaluate_polynomial({(1, 1, 0): 2.0, (0, 0, 0): 1.0}, [0.5, 0.5, 0.7]))
-    1.5
-    """
-    coeffs = _check_coeffs(coeffs)
-    d = check_directions(d, "d").astype(np.float64)
-    return _poly_eval(coeffs, d)
-
-
-def cubic_harmonic(degree):
-    """The O_h-invariant harmonic polynomial of degree 4, 6 or 8.
-
-    The polynomials invariant under the 48 signed permutations form, on the
-    sphere, one harmonic of each degree 0, 4, 6, 8 (and none of degree 2 or
-    any odd degree; see ``docs/integrands.md``).  Their homogeneous harmonic
-    representatives (Laplacian 0 in R^3, derived by matching coefficients):
-
-    - degree 4: ``sum x^4 - 3 sum x^2 y^2``  (= (5/2)(x^4 + y^4 + z^4 - 3/5) on the sphere)
-    - degree 6: ``sum x^6 - (15/2) sum_sym x^4 y^2 + 90 x^2 y^2 z^2``
-    - degree 8: ``sum x^8 - 14 sum_sym x^6 y^2 + 35 sum x^4 y^4``
-
-    where ``sum_sym x^4 y^2`` runs over the 6 ordered pairs of distinct axes.
-    Being harmonic and homogeneous of degree l, each restricts to a degree-l
-    spherical harmonic, so it integrates to 0 and is orthogonal to every
-    lower degree.
-
-    Returns
-    -------
-    dict
-        ``{(a, b, c): coefficient}``.
-
-    Examples
-    --------
-    >>> from symsphere.integrands import cubic_harmonic, polynomial_integral
-    >>> len(cubic_harmonic(6)), polynomial_integral(cubic_harmonic(8))
-    (10, 0.0)
-    """
-    if isinstance(degree, bool) or not isinstance(degree, numbers.Integral) or degree not in (4, 6, 8):
-        raise ValueError(f"'degree' must be 4, 6 or 8, got {degree!r}")
-    terms = {
-        4: (((4, 0, 0), 1.0), ((2, 2, 0), -3.0)),
-        6: (((6, 0, 0), 1.0), ((4, 2, 0), -7.5), ((2, 2, 2), 90.0)),
-        8: (((8, 0, 0), 1.0), ((6, 2, 0), -14.0), ((4, 4, 0), 35.0)),
-    }[int(degree)]
-    coeffs = {}
-    for exps, coef in terms:
-        for perm in _distinct_permutations(exps):
-            coeffs[perm] = coef
-    return coeffs
-
-
-# =============================================================================
 # Lights
 # =============================================================================
 
 
-def lambert_irradiance(vertices, normal=None, radiance=1.0):
+def lambert_irradiance(
+    vertices: npt.ArrayLike, normal: npt.ArrayLike | None = None, radiance: float = 1.0
+) -> float:
     """Irradiance at the origin from a polygonal light of constant radiance (Lambert 1760).
 
     ``E = (L/2) |sum_i Theta_i (n . Gamma_i)|``, where for the edge from
@@ -390,7 +188,7 @@ def lambert_irradiance(vertices, normal=None, radiance=1.0):
     if v.ndim != 2 or v.shape[0] < 3:
         raise ValueError(f"'vertices' must have shape (k, 3) with k >= 3, got {v.shape}")
     n = check_normal((0.0, 0.0, 1.0) if normal is None else normal)
-    radiance = _check_nonnegative(radiance, "radiance")
+    radiance = check_nonnegative(radiance, "radiance")
     if np.any(v @ n <= 0):
         raise ValueError("'vertices' must lie strictly above the surface (vertices @ normal > 0)")
     u = v / np.linalg.norm(v, axis=1, keepdims=True)
@@ -402,7 +200,9 @@ def lambert_irradiance(vertices, normal=None, radiance=1.0):
     return 0.5 * radiance * abs(math.fsum((theta * gamma_n).tolist()))
 
 
-def sphere_light_irradiance(center, distance, radius, radiance=1.0):
+def sphere_light_irradiance(
+    center: npt.ArrayLike, distance: float, radius: float, radiance: float = 1.0
+) -> float:
     """Irradiance from a spherical light entirely above the surface z = 0.
 
     The light subtends the cone of half-angle alpha, ``sin(alpha) = R/D``,
@@ -433,9 +233,9 @@ def sphere_light_irradiance(center, distance, radius, radiance=1.0):
     0.25
     """
     c = check_normal(center, "center")
-    distance = _check_positive(distance, "distance")
-    radius = _check_positive(radius, "radius")
-    radiance = _check_nonnegative(radiance, "radiance")
+    distance = check_positive(distance, "distance")
+    radius = check_positive(radius, "radius")
+    radiance = check_nonnegative(radiance, "radiance")
     if radius >= distance:
         raise ValueError(f"'radius' must be smaller than 'distance', got {radius} >= {distance}")
     sin_alpha = radius / distance
@@ -444,7 +244,9 @@ def sphere_light_irradiance(center, distance, radius, radiance=1.0):
     return math.pi * radiance * sin_alpha**2 * float(c[2])
 
 
-def orbit_average(f, p, domain="sphere"):
+def orbit_average(
+    f: Callable[[FloatArray], npt.ArrayLike], p: npt.ArrayLike, domain: Domain = "sphere"
+) -> Float64Array:
     """Mean of ``f`` over the 48 (hemisphere: 24) images of each point p.
 
     ``area * orbit_average(f, p)`` with p uniform on T0 is the symmetric
@@ -475,7 +277,8 @@ def orbit_average(f, p, domain="sphere"):
     count = orbit_size(domain)
     images = orbit(p, domain)
     values = np.asarray(f(images.reshape(-1, 3)), dtype=np.float64)
-    return values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    return mean
 
 
 # =============================================================================
@@ -483,139 +286,18 @@ def orbit_average(f, p, domain="sphere"):
 # =============================================================================
 
 
-def _check_lm(l, m):
-    for value, name in ((l, "l"), (m, "m")):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise TypeError(f"'{name}' must be an integer, got {type(value).__name__}")
-    l, m = int(l), int(m)
-    if l < 0:
-        raise ValueError(f"'l' must be >= 0, got {l}")
-    if abs(m) > l:
-        raise ValueError(f"'m' must satisfy -l <= m <= l, got l={l}, m={m}")
-    return l, m
+def _unit3(v: npt.ArrayLike) -> Float64Array:
+    a = np.asarray(v, dtype=np.float64)
+    unit: Float64Array = a / np.linalg.norm(a)
+    return unit
 
 
-def _check_exponents(a, b, c):
-    out = []
-    for value, name in ((a, "a"), (b, "b"), (c, "c")):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise TypeError(f"exponent '{name}' must be an integer, got {type(value).__name__}")
-        if value < 0:
-            raise ValueError(f"exponent '{name}' must be >= 0, got {value}")
-        out.append(int(value))
-    return out
-
-
-def _check_coeffs(coeffs):
-    if not isinstance(coeffs, Mapping):
-        raise TypeError(f"'coeffs' must be a mapping {{(a, b, c): coefficient}}, got {type(coeffs).__name__}")
-    for key in coeffs:
-        if not (isinstance(key, tuple) and len(key) == 3):
-            raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {key!r}")
-        _check_exponents(*key)
-    return coeffs
-
-
-def _check_positive(value, name):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
-    if value <= 0:
-        raise ValueError(f"'{name}' must be positive, got {value}")
-    return float(value)
-
-
-def _check_nonnegative(value, name):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
-    if value < 0:
-        raise ValueError(f"'{name}' must be >= 0, got {value}")
-    return float(value)
-
-
-def _double_factorial(k):
-    return math.prod(range(k, 0, -2)) if k > 0 else 1
-
-
-def _monomial_integral_over_pi(a, b, c, domain):
-    """The integral divided by pi, as an exact Fraction (see monomial_integral)."""
-    if a % 2 or b % 2:
-        return Fraction(0)
-    if c % 2 == 0:
-        sphere = Fraction(4 * _double_factorial(a - 1) * _double_factorial(b - 1) * _double_factorial(c - 1),
-                          _double_factorial(a + b + c + 1))
-        return sphere if domain == "sphere" else sphere / 2
-    if domain == "sphere":
-        return Fraction(0)
-    # G((a+1)/2) G((b+1)/2) = pi (a-1)!! (b-1)!! / 2^((a+b)/2); G((c+1)/2) = ((c-1)/2)!;
-    # G((a+b+c+3)/2) = ((a+b+c+1)/2)!  (a + b + c + 1 is even).
-    return Fraction(_double_factorial(a - 1) * _double_factorial(b - 1) * math.factorial((c - 1) // 2),
-                    2 ** ((a + b) // 2) * math.factorial((a + b + c + 1) // 2))
-
-
-def _poly_eval(coeffs, d):
-    x, y, z = d[..., 0], d[..., 1], d[..., 2]
-    out = np.zeros(d.shape[:-1])
-    for (a, b, c), coef in coeffs.items():
-        out = out + float(coef) * x**a * y**b * z**c
-    return out
-
-
-def _distinct_permutations(exps):
-    import itertools
-
-    return sorted(set(itertools.permutations(exps)))
-
-
-def _sh_norm(l, am):
-    return math.sqrt((2 * l + 1) / (4 * math.pi) * math.factorial(l - am) / math.factorial(l + am))
-
-
-def _assoc_q(l, am, z):
-    """Q_l^m(z), with P_l^m = (1 - z^2)^(m/2) Q_l^m, no Condon-Shortley phase."""
-    q_prev = np.full_like(z, float(_double_factorial(2 * am - 1)))  # Q_m^m
-    if l == am:
-        return q_prev
-    q = (2 * am + 1) * z * q_prev  # Q_{m+1}^m
-    for k in range(am + 2, l + 1):
-        q, q_prev = ((2 * k - 1) * z * q - (k + am - 1) * q_prev) / (k - am), q
-    return q
-
-
-def _legendre_q_coefficients(l, am):
-    """Coefficients (Fractions, by power of z) of Q_l^m, by the same recurrence."""
-    q_prev = [Fraction(_double_factorial(2 * am - 1))]
-    if l == am:
-        return q_prev
-    q = [Fraction(0), (2 * am + 1) * q_prev[0]]
-    for k in range(am + 2, l + 1):
-        zq = [Fraction(0)] + [(2 * k - 1) * c for c in q]
-        prev = q_prev + [Fraction(0)] * (len(zq) - len(q_prev))
-        q, q_prev = [(s - (k + am - 1) * t) / (k - am) for s, t in zip(zq, prev)], q
-    return q
-
-
-def _sh(l, m, x, y, z):
-    am = abs(m)
-    value = _sh_norm(l, am) * _assoc_q(l, am, z)
-    if m == 0:
-        return value
-    re, im = np.ones_like(x), np.zeros_like(x)  # (x + i y)^|m| by repeated multiplication
-    for _ in range(am):
-        re, im = re * x - im * y, re * y + im * x
-    return math.sqrt(2.0) * value * (re if m > 0 else im)
-
-
-def _unit3(v):
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v)
-
-
-def _frozen(**kwargs):
+def _frozen(**kwargs: Any) -> Mapping[str, Any]:
     return MappingProxyType({k: (np.array(v, dtype=np.float64) if isinstance(v, (list, tuple, np.ndarray)) else v)
                              for k, v in kwargs.items()})
 
 
-def _phong_hemisphere_integral(r, n):
+def _phong_hemisphere_integral(r: Float64Array, n: int) -> float:
     """Integral over z >= 0 of the normalised Phong lobe (n+1)/(2 pi) max(0, w.r)^n.
 
     About r, w = cos t r + sin t (cos psi e1 + sin psi e2) with e1 the unit
@@ -631,15 +313,15 @@ def _phong_hemisphere_integral(r, n):
         return 1.0
     cot_b = cos_b / sin_b
 
-    def below(tau):
+    def below(tau: float) -> float:
         k = min(1.0, tau * cot_b / math.sqrt(1.0 - tau * tau))
         return tau**n * 2.0 * math.acos(k)
 
     value, _ = integrate.quad(below, 0.0, sin_b, epsabs=0.0, epsrel=1e-13, limit=200)
-    return 1.0 - (n + 1) / (2.0 * math.pi) * value
+    return float(1.0 - (n + 1) / (2.0 * math.pi) * value)
 
 
-def _exp_hemisphere_integral(a):
+def _exp_hemisphere_integral(a: Float64Array) -> float:
     """Integral over z >= 0 of exp(w . a) = 2 pi int_0^1 exp(a_z z) I0(rho sqrt(1 - z^2)) dz.
 
     The phi integral of exp(rho s cos(phi - phi0)) is 2 pi I0(rho s) (s = sin theta).
@@ -649,10 +331,10 @@ def _exp_hemisphere_integral(a):
         lambda z: math.exp(a[2] * z) * special.i0(rho * math.sqrt(max(0.0, 1.0 - z * z))),
         0.0, 1.0, epsabs=0.0, epsrel=1e-13, limit=200,
     )
-    return 2.0 * math.pi * value
+    return float(2.0 * math.pi * value)
 
 
-def _polygon_inside(vertices):
+def _polygon_inside(vertices: npt.ArrayLike) -> Callable[[FloatArray], BoolArray]:
     """Vectorised test: does the ray along w pass through the convex polygon?
 
     For a convex polygon not containing the origin, the rays through it form
@@ -664,8 +346,9 @@ def _polygon_inside(vertices):
     sigma = np.sign(v.mean(axis=0) @ normals[0])
     normals = sigma * normals
 
-    def inside(d):
-        return np.all(d @ normals.T >= 0, axis=-1)
+    def inside(d: FloatArray) -> BoolArray:
+        hit: BoolArray = np.all(d @ normals.T >= 0, axis=-1)
+        return hit
 
     return inside
 
@@ -675,7 +358,9 @@ def _polygon_inside(vertices):
 # =============================================================================
 
 
-def _sh_integrand(l, m, domain="sphere", shift=0.0, orbit_exact=False):
+def _sh_integrand(
+    l: int, m: int, domain: Domain = "sphere", shift: float = 0.0, orbit_exact: bool = False
+) -> Integrand:
     poly = sh_polynomial(l, m)
     exact = shift * _AREA[domain] + (0.0 if domain == "sphere" and l > 0 else polynomial_integral(poly, domain))
     label = f"Y_{l},{m}" if not shift else f"{shift:g} + Y_{l},{m}"
@@ -689,12 +374,13 @@ def _sh_integrand(l, m, domain="sphere", shift=0.0, orbit_exact=False):
     )
 
 
-def _cubic_integrand(degree, shift=0.0):
+def _cubic_integrand(degree: Literal[4, 6, 8], shift: float = 0.0) -> Integrand:
+    coeffs: dict[tuple[int, int, int], float | Fraction]
     if degree == 4:  # the brief form x^4 + y^4 + z^4 - 3/5 = (2/5) * harmonic on the sphere
         coeffs = {(4, 0, 0): 1, (0, 4, 0): 1, (0, 0, 4): 1, (0, 0, 0): Fraction(-3, 5)}
         label = "x^4 + y^4 + z^4 - 3/5"
     else:
-        coeffs = cubic_harmonic(degree)
+        coeffs = dict(cubic_harmonic(degree))
         label = f"the O_h-invariant harmonic polynomial of degree {degree}"
     if shift:
         coeffs = dict(coeffs)
@@ -702,15 +388,15 @@ def _cubic_integrand(degree, shift=0.0):
         label = f"{shift:g} + {label}"
     name = f"cubic{degree}" if not shift else f"shifted_cubic{degree}"
     return Integrand(
-        name, "sphere", lambda d: _poly_eval(coeffs, np.asarray(d, dtype=np.float64)),
+        name, "sphere", lambda d: evaluate_polynomial(coeffs, d),
         polynomial_integral(coeffs, "sphere"),
         f"cubic harmonic: {label}; invariant under the 48 maps; exact: moment formula",
         True, True, False, _frozen(degree=degree, shift=shift),
     )
 
 
-def _build_integrands():
-    out = []
+def _build_integrands() -> dict[str, Integrand]:
+    out: list[Integrand] = []
     # (a) pure harmonics: exact 0.  orbit_exact: those with no O_h-invariant component
     # (odd l, l = 2, and odd under a sign change of x or y), see docs/integrands.md.
     for l, m, exact_orbit in [
@@ -729,7 +415,7 @@ def _build_integrands():
     r = _unit3([0.3, -0.2, 0.9])
     n = 20
 
-    def phong(d, r=r, n=n):
+    def phong(d: FloatArray, r: Float64Array = r, n: int = n) -> Float64Array:
         d = np.asarray(d, dtype=np.float64)
         return (n + 1) / (2 * math.pi) * np.maximum(d @ r, 0.0) ** n
 
@@ -751,7 +437,7 @@ def _build_integrands():
     cos_alpha = math.cos(alpha)
     cap_area = 2 * math.pi * 2 * math.sin(alpha / 2) ** 2  # 2 pi (1 - cos alpha)
 
-    def cap(d, c=c, cos_alpha=cos_alpha):
+    def cap(d: FloatArray, c: Float64Array = c, cos_alpha: float = cos_alpha) -> Float64Array:
         return (np.asarray(d, dtype=np.float64) @ c >= cos_alpha).astype(np.float64)
 
     for domain in _DOMAINS:
@@ -766,7 +452,7 @@ def _build_integrands():
     a = np.array([0.7, -0.4, 0.5])
     norm_a = float(np.linalg.norm(a))
 
-    def expo(d, a=a):
+    def expo(d: FloatArray, a: Float64Array = a) -> Float64Array:
         return np.exp(np.asarray(d, dtype=np.float64) @ a)
 
     out.append(Integrand(
@@ -794,7 +480,9 @@ def _build_integrands():
     radiance, distance, radius = 3.0, 5.0, 1.5
     cos_light = math.sqrt(distance**2 - radius**2) / distance
 
-    def sphere_light(d, c=light_c, cos_light=cos_light, radiance=radiance):
+    def sphere_light(
+        d: FloatArray, c: Float64Array = light_c, cos_light: float = cos_light, radiance: float = radiance
+    ) -> Float64Array:
         d = np.asarray(d, dtype=np.float64)
         return radiance * np.maximum(d[..., 2], 0.0) * (d @ c >= cos_light)
 
@@ -815,7 +503,9 @@ def _build_integrands():
     quad_radiance = 2.0
     inside = _polygon_inside(quad)
 
-    def quad_light(d, inside=inside, radiance=quad_radiance):
+    def quad_light(
+        d: FloatArray, inside: Callable[[FloatArray], BoolArray] = inside, radiance: float = quad_radiance
+    ) -> Float64Array:
         d = np.asarray(d, dtype=np.float64)
         return radiance * np.maximum(d[..., 2], 0.0) * inside(d)
 

@@ -24,23 +24,26 @@ combined in block order, so the result does not depend on how the work is split
 
 from __future__ import annotations
 
-from ._integration import DEFAULT_REPLICATES, IntegrationResult, block_partial, finish, plan
+import numpy.typing as npt
+
+from ._integration import DEFAULT_REPLICATES, IntegrationResult, Integrand, block_partial, finish, plan
+from ._typing import Domain, MapMethod, PointsLike, RNGLike
 
 __all__ = ["IntegrationResult", "integrate"]
 
 
 def integrate(
-    f,
+    f: Integrand,
     *,
-    domain="sphere",
-    n,
-    method="equal_area",
-    points="random",
-    normal=None,
-    rng=None,
-    replicates=None,
-    confidence_level=0.95,
-):
+    domain: Domain = "sphere",
+    n: int,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    normal: npt.ArrayLike | None = None,
+    rng: RNGLike = None,
+    replicates: int | None = None,
+    confidence_level: float = 0.95,
+) -> IntegrationResult:
     """Integrate f over the sphere or a hemisphere with the symmetric scheme.
 
     Parameters

@@ -28,12 +28,14 @@ Outputs are clamped into T0 (``z >= x >= y >= 0``) to absorb rounding, so
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
+import numpy.typing as npt
 from numba.extending import register_jitable
 
+from ._typing import BoolArray, Float64Array, FloatArray, MapMethod
 from ._validation import check_choice, check_directions, check_uv
 
 __all__ = [
@@ -61,22 +63,22 @@ class TriangleMap:
     """
 
     name: str
-    point: Callable
-    density: Callable
-    inverse: Callable[[np.ndarray], np.ndarray]
+    point: Callable[[Float64Array, Float64Array], tuple[Float64Array, Float64Array, Float64Array]]
+    density: Callable[[Float64Array, Float64Array, Float64Array], FloatArray]
+    inverse: Callable[[Float64Array], Float64Array]
     uniform: bool
 
-    def forward(self, uv: np.ndarray) -> np.ndarray:
+    def forward(self, uv: Float64Array) -> Float64Array:
         """Points (..., 2) of the unit square to directions (..., 3) in T0."""
         return np.stack(self.point(uv[..., 0], uv[..., 1]), axis=-1)
 
-    def pdf(self, p: np.ndarray) -> np.ndarray:
+    def pdf(self, p: Float64Array) -> Float64Array:
         """Density with respect to solid angle at directions (..., 3); 0 outside T0."""
         with np.errstate(divide="ignore", over="ignore"):
             return np.asarray(self.density(p[..., 0], p[..., 1], p[..., 2]), dtype=np.float64)
 
 
-def square_to_triangle(uv, method="equal_area"):
+def square_to_triangle(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Map points of the unit square onto the triangle T0.
 
     Parameters
@@ -105,7 +107,7 @@ def square_to_triangle(uv, method="equal_area"):
     return triangle_map.forward(uv.astype(np.float64)).astype(uv.dtype, copy=False)
 
 
-def triangle_pdf(p, method="equal_area"):
+def triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density of a map's points with respect to solid angle on T0.
 
     Parameters
@@ -132,7 +134,7 @@ def triangle_pdf(p, method="equal_area"):
     return triangle_map.pdf(p.astype(np.float64)).astype(p.dtype, copy=False)
 
 
-def triangle_to_square(p, method="equal_area"):
+def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Inverse of :func:`square_to_triangle`.
 
     Parameters
@@ -165,7 +167,7 @@ def triangle_to_square(p, method="equal_area"):
     return triangle_map.inverse(p64).astype(p.dtype, copy=False)
 
 
-def get_map(method) -> TriangleMap:
+def get_map(method: MapMethod) -> TriangleMap:
     """The registered :class:`TriangleMap` called *method*."""
     return _REGISTRY[check_choice(method, "method", METHODS)]
 
@@ -177,31 +179,33 @@ def get_map(method) -> TriangleMap:
 
 
 @register_jitable
-def _clamped_into_t0(x, y, z):
+def _clamped_into_t0(
+    x: Float64Array, y: Float64Array, z: Float64Array
+) -> tuple[Float64Array, Float64Array, Float64Array]:
     """Clamp rounding errors so that z >= x >= y >= 0."""
     x = np.minimum(x, z)
     return x, np.minimum(np.maximum(y, 0.0), x), z
 
 
 @register_jitable
-def _in_triangle(x, y, z):
+def _in_triangle(x: Float64Array, y: Float64Array, z: Float64Array) -> BoolArray:
     return (z >= x) & (x >= y) & (y >= 0.0)
 
 
 @register_jitable
-def _one_minus_cos_theta_max(cos_phi):
+def _one_minus_cos_theta_max(cos_phi: Float64Array) -> Float64Array:
     # 1 - c/sqrt(1+c^2) rewritten without cancellation: 1 / (r (r + c)), r = sqrt(1+c^2).
     r = np.sqrt(1.0 + cos_phi * cos_phi)
     return 1.0 / (r * (r + cos_phi))
 
 
-def _azimuth_to_u(p):
+def _azimuth_to_u(p: Float64Array) -> Float64Array:
     """u = 4 phi / pi with phi = atan2(y, x) (both paper maps use phi = u pi/4)."""
     return np.clip(np.arctan2(p[..., 1], p[..., 0]) * (4 / np.pi), 0.0, 1.0)
 
 
 @register_jitable
-def _equal_area_point(u, v):
+def _equal_area_point(u: Float64Array, v: Float64Array) -> tuple[Float64Array, Float64Array, Float64Array]:
     # tan(phi) = sqrt2 sin(s) / (sqrt2 cos(s) - 1) =: a / b with s = u pi/12 in [0, pi/12]; then
     # (cos phi, sin phi) = (b, a) / |(a, b)|, with b >= sqrt2 cos(pi/12) - 1 > 0.36.  One sine
     # (cos s = sqrt(1 - sin^2 s) is exact enough for sin s <= 0.26) and no atan2, sin, cos of phi.
@@ -216,13 +220,13 @@ def _equal_area_point(u, v):
 
 
 @register_jitable
-def _sin_small(s):
+def _sin_small(s: Float64Array) -> Float64Array:
     # sin s for 0 <= s <= pi/12 by its Taylor polynomial to s^13 (Horner in s^2): the remainder is
     # below s^15/15! < 2e-21, far under half an ulp, and measured against an 80-bit sine on 2e7
     # points it is within 0.534 ulp (glibc's sin: 0.516), correctly rounded as often.  A polynomial,
     # unlike a libm call, lets LLVM vectorise the map over a batch of base points in the kernels.
     s2 = s * s
-    p = 1.0 / 6227020800.0
+    p: Float64Array | float = 1.0 / 6227020800.0  # (an annotation only: no bytecode for numba)
     p = p * s2 - 1.0 / 39916800.0
     p = p * s2 + 1.0 / 362880.0
     p = p * s2 - 1.0 / 5040.0
@@ -232,11 +236,11 @@ def _sin_small(s):
 
 
 @register_jitable
-def _equal_area_density(x, y, z):
+def _equal_area_density(x: Float64Array, y: Float64Array, z: Float64Array) -> FloatArray:
     return _in_triangle(x, y, z) * (12 / np.pi)
 
 
-def _equal_area_inverse(p):
+def _equal_area_inverse(p: Float64Array) -> Float64Array:
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     phi = np.clip(np.arctan2(y, x), 0.0, np.pi / 4)
     u = np.clip((phi - np.arcsin(np.sin(phi) / _SQRT2)) * (12 / np.pi), 0.0, 1.0)
@@ -246,7 +250,7 @@ def _equal_area_inverse(p):
 
 
 @register_jitable
-def _paper1_point(u, v):
+def _paper1_point(u: Float64Array, v: Float64Array) -> tuple[Float64Array, Float64Array, Float64Array]:
     # Algorithm 1 as printed: phi = u pi/4, theta = arctan(v / cos phi).
     phi = u * (np.pi / 4)
     theta = np.arctan(v / np.cos(phi))
@@ -254,19 +258,19 @@ def _paper1_point(u, v):
 
 
 @register_jitable
-def _paper1_density(x, y, z):
+def _paper1_density(x: Float64Array, y: Float64Array, z: Float64Array) -> FloatArray:
     # (a, b) = (x/z, y/z) = (v, v tan phi): |J| = pi (x^2 + y^2) / (4 x z), d(omega) = z^3 da db,
     # so pdf = 4 x / (pi z^2 (x^2 + y^2)).
     return _vertex_singular_density(x, y, _in_triangle(x, y, z), 4.0, np.pi * z * z)
 
 
-def _paper1_inverse(p):
+def _paper1_inverse(p: Float64Array) -> Float64Array:
     v = np.clip(np.divide(p[..., 0], p[..., 2]), 0.0, 1.0)
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
 @register_jitable
-def _paper2_point(u, v):
+def _paper2_point(u: Float64Array, v: Float64Array) -> tuple[Float64Array, Float64Array, Float64Array]:
     # Algorithm 2 as printed: phi = u pi/4, theta = v pi/4, P = N'_x x N'_y / |N'_x x N'_y|.
     phi = u * (np.pi / 4)
     theta = v * (np.pi / 4)
@@ -276,19 +280,21 @@ def _paper2_point(u, v):
 
 
 @register_jitable
-def _paper2_density(x, y, z):
+def _paper2_density(x: Float64Array, y: Float64Array, z: Float64Array) -> FloatArray:
     # (a, b) = (tan theta, tan theta tan phi): |J| = (pi/4)^2 (x^2+z^2)(x^2+y^2) / (x z^3),
     # so pdf = 16 x / (pi^2 (x^2 + z^2)(x^2 + y^2)).
     return _vertex_singular_density(x, y, _in_triangle(x, y, z), 16.0, np.pi**2 * (x * x + z * z))
 
 
-def _paper2_inverse(p):
+def _paper2_inverse(p: Float64Array) -> Float64Array:
     v = np.clip(np.arctan2(p[..., 0], p[..., 2]) * (4 / np.pi), 0.0, 1.0)
     return np.stack([_azimuth_to_u(p), v], axis=-1)
 
 
 @register_jitable
-def _vertex_singular_density(x, y, inside, constant, smooth_factor):
+def _vertex_singular_density(
+    x: Float64Array, y: Float64Array, inside: BoolArray, constant: float, smooth_factor: Float64Array
+) -> FloatArray:
     """``constant x / (smooth_factor (x^2 + y^2))`` on T0, 0 outside, +inf at the vertex (0, 0, 1).
 
     Evaluated as ``constant cos(phi) / (smooth_factor r)`` with r = hypot(x, y), so
@@ -298,13 +304,13 @@ def _vertex_singular_density(x, y, inside, constant, smooth_factor):
     product with ``inside = 0`` is 0, never 0 * inf.
     """
     outside = 1.0 - inside
-    r = np.hypot(x, y) + outside
-    at_vertex = r == 0.0
+    r: Float64Array = np.hypot(x, y) + outside  # (annotations only: no bytecode for numba)
+    at_vertex: BoolArray = r == 0.0
     cos_phi = (x + at_vertex) / (r + at_vertex)
     return inside * (constant * cos_phi / ((smooth_factor + outside) * r))
 
 
-_REGISTRY = {
+_REGISTRY: dict[MapMethod, TriangleMap] = {
     "equal_area": TriangleMap("equal_area", _equal_area_point, _equal_area_density, _equal_area_inverse, True),
     "paper1": TriangleMap("paper1", _paper1_point, _paper1_density, _paper1_inverse, False),
     "paper2": TriangleMap("paper2", _paper2_point, _paper2_density, _paper2_inverse, False),

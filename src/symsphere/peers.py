@@ -42,20 +42,22 @@ tests): ``equal_area`` is Arvo's map in closed form.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
 from ._validation import (
     as_float_array,
     check_choice,
     check_count,
     check_directions,
     check_dtype,
-    check_normal,
     check_rng,
+    check_triangle,
     check_uv,
 )
 from .points import POINT_SETS, check_points, unit_square_points
@@ -152,20 +154,22 @@ class Peer:
     """
 
     name: str
-    domain: str
-    sampler: Callable
-    pdf: Callable
+    domain: Domain
+    sampler: Sampler
+    pdf: Callable[[npt.ArrayLike], FloatArray]
     is_random: bool
     is_map: bool
     independent_rows: bool
     multiple: int = 1
     orbit_size: int | None = 1
     uniform: bool = True
-    forward: Callable | None = None
-    inverse: Callable | None = None
+    forward: Callable[[npt.ArrayLike], FloatArray] | None = None
+    inverse: Callable[[npt.ArrayLike], FloatArray] | None = None
     reference: str = ""
 
-    def sample(self, n, rng=None, dtype=np.float64, points="random"):
+    def sample(
+        self, n: int, rng: RNGLike = None, dtype: DTypeLike = np.float64, points: PointsLike = "random"
+    ) -> FloatArray:
         """Draw ``n`` directions; ``points`` other than 'random' needs ``is_map``.
 
         Examples
@@ -194,7 +198,7 @@ class Peer:
         return POINT_SETS if self.is_map else ("random",)
 
 
-def get_peer(name) -> Peer:
+def get_peer(name: str) -> Peer:
     """The registered :class:`Peer` called *name*; ValueError naming 'peer' otherwise.
 
     Examples
@@ -211,7 +215,9 @@ def get_peer(name) -> Peer:
 # =============================================================================
 
 
-def sample_classic(n, *, points="random", rng=None, dtype=np.float64):
+def sample_classic(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere by z = 1 - 2u, phi = 2 pi v.
 
     The map of :func:`square_to_uniform_sphere` (pbrt-v4 ``SampleUniformSphere``,
@@ -241,7 +247,9 @@ def sample_classic(n, *, points="random", rng=None, dtype=np.float64):
     return _sample_map(_uniform_sphere, n, points, rng, dtype)
 
 
-def sample_classic_hemisphere(n, *, points="random", rng=None, dtype=np.float64):
+def sample_classic_hemisphere(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the hemisphere z >= 0 by z = u, phi = 2 pi v.
 
     Parameters and returns as in :func:`sample_classic`.
@@ -256,7 +264,7 @@ def sample_classic_hemisphere(n, *, points="random", rng=None, dtype=np.float64)
     return _sample_map(_uniform_hemisphere, n, points, rng, dtype)
 
 
-def sample_gaussian(n, *, rng=None, dtype=np.float64):
+def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
     """Uniform directions on the sphere: normalised standard normal vectors.
 
     As ``scipy.stats.uniform_direction`` does (Muller 1959, Marsaglia 1972):
@@ -292,7 +300,9 @@ def sample_gaussian(n, *, rng=None, dtype=np.float64):
     return (g / norm[:, None]).astype(dtype)
 
 
-def sample_octahedral(n, *, points="random", rng=None, dtype=np.float64):
+def sample_octahedral(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere by Clarberg's octahedral map.
 
     The map of :func:`square_to_octahedral_sphere`; parameters and returns as
@@ -307,7 +317,9 @@ def sample_octahedral(n, *, points="random", rng=None, dtype=np.float64):
     return _sample_map(_octahedral_sphere, n, points, rng, dtype)
 
 
-def sample_octahedral_hemisphere(n, *, points="random", rng=None, dtype=np.float64):
+def sample_octahedral_hemisphere(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the hemisphere z >= 0 by Clarberg's hemisphere map.
 
     The map of :func:`square_to_octahedral_hemisphere`; parameters and returns
@@ -323,7 +335,9 @@ def sample_octahedral_hemisphere(n, *, points="random", rng=None, dtype=np.float
     return _sample_map(_octahedral_hemisphere, n, points, rng, dtype)
 
 
-def sample_cosine(n, *, points="random", rng=None, dtype=np.float64):
+def sample_cosine(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Cosine-weighted directions on the hemisphere z >= 0 (pdf cos(theta)/pi).
 
     Shirley & Chiu's concentric map onto the disk, lifted to the hemisphere
@@ -341,7 +355,9 @@ def sample_cosine(n, *, points="random", rng=None, dtype=np.float64):
     return _sample_map(_cosine_hemisphere, n, points, rng, dtype)
 
 
-def sample_fibonacci(n, *, randomize=False, rng=None, dtype=np.float64):
+def sample_fibonacci(
+    n: int, *, randomize: bool = False, rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """The spherical Fibonacci point set, optionally under a random rotation.
 
     Point i of n (Keinert et al., "Spherical Fibonacci Mapping", SIGGRAPH Asia
@@ -386,7 +402,9 @@ def sample_fibonacci(n, *, randomize=False, rng=None, dtype=np.float64):
     return d.astype(dtype)
 
 
-def sample_arvo(n, *, points="random", rng=None, dtype=np.float64):
+def sample_arvo(
+    n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+) -> FloatArray:
     """Uniform directions on the sphere: Arvo's triangle sampling on T0, then symmetry.
 
     ``n / 48`` points of the unit square are mapped onto T0 by Arvo's
@@ -428,7 +446,7 @@ def sample_arvo(n, *, points="random", rng=None, dtype=np.float64):
 # =============================================================================
 
 
-def square_to_uniform_sphere(uv):
+def square_to_uniform_sphere(uv: npt.ArrayLike) -> FloatArray:
     """Map the unit square onto the sphere: z = 1 - 2u, phi = 2 pi v.
 
     Archimedes' hat-box theorem: the area of the zone below height z is
@@ -457,7 +475,7 @@ def square_to_uniform_sphere(uv):
     return _public_forward(_uniform_sphere, uv)
 
 
-def uniform_sphere_to_square(d):
+def uniform_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_uniform_sphere`.
 
     ``u = (1 - z)/2``, evaluated as ``(x^2 + y^2) / (2 (1 + z))`` for z > 0
@@ -484,7 +502,7 @@ def uniform_sphere_to_square(d):
     return _public_inverse(_uniform_sphere_inverse, d)
 
 
-def uniform_sphere_pdf(d):
+def uniform_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
     """The uniform density on the sphere, 1/(4 pi), of shape ``d.shape[:-1]``.
 
     Examples
@@ -497,7 +515,7 @@ def uniform_sphere_pdf(d):
     return np.full(d.shape[:-1], _INV_4PI)
 
 
-def square_to_uniform_hemisphere(uv):
+def square_to_uniform_hemisphere(uv: npt.ArrayLike) -> FloatArray:
     """Map the unit square onto the hemisphere z >= 0: z = u, phi = 2 pi v.
 
     sin(theta) = sqrt((1 - u)(1 + u)).  pbrt-v4 ``SampleUniformHemisphere``.
@@ -512,7 +530,7 @@ def square_to_uniform_hemisphere(uv):
     return _public_forward(_uniform_hemisphere, uv)
 
 
-def uniform_hemisphere_to_square(d):
+def uniform_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_uniform_hemisphere`: u = z, v = phi / (2 pi).
 
     Examples
@@ -524,7 +542,7 @@ def uniform_hemisphere_to_square(d):
     return _public_inverse(_uniform_hemisphere_inverse, d, hemisphere=True)
 
 
-def uniform_hemisphere_pdf(d):
+def uniform_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     """The uniform density on the hemisphere z >= 0: 1/(2 pi) there, 0 below.
 
     Examples
@@ -537,7 +555,7 @@ def uniform_hemisphere_pdf(d):
     return np.where(d[..., 2] >= 0, _INV_2PI, 0.0)
 
 
-def square_to_octahedral_sphere(uv):
+def square_to_octahedral_sphere(uv: npt.ArrayLike) -> FloatArray:
     """Clarberg's equal-area map of the square onto the sphere (JGT 2008).
 
     With (a, b) = 2 (u, v) - 1, the square is an unfolded octahedron: the
@@ -569,7 +587,7 @@ def square_to_octahedral_sphere(uv):
     return _public_forward(_octahedral_sphere, uv)
 
 
-def octahedral_sphere_to_square(d):
+def octahedral_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_octahedral_sphere`.
 
     r = sqrt(1 - |z|), evaluated as sqrt((x^2 + y^2) / (1 + |z|)); the share
@@ -587,7 +605,7 @@ def octahedral_sphere_to_square(d):
     return _public_inverse(_octahedral_sphere_inverse, d)
 
 
-def square_to_octahedral_hemisphere(uv):
+def square_to_octahedral_hemisphere(uv: npt.ArrayLike) -> FloatArray:
     """Clarberg's equal-area map of the square onto the hemisphere z >= 0.
 
     The square [-1, 1]^2 is turned by 45 degrees and shrunk onto the diamond
@@ -605,7 +623,7 @@ def square_to_octahedral_hemisphere(uv):
     return _public_forward(_octahedral_hemisphere, uv)
 
 
-def octahedral_hemisphere_to_square(d):
+def octahedral_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_octahedral_hemisphere`.
 
     Examples
@@ -619,7 +637,7 @@ def octahedral_hemisphere_to_square(d):
     return _public_inverse(_octahedral_hemisphere_inverse, d, hemisphere=True)
 
 
-def square_to_concentric_disk(uv):
+def square_to_concentric_disk(uv: npt.ArrayLike) -> FloatArray:
     """Shirley & Chiu's concentric map of the square onto the unit disk (1997).
 
     With (a, b) = 2 (u, v) - 1, concentric squares go to concentric circles:
@@ -649,7 +667,7 @@ def square_to_concentric_disk(uv):
     return _concentric(uv.astype(np.float64)).astype(uv.dtype, copy=False)
 
 
-def concentric_disk_to_square(p):
+def concentric_disk_to_square(p: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_concentric_disk`.
 
     Parameters
@@ -679,7 +697,7 @@ def concentric_disk_to_square(p):
     return _concentric_inverse(a64).astype(arr.dtype, copy=False)
 
 
-def square_to_cosine_hemisphere(uv):
+def square_to_cosine_hemisphere(uv: npt.ArrayLike) -> FloatArray:
     """Cosine-weighted hemisphere: the concentric disk lifted by Malley's method.
 
     A uniform point (x, y) of the unit disk, lifted vertically to
@@ -698,7 +716,7 @@ def square_to_cosine_hemisphere(uv):
     return _public_forward(_cosine_hemisphere, uv)
 
 
-def cosine_hemisphere_to_square(d):
+def cosine_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_cosine_hemisphere`: drop z, invert the disk map.
 
     Examples
@@ -712,7 +730,7 @@ def cosine_hemisphere_to_square(d):
     return _public_inverse(_cosine_hemisphere_inverse, d, hemisphere=True)
 
 
-def cosine_hemisphere_pdf(d):
+def cosine_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     """Density cos(theta)/pi of :func:`square_to_cosine_hemisphere`; 0 for z < 0.
 
     Examples
@@ -726,7 +744,7 @@ def cosine_hemisphere_pdf(d):
     return np.maximum(d64[..., 2], 0.0) / (np.linalg.norm(d64, axis=-1) * math.pi)
 
 
-def square_to_spherical_triangle(uv, a, b, c):
+def square_to_spherical_triangle(uv: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> FloatArray:
     """Arvo's area-preserving map of the square onto a spherical triangle ABC.
 
     Arvo, "Stratified sampling of spherical triangles", SIGGRAPH 1995.
@@ -761,11 +779,11 @@ def square_to_spherical_triangle(uv, a, b, c):
            [0.57735027, 0.57735027, 0.57735027]])
     """
     uv = check_uv(uv)
-    setup = _triangle_setup(_check_triangle(a, b, c))
+    setup = _triangle_setup(check_triangle(a, b, c))
     return _arvo_forward(uv.astype(np.float64), *setup).astype(uv.dtype, copy=False)
 
 
-def spherical_triangle_to_square(d, a, b, c):
+def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_spherical_triangle`.
 
     The arc from B through d meets the edge AC at C' (the intersection of
@@ -793,11 +811,11 @@ def spherical_triangle_to_square(d, a, b, c):
     True
     """
     d = check_directions(d, "d")
-    setup = _triangle_setup(_check_triangle(a, b, c))
+    setup = _triangle_setup(check_triangle(a, b, c))
     return _arvo_inverse(d.astype(np.float64), *setup).astype(d.dtype, copy=False)
 
 
-def spherical_triangle_pdf(d, a, b, c):
+def spherical_triangle_pdf(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Float64Array:
     """Density of :func:`square_to_spherical_triangle`: 1/area inside ABC, 0 outside.
 
     Inside means on the inner side of the three edges' great circles, with a
@@ -812,7 +830,7 @@ def spherical_triangle_pdf(d, a, b, c):
     array([12.,  0.])
     """
     d = check_directions(d, "d")
-    verts = _check_triangle(a, b, c)
+    verts = check_triangle(a, b, c)
     A, B, C = verts
     orient = np.sign(np.dot(A, np.cross(B, C)))
     d64 = d.astype(np.float64)
@@ -822,7 +840,7 @@ def spherical_triangle_pdf(d, a, b, c):
     return np.where(inside, 1.0 / _triangle_area(A, B, C), 0.0)
 
 
-def fibonacci_points(n):
+def fibonacci_points(n: int) -> Float64Array:
     """The n spherical Fibonacci points (Keinert et al. 2015), deterministic.
 
     ``z_i = 1 - (2 i + 1)/n`` and ``phi_i = 2 pi frac(i (Phi - 1))`` for
@@ -857,15 +875,19 @@ def fibonacci_points(n):
 # =============================================================================
 
 
-def _random_only(sampler):
-    def wrapped(n, *, points="random", rng=None, dtype=np.float64):
+def _random_only(sampler: Callable[..., FloatArray]) -> Sampler:
+    def wrapped(
+        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
         return sampler(n, rng=rng, dtype=dtype)
 
     return wrapped
 
 
-def _fibonacci_sampler(randomize):
-    def wrapped(n, *, points="random", rng=None, dtype=np.float64):
+def _fibonacci_sampler(randomize: bool) -> Sampler:
+    def wrapped(
+        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
         return sample_fibonacci(n, randomize=randomize, rng=rng, dtype=dtype)
 
     return wrapped
@@ -1057,16 +1079,6 @@ def _fibonacci(n):
 _GOLDEN_FRACTION_BITS = (math.isqrt(5 << 128) - (1 << 64)) >> 1
 
 
-def _check_triangle(a, b, c):
-    verts = np.stack([check_normal(v, name) for v, name in ((a, "a"), (b, "b"), (c, "c"))])
-    if _triangle_area(*verts) < 1e-12:
-        raise ValueError(
-            "'a', 'b', 'c' must span a non-degenerate spherical triangle "
-            "(distinct, not on one great circle)"
-        )
-    return verts
-
-
 def _triangle_area(A, B, C):
     # Van Oosterom & Strackee (1983): tan(E/2) = |A.(B x C)| / (1 + A.B + B.C + C.A).
     return 2.0 * math.atan2(abs(float(np.dot(A, np.cross(B, C)))), 1.0 + A @ B + B @ C + C @ A)
@@ -1135,7 +1147,7 @@ def _arvo_inverse(d, A, B, C, alpha, cos_c, area):
     return np.clip(np.stack([u, v], axis=-1), 0.0, 1.0)
 
 
-def _build_peers():
+def _build_peers() -> dict[str, Peer]:
     peers = [
         Peer("classic", "sphere", sample_classic, uniform_sphere_pdf, True, True, True,
              forward=square_to_uniform_sphere, inverse=uniform_sphere_to_square,

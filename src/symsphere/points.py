@@ -23,14 +23,20 @@ from __future__ import annotations
 
 import math
 import warnings
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
+from ._typing import Float64Array, PointSet, PointsLike, RNGLike
 from ._validation import check_choice, check_count, check_rng
+
+if TYPE_CHECKING:
+    from scipy.stats.qmc import QMCEngine
 
 __all__ = ["POINT_SETS", "BLOCK", "BasePoints", "unit_square_points", "check_points"]
 
-POINT_SETS = ("random", "stratified", "sobol", "halton")
+POINT_SETS: tuple[PointSet, ...] = ("random", "stratified", "sobol", "halton")
 
 BLOCK = 4096
 """Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""
@@ -39,7 +45,9 @@ _STREAM_KEY, _SCRAMBLE_KEY = 0, 1  # spawn-key namespaces of the root SeedSequen
 _SOBOL_WARNING = "The balance properties of Sobol' points require n to be a power of 2."
 
 
-def unit_square_points(m, points="random", rng=None, *, per_point=1):
+def unit_square_points(
+    m: int, points: PointsLike = "random", rng: RNGLike = None, *, per_point: int = 1
+) -> Float64Array:
     """Draw *m* points of the unit square.
 
     Parameters
@@ -94,11 +102,11 @@ class BasePoints:
     True
     """
 
-    def __init__(self, points, rng, total, *, per_point=1):
+    def __init__(self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1) -> None:
         self.total = check_count(total, "total")
         self._engine = check_points(points)
-        self._kind = "engine" if self._engine is not None else points
-        self._side = None
+        self._kind: str = "engine" if self._engine is not None else points
+        self._side: int | None = None
         entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
         self.root_entropy = tuple(int(e) for e in entropy)
         if self._kind == "stratified":
@@ -109,7 +117,8 @@ class BasePoints:
             engine_class = qmc.Sobol if self._kind == "sobol" else qmc.Halton
             scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
             self._engine = engine_class(d=2, scramble=True, rng=np.random.default_rng(scramble_seed))
-        self.seed_words = None  # the random stream's seed, for the kernels (below)
+        # The random stream's seed, for the kernels (below).
+        self.seed_words: npt.NDArray[np.unsignedinteger[Any]] | None = None
         if self._engine is not None:
             self._offset = self._engine.num_generated
             if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
@@ -119,14 +128,14 @@ class BasePoints:
             # What numpy's PCG64 takes from the SeedSequence (uint64[4]): the kernels seed their
             # own copy of the stream from it (symsphere._kernels.pcg64_seeded).
             self.seed_words = self._stream_seed.generate_state(4, np.uint64)
-            self._stream_start = None  # numpy's PCG64 state at point 0, made when take() needs it
+            self._stream_start: Any = None  # numpy's PCG64 state at point 0, made when take() needs it
 
     @property
-    def kind(self):
+    def kind(self) -> str:
         """``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'`` or ``'engine'``."""
         return self._kind
 
-    def take(self, start, stop):
+    def take(self, start: int, stop: int) -> Float64Array:
         """Points ``start ... stop - 1`` of the run, shape (stop - start, 2), float64."""
         if not 0 <= start <= stop <= self.total:
             raise ValueError(f"'start'={start} and 'stop'={stop} must satisfy 0 <= start <= stop <= {self.total}")
@@ -135,11 +144,13 @@ class BasePoints:
         jitter = self._take_random(start, stop)
         if self._kind == "random":
             return jitter
+        side = self._side
+        assert side is not None  # set at construction for 'stratified', the only other kind
         cells = np.arange(start, stop)
-        corner = np.stack([cells // self._side, cells % self._side], axis=-1)
-        return (corner + jitter) / self._side
+        corner = np.stack([cells // side, cells % side], axis=-1)
+        return (corner + jitter) / side
 
-    def _generator_at(self, index):
+    def _generator_at(self, index: int) -> np.random.Generator:
         if self._stream_start is None:
             self._stream_start = np.random.PCG64(self._stream_seed).state
         bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
@@ -147,11 +158,12 @@ class BasePoints:
         bit_generator.advance(2 * int(index))  # two draws per point; advance takes Python ints only
         return np.random.Generator(bit_generator)
 
-    def _take_random(self, start, stop):
+    def _take_random(self, start: int, stop: int) -> Float64Array:
         return self._generator_at(start).random((stop - start, 2))
 
-    def _take_engine(self, start, stop):
+    def _take_engine(self, start: int, stop: int) -> Float64Array:
         engine = self._engine
+        assert engine is not None  # take() calls this for engines only
         position = self._offset + start
         if engine.num_generated != position:
             engine.reset()
@@ -163,7 +175,7 @@ class BasePoints:
             return np.asarray(engine.random(stop - start), dtype=np.float64)
 
 
-def check_points(points):
+def check_points(points: object) -> QMCEngine | None:
     """Validate *points*; return the engine if it is a QMCEngine, else None."""
     if isinstance(points, str):
         check_choice(points, "points", POINT_SETS)
@@ -179,7 +191,7 @@ def check_points(points):
     )
 
 
-def _square_side(m, per_point):
+def _square_side(m: int, per_point: int) -> int:
     side = math.isqrt(m)
     if side * side != m:
         options = [c for c in (side * side, (side + 1) ** 2) if c > 0]

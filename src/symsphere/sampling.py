@@ -9,11 +9,15 @@ row is uniform on the sphere; the rows of one orbit are not independent.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
+import numpy.typing as npt
 
 from . import _blocks, frames
 from ._validation import check_count, check_directions, check_normal, check_out
 from .maps import get_map
+from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import fold
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
@@ -22,7 +26,15 @@ DEFAULT_CHUNK = 48 * 2**16
 """Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
 
 
-def sample_sphere(n, *, method="equal_area", points="random", rng=None, dtype=np.float64, out=None):
+def sample_sphere(
+    n: int,
+    *,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+    out: FloatArray | None = None,
+) -> FloatArray:
     """Directions on the unit sphere by the 48-fold symmetric scheme.
 
     Parameters
@@ -61,7 +73,16 @@ def sample_sphere(n, *, method="equal_area", points="random", rng=None, dtype=np
     return _sample(n, 48, None, method, points, rng, dtype, out)
 
 
-def sample_hemisphere(n, *, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64, out=None):
+def sample_hemisphere(
+    n: int,
+    *,
+    normal: npt.ArrayLike | None = None,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+    out: FloatArray | None = None,
+) -> FloatArray:
     """Directions on the unit hemisphere by the 24-fold symmetric scheme.
 
     Parameters
@@ -93,8 +114,15 @@ def sample_hemisphere(n, *, normal=None, method="equal_area", points="random", r
 
 
 def iter_sphere(
-    n_total, *, chunk=DEFAULT_CHUNK, method="equal_area", points="random", rng=None, dtype=np.float64, out=None
-):
+    n_total: int,
+    *,
+    chunk: int = DEFAULT_CHUNK,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+    out: FloatArray | None = None,
+) -> Iterator[FloatArray]:
     """Directions of :func:`sample_sphere` in blocks, for runs larger than memory.
 
     Parameters
@@ -131,16 +159,16 @@ def iter_sphere(
 
 
 def iter_hemisphere(
-    n_total,
+    n_total: int,
     *,
-    chunk=DEFAULT_CHUNK // 2,
-    normal=None,
-    method="equal_area",
-    points="random",
-    rng=None,
-    dtype=np.float64,
-    out=None,
-):
+    chunk: int = DEFAULT_CHUNK // 2,
+    normal: npt.ArrayLike | None = None,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+    out: FloatArray | None = None,
+) -> Iterator[FloatArray]:
     """Directions of :func:`sample_hemisphere` in blocks, for runs larger than memory.
 
     Parameters
@@ -173,7 +201,7 @@ def iter_hemisphere(
     return _iterate(n_total, chunk, 24, normal, method, points, rng, dtype, out)
 
 
-def sphere_pdf(d, method="equal_area"):
+def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density (solid angle) of each direction that :func:`sample_sphere` returns.
 
     Parameters
@@ -198,10 +226,12 @@ def sphere_pdf(d, method="equal_area"):
     d = check_directions(d, "d")
     triangle_map = get_map(method)
     _, base = fold(d.astype(np.float64))
-    return (triangle_map.pdf(base) / 48).astype(d.dtype, copy=False)
+    return (triangle_map.pdf(base.astype(np.float64, copy=False)) / 48).astype(d.dtype, copy=False)
 
 
-def hemisphere_pdf(d, method="equal_area", normal=None):
+def hemisphere_pdf(
+    d: npt.ArrayLike, method: MapMethod = "equal_area", normal: npt.ArrayLike | None = None
+) -> FloatArray:
     """Density (solid angle) of each direction that :func:`sample_hemisphere` returns.
 
     Parameters
@@ -227,18 +257,27 @@ def hemisphere_pdf(d, method="equal_area", normal=None):
     d = check_directions(d, "d")
     normal = check_normal(normal)
     triangle_map = get_map(method)
-    local = d.astype(np.float64)
+    local: FloatArray = d.astype(np.float64)
     if normal is not None:
         local = frames.to_local(local, frames.frame(normal))
     _, base = fold(local)
-    density = np.where(local[..., 2] >= 0, triangle_map.pdf(base) / 24, 0.0)
+    density = np.where(local[..., 2] >= 0, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
     return density.astype(d.dtype, copy=False)
 
 
 # --- private ------------------------------------------------------------------
 
 
-def _sample(n, count, normal, method, points, rng, dtype, out):
+def _sample(
+    n: int,
+    count: int,
+    normal: Float64Array | None,
+    method: MapMethod,
+    points: PointsLike,
+    rng: RNGLike,
+    dtype: DTypeLike,
+    out: FloatArray | None,
+) -> FloatArray:
     n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype)
     if out is not None:
         check_out(out, (n, 3), dtype)
@@ -247,7 +286,17 @@ def _sample(n, count, normal, method, points, rng, dtype, out):
     return _blocks.fill_range(source, 0, n // count, method, count, basis, out)
 
 
-def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
+def _iterate(
+    n_total: int,
+    chunk: int,
+    count: int,
+    normal: Float64Array | None,
+    method: MapMethod,
+    points: PointsLike,
+    rng: RNGLike,
+    dtype: DTypeLike,
+    out: FloatArray | None,
+) -> Iterator[FloatArray]:
     # Validate now, not at the first next(): a generator function would defer the errors.
     n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype)
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
@@ -255,7 +304,7 @@ def _iterate(n_total, chunk, count, normal, method, points, rng, dtype, out):
     if out is not None:
         check_out(out, (n_total, 3), dtype)
 
-    def blocks():
+    def blocks() -> Iterator[FloatArray]:
         for start in range(0, total, per_chunk):
             stop = min(start + per_chunk, total)
             if out is None:

@@ -7,35 +7,37 @@ by integrating the density over the bin numerically, bins with a small
 expected count are pooled, and Pearson's chi-square statistic is compared
 with the chi-square distribution.
 
-Three domains are supported.  Each is a rectangle in the coordinates
-(phi, cos theta), with phi = atan2(y, x) and cos theta = z:
-
-========== ====================== ==========================
-domain     phi                    cos theta
-========== ====================== ==========================
-sphere     [-pi, pi)              [-1, 1]
-hemisphere [-pi, pi)              [0, 1]
-triangle   [0, pi/4]              [1/sqrt 3, 1]
-========== ====================== ==========================
-
-The ``'triangle'`` rectangle is the bounding rectangle of the fundamental
-spherical triangle T0 = {z >= x >= y >= 0} (area pi/12), which in these
-coordinates is phi in [0, pi/4], cos theta >= cos theta_max(phi) with
-cos theta_max(phi) = cos phi / sqrt(1 + cos^2 phi).  Since d(omega) =
-d(phi) d(cos theta), a regular grid in (phi, cos theta) has bins of equal
-solid angle.
+The domains are the sphere, the hemisphere z >= 0 and the fundamental
+triangle T0 = {z >= x >= y >= 0}; the equal-area bins in (phi, cos theta)
+and the quadrature of the density over them are in :mod:`symsphere.bins`
+(:func:`bin_probabilities` and :func:`equal_area_bins` are importable from
+here too).
 """
 
 from __future__ import annotations
 
 import math
-import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
+import numpy.typing as npt
 from scipy import stats as _scipy_stats
 
-from ._validation import check_choice, check_count, check_directions, check_rng
+from ._typing import ChiDomain, Density, Float64Array, FloatArray, IntArray, RNGLike
+from ._validation import (
+    check_bins,
+    check_choice,
+    check_count,
+    check_directions,
+    check_open_unit,
+    check_pdf,
+    check_positive_real,
+    check_rng,
+    check_samples,
+)
+from .bins import bin_probabilities, equal_area_bins
 
 __all__ = [
     "Chi2Result",
@@ -46,14 +48,7 @@ __all__ = [
     "uniform_pdf",
 ]
 
-_DOMAINS = ("sphere", "hemisphere", "triangle")
-
-# (phi_min, phi_max, cos_min, cos_max) of each domain's rectangle.
-_RECTANGLES = {
-    "sphere": (-math.pi, math.pi, -1.0, 1.0),
-    "hemisphere": (-math.pi, math.pi, 0.0, 1.0),
-    "triangle": (0.0, math.pi / 4, 1.0 / math.sqrt(3.0), 1.0),
-}
+_DOMAINS: tuple[ChiDomain, ...] = ("sphere", "hemisphere", "triangle")
 
 # |integral - 1| above this fails the test: the expected counts would be wrong.
 _INTEGRAL_TOL = 1e-3
@@ -67,10 +62,6 @@ _EDGE_TOL = 1e-12
 # Default bin grid: about this many expected samples per bin, and limits on r.
 _TARGET_PER_BIN = 100
 _MIN_RES, _MAX_RES = 4, 64
-# Adaptive quadrature: a bin's rule is refined by quartering while it changes the
-# bin's probability by more than _REFINE_TOL, at most _REFINE_LEVELS times.
-_REFINE_TOL = 1e-9
-_REFINE_LEVELS = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,12 +107,12 @@ class Chi2Result:
     p_value: float
     threshold: float
     passed: bool
-    observed: np.ndarray
-    expected: np.ndarray
+    observed: IntArray
+    expected: Float64Array
     integral: float
     message: str
     ratio_range: tuple[float, float]
-    domain: str
+    domain: ChiDomain
     n_samples: int
 
     def __str__(self) -> str:
@@ -141,15 +132,15 @@ class Chi2Result:
 
 
 def chi2_test(
-    samples,
-    pdf,
-    domain="sphere",
+    samples: npt.ArrayLike,
+    pdf: Density,
+    domain: ChiDomain = "sphere",
     *,
-    bins=None,
-    significance=0.01,
-    test_count=1,
-    min_expected=5.0,
-    quadrature_order=12,
+    bins: tuple[int, int] | None = None,
+    significance: float = 0.01,
+    test_count: int = 1,
+    min_expected: float = 5.0,
+    quadrature_order: int = 12,
 ) -> Chi2Result:
     """Pearson chi-square test of direction samples against a density.
 
@@ -253,17 +244,18 @@ def chi2_test(
     (False, True)
     """
     domain = check_choice(domain, "domain", _DOMAINS)
-    d, boundary_tol = _check_samples(samples)
-    pdf = _check_pdf(pdf)
-    significance = _check_open_unit(significance, "significance")
+    d = check_samples(samples)
+    boundary_tol = _BOUNDARY_ULPS * float(np.finfo(d.dtype).eps)
+    pdf = check_pdf(pdf)
+    significance = check_open_unit(significance, "significance")
     test_count = check_count(test_count, "test_count")
-    min_expected = _check_positive_real(min_expected, "min_expected")
+    min_expected = check_positive_real(min_expected, "min_expected")
     quadrature_order = check_count(quadrature_order, "quadrature_order")
     n = d.shape[0]
-    shape = _default_bins(domain, n) if bins is None else _check_bins(bins)
+    shape = _default_bins(domain, n) if bins is None else check_bins(bins)
     threshold = _sidak(significance, test_count)
 
-    prob = _bin_probabilities(pdf, domain, shape, quadrature_order)
+    prob = bin_probabilities(pdf, domain, shape, quadrature_order=quadrature_order)
     integral = math.fsum(prob.ravel().tolist())
     expected = n * prob
     observed, problems = _histogram(d, domain, shape, boundary_tol)
@@ -342,103 +334,7 @@ def chi2_test(
     )
 
 
-def bin_probabilities(pdf, domain="sphere", bins=(32, 16), *, quadrature_order=12):
-    """Integrals of a density over the equal-area bins of a domain.
-
-    Parameters
-    ----------
-    pdf : callable
-        Density with respect to solid angle, as for :func:`chi2_test`.
-    domain : {'sphere', 'hemisphere', 'triangle'}, optional
-        Default is 'sphere'.
-    bins : tuple of two int, optional
-        ``(n_phi, n_cos)``.  Default is (32, 16).
-    quadrature_order : int, optional
-        Gauss-Legendre points per axis (and per piece, see Notes).  Default 12.
-
-    Returns
-    -------
-    ndarray, shape bins
-        ``P[i, j]`` is the integral of `pdf` over the bin
-        ``phi_edges[i:i+2] x cos_edges[j:j+2]`` of :func:`equal_area_bins`.
-
-    Notes
-    -----
-    With d(omega) = d(phi) d(cos theta), each bin's integral is computed by a
-    tensor Gauss-Legendre rule in phi and in a variable u that makes the
-    integrand smooth at the nearer pole: on bins whose centre has
-    cos theta >= 0, ``cos theta = 1 - u**2`` (so ``d cos theta = 2 u du`` and
-    ``sin theta = u sqrt(2 - u**2)``), on the others ``cos theta = -1 + u**2``.
-    A density with a ``1/sin theta`` singularity at a pole thus becomes
-    bounded and smooth in u, and is integrated to near machine precision.
-
-    For ``domain='triangle'`` the pdf is taken to vanish outside T0, whose
-    lower boundary cos theta_max(phi) = cos phi / sqrt(1 + cos^2 phi) cuts
-    through the bins.  The inner (u) rule is therefore applied, at each
-    phi node, on ``cos theta in [max(c0, cos theta_max(phi)), c1]`` only, and
-    the phi interval of each bin is split where cos theta_max(phi) crosses
-    c0 and c1 (there ``phi = atan2(sqrt(1 - 2 c**2), c)``), so that on each
-    of the up to three pieces the inner integral is a smooth function of
-    phi.  No discontinuity is then integrated over, and the per-bin
-    integrals of the uniform density, or of any density smooth on T0 (also
-    with a 1/sin theta pole), are accurate to about 1e-12 relative with the
-    default order; on 64 x 64 bins the worst bin, a sliver of T0 with 5e-8
-    of its area, is within 6e-9 relative, and the total is 1 within 1e-15.
-
-    The rule is adaptive: each bin's value is compared with the sum of the
-    same rule on its four quarters, and bins where they differ by more than
-    1e-9 are quartered again (at most 12 times).  Densities with a kink or
-    an integrable point singularity inside or on the corner of a bin, such
-    as the paper maps' sphere densities at the axes, are thereby integrated
-    to about 1e-7 in total.
-
-    Examples
-    --------
-    >>> from symsphere.stats import bin_probabilities, uniform_pdf
-    >>> p = bin_probabilities(uniform_pdf("triangle"), "triangle", (8, 8))
-    >>> p.shape, round(float(p.sum()), 12)
-    ((8, 8), 1.0)
-    """
-    pdf = _check_pdf(pdf)
-    domain = check_choice(domain, "domain", _DOMAINS)
-    shape = _check_bins(bins)
-    quadrature_order = check_count(quadrature_order, "quadrature_order")
-    return _bin_probabilities(pdf, domain, shape, quadrature_order)
-
-
-def equal_area_bins(domain="sphere", bins=(32, 16)):
-    """Edges of the regular (phi, cos theta) grid of a domain's rectangle.
-
-    Parameters
-    ----------
-    domain : {'sphere', 'hemisphere', 'triangle'}, optional
-        Default is 'sphere'.
-    bins : tuple of two int, optional
-        ``(n_phi, n_cos)``.  Default is (32, 16).
-
-    Returns
-    -------
-    phi_edges : ndarray, shape (n_phi + 1,)
-    cos_edges : ndarray, shape (n_cos + 1,)
-        Every bin has solid angle ``dphi * dcos``; for the triangle only the
-        part of a bin inside T0 belongs to the domain.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from symsphere.stats import equal_area_bins
-    >>> phi, cos = equal_area_bins("hemisphere", (4, 2))
-    >>> phi / np.pi
-    array([-1. , -0.5,  0. ,  0.5,  1. ])
-    >>> cos
-    array([0. , 0.5, 1. ])
-    """
-    domain = check_choice(domain, "domain", _DOMAINS)
-    shape = _check_bins(bins)
-    return _edges(domain, shape)
-
-
-def uniform_pdf(domain="sphere"):
+def uniform_pdf(domain: ChiDomain = "sphere") -> Callable[[npt.ArrayLike], Float64Array]:
     """The uniform density on a domain, as a callable for :func:`chi2_test`.
 
     Parameters
@@ -470,7 +366,7 @@ def uniform_pdf(domain="sphere"):
     if domain == "sphere":
         value = 1.0 / (4.0 * math.pi)
 
-        def uniform_sphere_pdf(d):
+        def uniform_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
             d = check_directions(d, "d")
             return np.full(d.shape[:-1], value)
 
@@ -478,7 +374,7 @@ def uniform_pdf(domain="sphere"):
     if domain == "hemisphere":
         value = 1.0 / (2.0 * math.pi)
 
-        def uniform_hemisphere_pdf(d):
+        def uniform_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
             d = check_directions(d, "d")
             return np.where(d[..., 2] >= 0, value, 0.0)
 
@@ -486,7 +382,7 @@ def uniform_pdf(domain="sphere"):
 
     value = 12.0 / math.pi
 
-    def uniform_triangle_pdf(d):
+    def uniform_triangle_pdf(d: npt.ArrayLike) -> Float64Array:
         d = check_directions(d, "d")
         x, y, z = d[..., 0], d[..., 1], d[..., 2]
         inside = (z - x >= -_EDGE_TOL) & (x - y >= -_EDGE_TOL) & (y >= -_EDGE_TOL)
@@ -495,12 +391,7 @@ def uniform_pdf(domain="sphere"):
     return uniform_triangle_pdf
 
 
-# ---------------------------------------------------------------------------
-# Private helpers
-# ---------------------------------------------------------------------------
-
-
-def one_per_orbit(directions, orbit_size, rng=None):
+def one_per_orbit(directions: npt.ArrayLike, orbit_size: Literal[48, 24], rng: RNGLike = None) -> FloatArray:
     """One randomly chosen row of each orbit: independent directions.
 
     The 48 (hemisphere: 24) rows of an orbit of :func:`symsphere.sample_sphere`
@@ -542,7 +433,12 @@ def one_per_orbit(directions, orbit_size, rng=None):
     return orbits[np.arange(len(orbits)), members]
 
 
-def _to_phi_cos(d):
+# ---------------------------------------------------------------------------
+# Private helpers
+# ---------------------------------------------------------------------------
+
+
+def _to_phi_cos(d: Float64Array) -> tuple[Float64Array, Float64Array]:
     """(phi, cos theta) of unit vectors, phi in [-pi, pi) and cos theta in [-1, 1]."""
     phi = np.arctan2(d[..., 1], d[..., 0])
     phi = np.where(phi >= np.pi, -np.pi, phi)
@@ -550,32 +446,12 @@ def _to_phi_cos(d):
     return phi, cos
 
 
-def _cos_theta_max(phi):
-    """Lower boundary of T0 in cos theta: cos phi / sqrt(1 + cos^2 phi)."""
-    c = np.cos(phi)
-    return c / np.sqrt(1.0 + c * c)
-
-
-def _phi_crossing(c):
-    """The phi at which cos theta_max(phi) = c (decreasing in c).
-
-    Valid for c in [1/sqrt 3, 1]: 0 for c >= 1/sqrt 2, pi/4 at c = 1/sqrt 3.
-    Smaller c give phi > pi/4, which callers clip.
-    """
-    return np.arctan2(np.sqrt(np.maximum(1.0 - 2.0 * c * c, 0.0)), c)
-
-
-def _edges(domain, shape):
-    p0, p1, c0, c1 = _RECTANGLES[domain]
-    return np.linspace(p0, p1, shape[0] + 1), np.linspace(c0, c1, shape[1] + 1)
-
-
-def _interval(domain, shape, axis, k):
-    e = _edges(domain, shape)[axis]
+def _interval(domain: ChiDomain, shape: tuple[int, int], axis: int, k: int) -> str:
+    e = equal_area_bins(domain, shape)[axis]
     return f"[{e[k]:.6g}, {e[k + 1]:.6g}]"
 
 
-def _default_bins(domain, n):
+def _default_bins(domain: ChiDomain, n: int) -> tuple[int, int]:
     per_phi_bin = 2 if domain != "triangle" else 1
     r = int(np.clip(math.isqrt(n // (per_phi_bin * _TARGET_PER_BIN)), _MIN_RES, _MAX_RES))
     if domain != "triangle":
@@ -585,144 +461,13 @@ def _default_bins(domain, n):
     return (per_phi_bin * r, r)
 
 
-def _sidak(significance, test_count):
+def _sidak(significance: float, test_count: int) -> float:
     return float(-math.expm1(math.log1p(-significance) / test_count))
 
 
-def _bin_probabilities(pdf, domain, shape, order):
-    """Adaptive quadrature of `pdf` over all bins (see bin_probabilities).
-
-    Each rectangle's rule is checked against the sum of the same rule on its
-    four quarters; rectangles where the two differ by more than
-    ``_REFINE_TOL`` are split and checked again, up to ``_REFINE_LEVELS``
-    times.  Smooth bins stop at once; bins with a kink or an integrable
-    singularity inside (the paper maps' 1/r points on the sphere sit at bin
-    corners, with kinks along the symmetry planes through them) are refined
-    where needed.
-    """
-    phi_edges, cos_edges = _edges(domain, shape)
-    pa, ca = np.meshgrid(phi_edges[:-1], cos_edges[:-1], indexing="ij")
-    pb, cb = np.meshgrid(phi_edges[1:], cos_edges[1:], indexing="ij")
-    rects = np.stack([a.ravel() for a in (pa, pb, ca, cb)], axis=1)  # (B, 4)
-    owner = np.arange(len(rects))
-    values = _rectangle_integrals(pdf, domain, rects, order)
-    prob = np.zeros(len(rects))
-    for level in range(_REFINE_LEVELS + 1):
-        pm, cm = 0.5 * (rects[:, 0] + rects[:, 1]), 0.5 * (rects[:, 2] + rects[:, 3])
-        quarters = np.stack(
-            [
-                np.stack([rects[:, 0], pm, rects[:, 2], cm], axis=1),
-                np.stack([pm, rects[:, 1], rects[:, 2], cm], axis=1),
-                np.stack([rects[:, 0], pm, cm, rects[:, 3]], axis=1),
-                np.stack([pm, rects[:, 1], cm, rects[:, 3]], axis=1),
-            ],
-            axis=1,
-        )  # (R, 4, 4)
-        quarter_values = _rectangle_integrals(pdf, domain, quarters.reshape(-1, 4), order).reshape(-1, 4)
-        refined = quarter_values.sum(axis=1)
-        done = np.abs(refined - values) <= _REFINE_TOL
-        if level == _REFINE_LEVELS:
-            done[:] = True
-        np.add.at(prob, owner[done], refined[done])
-        todo = ~done
-        rects = quarters[todo].reshape(-1, 4)
-        values = quarter_values[todo].ravel()
-        owner = np.repeat(owner[todo], 4)
-        if not len(rects):
-            break
-    return prob.reshape(shape)
-
-
-def _rectangle_integrals(pdf, domain, rects, order):
-    """Tensor Gauss-Legendre integrals of `pdf` over rectangles (phi0, phi1, cos0, cos1)."""
-    x, w = np.polynomial.legendre.leggauss(order)
-    pa, pb, ca, cb = rects.T  # (B,)
-
-    if domain == "triangle":
-        # Split phi where the boundary crosses cb and ca (crossing(cb) <= crossing(ca)).
-        b1 = np.clip(_phi_crossing(cb), pa, pb)
-        b2 = np.clip(_phi_crossing(ca), b1, pb)
-        breaks = np.stack([pa, b1, b2, pb], axis=1)
-    else:
-        breaks = np.stack([pa, pb], axis=1)
-    lo, hi = breaks[:, :-1], breaks[:, 1:]  # (B, P)
-    half = 0.5 * (hi - lo)
-    phi = (0.5 * (hi + lo))[..., None] + half[..., None] * x  # (B, P, q)
-    w_phi = half[..., None] * w
-
-    c_lo = np.broadcast_to(ca[:, None, None], phi.shape)
-    c_hi = np.broadcast_to(cb[:, None, None], phi.shape)
-    if domain == "triangle":
-        c_lo = np.minimum(np.maximum(c_lo, _cos_theta_max(phi)), c_hi)
-
-    north = ((ca + cb) >= 0)[:, None, None]
-    u_lo = np.where(north, np.sqrt(1.0 - c_hi), np.sqrt(1.0 + c_lo))
-    u_hi = np.where(north, np.sqrt(1.0 - c_lo), np.sqrt(1.0 + c_hi))
-    u_half = 0.5 * (u_hi - u_lo)
-    u = (0.5 * (u_hi + u_lo))[..., None] + u_half[..., None] * x  # (B, P, q, q)
-    weight = (w_phi * u_half)[..., None] * w * (2.0 * u)
-
-    usq = u * u
-    cos = np.where(north[..., None], 1.0 - usq, usq - 1.0)
-    sin = u * np.sqrt(np.maximum(2.0 - usq, 0.0))
-    phi4 = phi[..., None]
-    nodes = np.stack(
-        np.broadcast_arrays(sin * np.cos(phi4), sin * np.sin(phi4), cos), axis=-1
-    ).reshape(-1, 3)
-
-    values = _evaluate_pdf(pdf, nodes)
-    return (values.reshape(weight.shape) * weight).sum(axis=(1, 2, 3))
-
-
-def _endpoint_graded_rule(order):
-    """Gauss-Legendre on [-1, 1] after Sidi's sin^2 transformation.
-
-    t -> t - sin(2 pi t) / (2 pi) on [0, 1] has a derivative 1 - cos(2 pi t)
-    that vanishes quadratically at both ends, so nodes crowd towards the bin
-    edges.  A density with an integrable singularity on a bin edge or corner
-    (1/r at an axis, as the paper maps have on the sphere) becomes bounded and
-    is integrated accurately; smooth densities still converge spectrally.
-    """
-    x, w = np.polynomial.legendre.leggauss(order)
-    t = 0.5 * (x + 1.0)
-    graded = t - np.sin(2.0 * np.pi * t) / (2.0 * np.pi)
-    return 2.0 * graded - 1.0, w * (1.0 - np.cos(2.0 * np.pi * t))
-
-
-def _evaluate_pdf(pdf, nodes):
-    m = nodes.shape[0]
-    out = pdf(nodes)
-    try:
-        values = np.asarray(out, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(
-            f"'pdf' must return an array of real numbers, got {type(out).__name__}"
-        ) from exc
-    if values.ndim == 0:
-        values = np.full(m, float(values))
-    if values.shape != (m,):
-        raise ValueError(
-            f"'pdf' must return shape (m,) = ({m},) for directions of shape ({m}, 3), "
-            f"got {values.shape}"
-        )
-    bad = ~np.isfinite(values)
-    if np.any(bad):
-        k = int(np.argmax(bad))
-        raise ValueError(
-            f"'pdf' returned non-finite values at {int(bad.sum())} of {m} quadrature "
-            f"nodes, e.g. {values[k]} at direction {nodes[k].tolist()}"
-        )
-    neg = values < 0
-    if np.any(neg):
-        k = int(np.argmax(neg))
-        raise ValueError(
-            f"'pdf' returned negative densities at {int(neg.sum())} of {m} quadrature "
-            f"nodes, e.g. {values[k]} at direction {nodes[k].tolist()}"
-        )
-    return values
-
-
-def _histogram(d, domain, shape, boundary_tol):
+def _histogram(
+    d: FloatArray, domain: ChiDomain, shape: tuple[int, int], boundary_tol: float
+) -> tuple[IntArray, list[str]]:
     """Counts per bin and a list of problems (samples that are not in the domain)."""
     problems = []
     d64 = d.astype(np.float64)
@@ -755,7 +500,8 @@ def _histogram(d, domain, shape, boundary_tol):
         )
 
     phi, cos = _to_phi_cos(v[~(bad_norm | outside)])
-    p0, p1, c0, c1 = _RECTANGLES[domain]
+    phi_edges, cos_edges = equal_area_bins(domain, (1, 1))  # the domain's rectangle
+    p0, p1, c0, c1 = float(phi_edges[0]), float(phi_edges[1]), float(cos_edges[0]), float(cos_edges[1])
     i = np.floor((phi - p0) * (shape[0] / (p1 - p0)))
     j = np.floor((cos - c0) * (shape[1] / (c1 - c0)))
     i = np.clip(i, 0, shape[0] - 1).astype(np.int64)
@@ -764,7 +510,7 @@ def _histogram(d, domain, shape, boundary_tol):
     return counts.astype(np.int64).reshape(shape), problems
 
 
-def _pearson(observed, expected, min_expected):
+def _pearson(observed: IntArray, expected: Float64Array, min_expected: float) -> tuple[float, int, str]:
     """Pearson's statistic with pooling of small cells; returns (stat, dof, note)."""
     o = observed.ravel().astype(np.float64)
     e = expected.ravel()
@@ -791,60 +537,3 @@ def _pearson(observed, expected, min_expected):
         cells += 1
     note = f" ({n_pooled} bins pooled into one cell)" if n_pooled > 1 else ""
     return stat, cells - 1, note
-
-
-def _check_samples(samples):
-    d = check_directions(samples, "samples")
-    if d.dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
-        raise TypeError(f"'samples' must be float32 or float64, got {d.dtype}")
-    if d.ndim != 2 or d.shape[0] < 1:
-        raise ValueError(f"'samples' must have shape (n, 3) with n >= 1, got {d.shape}")
-    return d, _BOUNDARY_ULPS * float(np.finfo(d.dtype).eps)
-
-
-def _check_pdf(pdf):
-    if not callable(pdf):
-        raise TypeError(
-            f"'pdf' must be a callable taking directions of shape (m, 3), "
-            f"got {type(pdf).__name__}"
-        )
-    return pdf
-
-
-def _check_bins(bins):
-    msg = f"'bins' must be a pair (n_phi, n_cos) of positive integers, got {bins!r}"
-    try:
-        pair = tuple(bins)
-    except TypeError as exc:
-        raise TypeError(msg) from exc
-    if len(pair) != 2:
-        raise ValueError(msg)
-    for b in pair:
-        if isinstance(b, bool) or not isinstance(b, numbers.Integral):
-            raise TypeError(msg)
-        if b <= 0:
-            raise ValueError(msg)
-    return (int(pair[0]), int(pair[1]))
-
-
-def _check_real(value, name):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"'{name}' must be a real number, got {type(value).__name__}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"'{name}' must be finite, got {value}")
-    return value
-
-
-def _check_open_unit(value, name):
-    value = _check_real(value, name)
-    if not 0.0 < value < 1.0:
-        raise ValueError(f"'{name}' must lie in the open interval (0, 1), got {value}")
-    return value
-
-
-def _check_positive_real(value, name):
-    value = _check_real(value, name)
-    if value <= 0:
-        raise ValueError(f"'{name}' must be positive, got {value}")
-    return value

@@ -16,12 +16,14 @@ the column (P, P', P'', P''').  Row-vector convention, as printed in the paper:
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
+from ._typing import Domain, FloatArray, IntArray
 from ._validation import check_choice, check_directions
 
 __all__ = ["SPHERE_MAPS", "HEMISPHERE_MAPS", "DOMAINS", "orbit", "fold", "orbit_size"]
 
-DOMAINS = ("sphere", "hemisphere")
+DOMAINS: tuple[Domain, ...] = ("sphere", "hemisphere")
 
 # Source coordinate of each output position, per table row (Table 1):
 # P0 (x, y, z), P1 (y, x, z), P2 (z, y, x), P3 (z, x, y), P4 (x, z, y), P5 (y, z, x).
@@ -56,12 +58,12 @@ SOURCES.setflags(write=False)
 SIGNS.setflags(write=False)
 
 
-def orbit_size(domain: str) -> int:
+def orbit_size(domain: Domain) -> int:
     """Number of triangles of *domain*: 48 for the sphere, 24 for the hemisphere."""
     return 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
 
 
-def orbit(p, domain="sphere"):
+def orbit(p: npt.ArrayLike, domain: Domain = "sphere") -> FloatArray:
     """Images of points under the 48 (hemisphere: 24) maps, in table order.
 
     Parameters
@@ -88,7 +90,7 @@ def orbit(p, domain="sphere"):
     return _orbit(p, count)
 
 
-def fold(d, domain="sphere"):
+def fold(d: npt.ArrayLike, domain: Domain = "sphere") -> tuple[IntArray, FloatArray]:
     """Sub-domain index and preimage in T0 of directions.
 
     Parameters
@@ -137,8 +139,9 @@ def fold(d, domain="sphere"):
 # --- private helpers: trust their inputs -----------------------------------
 
 
-def _orbit(p: np.ndarray, count: int) -> np.ndarray:
-    return p[..., SOURCES[:count]] * SIGNS[:count].astype(p.dtype)
+def _orbit(p: FloatArray, count: int) -> FloatArray:
+    images: FloatArray = p[..., SOURCES[:count]] * SIGNS[:count].astype(p.dtype)
+    return images
 
 
 def _fold_key(d: np.ndarray) -> np.ndarray:
@@ -174,5 +177,5 @@ def _build_fold_table() -> np.ndarray:
 _FOLD_TABLE = _build_fold_table()
 
 
-def _fold(d: np.ndarray):
+def _fold(d: FloatArray) -> tuple[IntArray, FloatArray]:
     return _FOLD_TABLE[_fold_key(d)], _base(d)

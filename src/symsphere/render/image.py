@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import atomic_path
+from ..io import atomic_path
 
 __all__ = ["HDR_SUFFIXES", "linear_to_srgb", "tonemap", "save_png", "save_pfm", "load_pfm", "save_npy", "save_image"]
 

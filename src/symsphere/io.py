@@ -55,7 +55,7 @@ def atomic_path(path):
     Examples
     --------
     >>> import os, tempfile
-    >>> from symsphere._io import atomic_path
+    >>> from symsphere.io import atomic_path
     >>> target = os.path.join(tempfile.mkdtemp(), "out.txt")
     >>> with atomic_path(target) as tmp:
     ...     _ = tmp.write_text("done")
@@ -167,7 +167,7 @@ def save_directions(path, directions, *, name="path"):
     --------
     >>> import os, tempfile
     >>> import numpy as np
-    >>> from symsphere._io import save_directions
+    >>> from symsphere.io import save_directions
     >>> target = os.path.join(tempfile.mkdtemp(), "d.csv")
     >>> save_directions(target, np.array([[0.0, 0.6, 0.8]]))
     >>> print(open(target).read(), end="")

@@ -1,4 +1,7 @@
-"""The ``symsphere`` command, its atomic output, and the demo."""
+"""The ``symsphere`` command (symsphere.apps.cli) and its atomic output (symsphere.io).
+
+The demo verb is tested in test_demo.py, the study verb in test_study.py.
+"""
 
 import os
 import subprocess
@@ -9,8 +12,8 @@ import pytest
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
-from symsphere._io import atomic_directory, atomic_path, save_directions, stream_directions
-from symsphere.cli import main
+from symsphere.apps.cli import main
+from symsphere.io import atomic_directory, atomic_path, save_directions, stream_directions
 
 
 def _read_csv(path, dtype=np.float64):
@@ -219,62 +222,6 @@ def test_atomic_directory_cleans_up_after_failure(tmp_path):
             raise KeyboardInterrupt
     assert (target / "report.md").read_text() == "old"
     assert _leftovers(tmp_path) == ["out"]
-
-
-# --- demo -----------------------------------------------------------------------
-
-DEMO_N = 48 * 2**11
-
-
-@pytest.fixture(scope="module")
-def demo_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo") / "symsphere-demo"
-    assert main(["demo", "--out", str(out), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
-    return out
-
-
-def test_demo_writes_report_and_figure(demo_dir):
-    assert sorted(p.name for p in demo_dir.iterdir()) == ["figure.png", "render.png", "report.md"]
-    assert (demo_dir / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert _leftovers(demo_dir.parent) == ["symsphere-demo"]  # no temporary directories
-
-
-def test_demo_report_states_the_measured_verdicts(demo_dir):
-    report = (demo_dir / "report.md").read_text(encoding="utf-8")
-    assert "**equal_area passes** every test against the uniform density" in report
-    assert "**paper1 fails** against the uniform density" in report
-    assert "**paper2 fails** against the uniform density" in report
-    rows = [line for line in report.splitlines() if line.startswith("| ") and "domain" not in line]
-    assert len(rows) == 15  # 3 domains x 3 maps vs uniform, + 3 domains x 2 paper maps vs their own pdf
-    equal_area = [row for row in rows if "| equal_area |" in row]
-    assert len(equal_area) == 3 and all("| pass |" in row for row in equal_area)
-
-
-def test_demo_replaces_its_own_output(demo_dir, capsys):
-    before = (demo_dir / "report.md").read_text(encoding="utf-8")
-    assert main(["demo", "--out", str(demo_dir), "--n", "4800", "--seed", "1", "--no-progress"]) == 0
-    assert str(demo_dir / "report.md") in capsys.readouterr().out
-    assert (demo_dir / "report.md").read_text(encoding="utf-8") != before
-    assert _leftovers(demo_dir.parent) == ["symsphere-demo"]
-    # Same seed, same n: the same report.
-    assert main(["demo", "--out", str(demo_dir), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
-    assert (demo_dir / "report.md").read_text(encoding="utf-8") == before
-
-
-def test_demo_refuses_a_directory_with_other_files(tmp_path, capsys):
-    (tmp_path / "notes.txt").write_text("keep me")
-    assert main(["demo", "--out", str(tmp_path), "--n", "4800", "--no-progress"]) == 1
-    assert "notes.txt" in capsys.readouterr().err
-    assert _leftovers(tmp_path) == ["notes.txt"]
-
-
-@pytest.mark.parametrize("arguments, named", [(["--n", "100"], "'n'"), (["--seed", "-2"], "'seed'")])
-def test_demo_rejects_invalid_values(tmp_path, capsys, arguments, named):
-    out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out), *arguments, "--no-progress"]) == 2
-    err = capsys.readouterr().err
-    assert "symsphere demo: error:" in err and named in err
-    assert _leftovers(tmp_path) == []
 
 
 # --- help and version -----------------------------------------------------------

@@ -1,0 +1,409 @@
+"""The ``symsphere`` command: sample directions to a file, or run the demo.
+
+Examples
+--------
+::
+
+    symsphere sample --n 4800 --seed 1 --out directions.npy
+    symsphere sample --n 4800 --domain hemisphere --normal 0 1 0 --out hemi.csv
+    symsphere demo --out symsphere-demo
+    symsphere render --scene cornell --width 256 --height 192 --spp 96 --sampler symmetric_sobol --out img.png
+    symsphere --version
+
+Exit status: 0 on success, 2 for invalid arguments (the message names the
+argument), 1 when the output cannot be written, 130 on Ctrl-C.  No partial
+output file is ever left behind.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__, integrate, iter_hemisphere, iter_sphere
+from .._validation import check_count, check_seed
+from ..integrands import INTEGRANDS
+from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
+from ..maps import METHODS
+from ..points import BLOCK, POINT_SETS
+from .demo import run_demo
+from .study import add_study_parser
+
+__all__ = ["main", "build_parser"]
+
+_DOMAINS = ("sphere", "hemisphere")
+_DTYPES = ("float64", "float32")
+_DEMO_DEFAULT_N = 48 * 2**14
+
+
+class _UsageError(Exception):
+    """An invalid combination of arguments that argparse cannot express."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``symsphere`` command (one sub-parser per verb)."""
+    parser = argparse.ArgumentParser(
+        prog="symsphere",
+        description="Exactly uniform, 48-fold symmetric sampling of the sphere and hemisphere.",
+    )
+    parser.add_argument("--version", action="version", version=f"symsphere {__version__}")
+    verbs = parser.add_subparsers(dest="verb", metavar="{sample,integrate,study,render,demo}")
+
+    sample = verbs.add_parser(
+        "sample",
+        help="write N directions to a .npy or .csv file",
+        description=(
+            "Write N unit directions, one per row (x, y, z), drawn by the 48-fold (hemisphere: "
+            "24-fold) symmetric scheme.  Rows 48i..48i+47 (24i..24i+23) are the orbit of one "
+            "point of the fundamental triangle.  The file appears only when complete."
+        ),
+    )
+    sample.add_argument("--n", type=int, required=True, help="number of directions: a multiple of 48 (hemisphere: 24)")
+    sample.add_argument("--domain", choices=_DOMAINS, default="sphere", help="default: %(default)s")
+    sample.add_argument(
+        "--method",
+        choices=METHODS,
+        default="equal_area",
+        help="map from the unit square onto the triangle; only equal_area is uniform (default: %(default)s)",
+    )
+    sample.add_argument(
+        "--points",
+        choices=POINT_SETS,
+        default="random",
+        help="base points of the unit square (stratified needs N/48 to be a square; default: %(default)s)",
+    )
+    sample.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    sample.add_argument(
+        "--out",
+        required=True,
+        metavar="FILE",
+        help=f"output file; its suffix chooses the format: {', '.join(DIRECTION_SUFFIXES)}",
+    )
+    sample.add_argument(
+        "--normal",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        default=None,
+        help="pole of the hemisphere (only with --domain hemisphere; default: 0 0 1)",
+    )
+    sample.add_argument("--dtype", choices=_DTYPES, default="float64", help="default: %(default)s")
+    sample.add_argument(
+        "--chunk",
+        type=int,
+        default=None,
+        help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
+        "memory stays at one chunk for any N (default: 48 * 2**16)",
+    )
+    _add_cluster_options(sample)
+    sample.set_defaults(handler=_run_sample)
+
+    integrate = verbs.add_parser(
+        "integrate",
+        help="integrate a closed-form test integrand, with an error bar",
+        description=(
+            "Integrate one of the closed-form test integrands of symsphere.integrands over its domain "
+            "(sphere or hemisphere) with the symmetric scheme, and print the estimate, its standard "
+            "error and confidence interval, and the exact value.  With --workers or --scheduler the "
+            "work runs on a Dask cluster and gives the identical result."
+        ),
+    )
+    integrate.add_argument("--integrand", required=True, help="a name from symsphere.integrands.INTEGRANDS")
+    integrate.add_argument("--n", type=int, required=True, help="evaluations: a multiple of 48 (hemisphere: 24)")
+    integrate.add_argument("--method", choices=METHODS, default="equal_area", help="default: %(default)s")
+    integrate.add_argument("--points", choices=POINT_SETS, default="random", help="default: %(default)s")
+    integrate.add_argument("--replicates", type=int, default=None, help="for stratified and QMC points (default 8)")
+    integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    _add_cluster_options(integrate)
+    integrate.set_defaults(handler=_run_integrate)
+
+    demo = verbs.add_parser(
+        "demo",
+        help="chi-square tests of the three maps, written up as report.md and figure.png",
+        description=(
+            "Sample the sphere and the hemisphere with every map, run chi-square tests against "
+            "the uniform density (and the paper's maps against their own density), and write "
+            "report.md and figure.png into DIR.  An existing DIR is replaced only if it holds "
+            "nothing but an earlier demo's output."
+        ),
+    )
+    demo.add_argument("--out", default="symsphere-demo", metavar="DIR", help="output directory (default: %(default)s)")
+    demo.add_argument(
+        "--n", type=int, default=_DEMO_DEFAULT_N, help="directions per sample, a multiple of 48 (default: %(default)s)"
+    )
+    demo.add_argument("--seed", type=int, default=0, help="default: %(default)s")
+    demo.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    demo.set_defaults(handler=_run_demo)
+
+    render = verbs.add_parser(
+        "render",
+        help="path-trace a scene with a chosen direction sampler; write PNG, PFM and NPY",
+        description=(
+            "Path-trace a built-in scene (cornell: smallpt's Cornell box; furnace; translucent) or a "
+            ".toml/.json scene file, sampling directions at diffuse vertices with SAMPLER, on all cores.  "
+            "Writes the tone-mapped sRGB image to --out (.png) and the linear HDR mean radiance next to "
+            "it (.pfm and .npy, same stem).  Every file appears only when complete."
+        ),
+    )
+    render.add_argument("--scene", default="cornell", help="cornell, furnace, translucent or a .toml/.json file "
+                        "(default: %(default)s)")  # fmt: skip
+    render.add_argument("--width", type=int, default=256, help="default: %(default)s")
+    render.add_argument("--height", type=int, default=192, help="default: %(default)s")
+    render.add_argument(
+        "--spp", type=int, default=96,
+        help="samples (camera paths) per pixel; symmetric samplers form whole orbits for multiples of 24 "
+        "(48 with translucent materials) (default: %(default)s)",
+    )  # fmt: skip
+    render.add_argument(
+        "--sampler", choices=_render_samplers(), default="symmetric_sobol",
+        help="direction sampling at diffuse vertices: the paper's scheme inside a pixel (symmetric, with "
+        "random or Owen-scrambled Sobol' base points), i.i.d. orbit samplers per map, or the classic uniform "
+        "and cosine references (default: %(default)s)",
+    )  # fmt: skip
+    render.add_argument(
+        "--method", choices=METHODS, default=None,
+        help="map onto the triangle for the symmetric samplers (default: equal_area)",
+    )  # fmt: skip
+    render.add_argument("--filter", choices=("box", "tent"), default="box", help="pixel filter (default: %(default)s)")
+    render.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    render.add_argument("--exposure", type=float, default=1.0, help="PNG only: scale before tone mapping (default: 1)")
+    render.add_argument("--threads", type=int, default=None, help="numba threads (default: all cores)")
+    render.add_argument("--out", default="render.png", metavar="FILE.png", help="default: %(default)s")
+    render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    _add_cluster_options(render)
+    render.set_defaults(handler=_run_render)
+
+    add_study_parser(verbs)
+    return parser
+
+
+def _render_samplers():
+    # Function-level: symsphere.render takes ~0.3 s to import; the renderer module alone gives the tuple
+    # without loading the kernels.
+    from ..render.renderer import SAMPLERS
+
+    return SAMPLERS
+
+
+def _add_cluster_options(verb):
+    cluster = verb.add_mutually_exclusive_group()
+    cluster.add_argument(
+        "--workers", type=int, default=None, metavar="N", help="run on a local Dask cluster of N worker processes"
+    )
+    cluster.add_argument(
+        "--scheduler", default=None, metavar="ADDRESS", help="run on the Dask cluster at ADDRESS (tcp://host:8786)"
+    )
+    verb.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the scheduler (default: %(default)s)"
+    )
+
+
+def _cluster_client(args):
+    """A Dask client for --workers / --scheduler, or None to run in this process."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    from .. import distributed  # function-level: dask is slow to import and optional
+
+    if args.scheduler is not None:
+        return distributed.connect(args.scheduler, timeout=args.timeout)
+    if args.workers < 1:
+        raise _UsageError(f"--workers must be a positive integer, got {args.workers}")
+    return distributed.local_client(args.workers)
+
+
+def _close_client(client):
+    if client is not None:
+        from ..distributed import close_client  # function-level: dask (see _cluster_client)
+
+        close_client(client)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version and usage errors: hand back argparse's status
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    if args.verb is None:
+        parser.print_help(sys.stderr)
+        return 2
+    prog = f"symsphere {args.verb}"
+    try:
+        return args.handler(args)
+    except (_UsageError, ValueError, TypeError) as exc:
+        # The library's validators name the argument; a traceback would add nothing.
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{prog}: error: {_describe_os_error(exc)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+def _run_sample(args) -> int:
+    from tqdm.auto import tqdm  # function-level: ~60 ms, only for the verbs that show progress
+
+    if args.normal is not None and args.domain != "hemisphere":
+        raise _UsageError("--normal is only valid with --domain hemisphere")
+    check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
+    seed = args.seed
+    if seed is None:
+        seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
+    start = time.perf_counter()
+    seed = check_seed(seed, "--seed")
+    options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
+    count = 48 if args.domain == "sphere" else 24
+    chunk = args.chunk if args.chunk is not None else count * 2**16
+    if args.domain == "sphere":
+        iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
+    else:
+        iterate = lambda out: iter_hemisphere(args.n, chunk=chunk, normal=args.normal, out=out, **options)  # noqa: E731
+    iterate(None)  # validate every argument before the output file is created
+    client = _cluster_client(args)
+    try:
+        blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
+        with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
+            try:
+                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=bar.update)
+            except OSError as exc:  # name the user's file, not the temporary next to it
+                raise OSError(exc.errno, exc.strerror, args.out) from exc
+    finally:
+        _close_client(client)
+    elapsed = time.perf_counter() - start
+    print(
+        f"wrote {args.n} directions ({args.domain}, {args.method}, {args.points}, "
+        f"seed {seed}, {args.dtype}) to {args.out} in {elapsed:.3f} s"
+    )
+    return 0
+
+
+def _cluster_blocks(client, args, options, chunk):
+    """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
+    from .. import distributed  # function-level: dask is slow to import and optional
+
+    count = 48 if args.domain == "sphere" else 24
+    chunk = max(count * BLOCK, chunk - chunk % (count * BLOCK))  # cluster chunks are whole blocks
+    if args.domain == "sphere":
+        array = distributed.sample_sphere(args.n, chunks=chunk, **options)
+    else:
+        array = distributed.sample_hemisphere(args.n, chunks=chunk, normal=args.normal, **options)
+    pieces = array.to_delayed().ravel().tolist()
+    in_flight = 2 * max(1, len(client.scheduler_info()["workers"]))
+
+    def blocks(out):
+        futures = [client.compute(piece) for piece in pieces[:in_flight]]
+        for index in range(len(pieces)):
+            block = futures[index].result()
+            futures[index] = None  # release the finished chunk
+            if index + in_flight < len(pieces):
+                futures.append(client.compute(pieces[index + in_flight]))
+            yield block
+
+    return blocks
+
+
+def _run_integrate(args) -> int:
+    if args.integrand not in INTEGRANDS:
+        raise _UsageError(f"--integrand {args.integrand!r} is not known; use one of {sorted(INTEGRANDS)}")
+    integrand = INTEGRANDS[args.integrand]
+    seed = check_seed(args.seed, "--seed") if args.seed is not None else np.random.SeedSequence().entropy
+    kwargs = dict(
+        domain=integrand.domain, n=args.n, method=args.method, points=args.points, replicates=args.replicates, rng=seed
+    )
+    start = time.perf_counter()
+    client = _cluster_client(args)
+    try:
+        if client is None:
+            result = integrate(integrand.f, **kwargs)
+        else:
+            from .. import distributed  # function-level: dask is slow to import and optional
+
+            result = distributed.integrate(integrand.f, client=client, progress=True, **kwargs)
+    finally:
+        _close_client(client)
+    elapsed = time.perf_counter() - start
+    error = result.integral - integrand.exact
+    low, high = result.confidence_interval
+    print(f"{integrand.name} over the {integrand.domain}: {integrand.description}")
+    print(f"  estimate  {result.integral:.12g} ± {result.standard_error:.3g} (standard error, {result.n_units} {result.unit}s)")
+    print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
+    print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
+    print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
+    return 0
+
+
+def _run_demo(args) -> int:
+    start = time.perf_counter()
+    report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
+    print(f"report: {report}  (figure: {report.with_name('figure.png')}; {time.perf_counter() - start:.1f} s)")
+    return 0
+
+
+def _run_render(args) -> int:
+    from ..render import render, write_outputs  # function-level: ~0.3 s, only for this verb
+
+    out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".pfm", ".npy"):
+        raise _UsageError(f"--out must end in .png, .pfm or .npy, got {args.out!r}")
+    if not out.parent.is_dir():
+        raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
+    if args.seed is not None:
+        check_seed(args.seed, "--seed")
+    if not args.exposure > 0:  # checked by save_png too, but only after the render: fail first
+        raise _UsageError(f"--exposure must be positive, got {args.exposure}")
+    scene_file = Path(args.scene)
+    if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
+        raise _UsageError(f"--scene: file {args.scene!r} does not exist")
+    for name in ("width", "height", "spp", "threads"):  # render() checks them too, naming 'spp' not '--spp'
+        if getattr(args, name) is not None:
+            check_count(getattr(args, name), f"--{name}")
+    options = dict(
+        width=args.width,
+        height=args.height,
+        spp=args.spp,
+        sampler=args.sampler,
+        method=args.method,
+        pixel_filter=args.filter,
+        seed=args.seed,
+        progress=not args.no_progress,
+    )
+    client = _cluster_client(args)
+    try:
+        if client is None:
+            result = render(args.scene, threads=args.threads, **options)
+        else:
+            from .. import distributed  # function-level: dask is slow to import and optional
+
+            result = distributed.render(args.scene, client=client, **options)
+    finally:
+        _close_client(client)
+    try:
+        paths = write_outputs(result, out, exposure=args.exposure)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, args.out) from exc
+    method = f" ({result.method})" if result.method else ""
+    print(
+        f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp with {result.sampler}{method}, "
+        f"seed {result.seed}: {result.paths} paths in {result.seconds:.2f} s = "
+        f"{result.paths_per_second / 1e6:.2f} Mpaths/s on {result.threads} threads "
+        f"(+{result.startup_seconds:.2f} s compile/load); wrote {', '.join(str(p) for p in paths)}"
+    )
+    return 0
+
+
+def _describe_os_error(exc: OSError) -> str:
+    if exc.filename is not None and exc.strerror:
+        return f"cannot write {exc.filename!s}: {exc.strerror}"
+    return str(exc)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,159 @@
+"""The study's samplers: the symmetric scheme (one per map and point set) and the peers, behind one interface.
+
+A :class:`Sampler` draws directions, evaluates its density and gives one estimate of an integral; the
+facts the study needs about it (rows per orbit, the multiple n must be, whether it is uniform) are read
+from :class:`symsphere.peers.Peer` fields for a peer and from the map and the domain for the scheme.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import numpy.typing as npt
+
+from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sphere_pdf
+from ...maps import get_map
+from ...peers import PEERS, Peer
+from ...symmetry import orbit_size
+from .config import StudyConfig, domains
+
+__all__ = ["Sampler", "all_samplers", "samplers", "weighted"]
+
+SCHEME_PREFIX = "symsphere_"
+"""Names of the scheme's samplers: ``symsphere_<map>``."""
+
+
+@dataclass(frozen=True)
+class Sampler:
+    """One sampler of the study: the symmetric scheme with a map, or a peer; with its base points.
+
+    Build it with :meth:`scheme` or :meth:`of_peer`.
+
+    Attributes
+    ----------
+    name : str
+        ``'symsphere_<method>'`` for the scheme, else the peer's name.
+    points : str
+        The base point set (:data:`symsphere.POINT_SETS`).
+    domain : {'sphere', 'hemisphere'}
+    method : str or None
+        The scheme's map; None for a peer.
+    peer : symsphere.peers.Peer or None
+        None for the scheme.
+    """
+
+    name: str
+    points: str
+    domain: str
+    method: str | None = None
+    peer: Peer | None = None
+
+    @classmethod
+    def scheme(cls, method: str, points: str, domain: str) -> Sampler:
+        """The symmetric scheme with the map *method* and base *points* on *domain*."""
+        return cls(f"{SCHEME_PREFIX}{method}", points, domain, method=method)
+
+    @classmethod
+    def of_peer(cls, peer: Peer, points: str) -> Sampler:
+        """The peer sampler *peer* with base *points*."""
+        return cls(peer.name, points, peer.domain, peer=peer)
+
+    @property
+    def label(self) -> str:
+        """``name/points``."""
+        return f"{self.name}/{self.points}"
+
+    @property
+    def is_scheme(self) -> bool:
+        """Whether this is the symmetric scheme (not a peer)."""
+        return self.method is not None
+
+    @property
+    def orbit_size(self) -> int | None:
+        """Rows per orbit (1 if the rows are independent; None if they are never independent)."""
+        return orbit_size(self.domain) if self.is_scheme else self.peer.orbit_size
+
+    @property
+    def multiple(self) -> int:
+        """n must be a multiple of this."""
+        return orbit_size(self.domain) if self.is_scheme else self.peer.multiple
+
+    @property
+    def uniform(self) -> bool:
+        """Whether the density is uniform on the domain."""
+        return get_map(self.method).uniform if self.is_scheme else self.peer.uniform
+
+    def n_for(self, k: int) -> int:
+        """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds)."""
+        n = 48 * 2**k
+        if self.is_scheme and self.points == "stratified":
+            count = orbit_size(self.domain)
+            side = max(1, round(math.sqrt(n // count)))
+            return count * side * side
+        return n
+
+    def estimate(self, f: Callable[[np.ndarray], np.ndarray], n: int, rng) -> float:
+        """One estimate of the integral of f from n evaluations.
+
+        The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
+        ``mean(f / pdf)`` over its n directions.
+        """
+        if self.is_scheme:
+            replicates = None if self.points == "random" else 1
+            result = integrate(f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng,
+                               replicates=replicates)
+            return float(result.integral)
+        d = self.peer.sample(n, rng=rng, points=self.points)
+        return float(np.mean(weighted(f(d), self.peer.pdf(d))))
+
+    def sample(self, n: int, rng) -> np.ndarray:
+        """n directions (for the scheme: n/48 or n/24 whole orbits)."""
+        if self.is_scheme:
+            sample = sample_sphere if self.domain == "sphere" else sample_hemisphere
+            return sample(n, method=self.method, points=self.points, rng=rng)
+        return self.peer.sample(n, rng=rng, points=self.points)
+
+    def pdf(self, d: npt.ArrayLike) -> np.ndarray:
+        """The density of the directions *d* with respect to solid angle."""
+        if self.is_scheme:
+            return sphere_pdf(d, self.method) if self.domain == "sphere" else hemisphere_pdf(d, self.method)
+        return self.peer.pdf(d)
+
+
+def weighted(values: npt.ArrayLike, pdf: npt.ArrayLike) -> np.ndarray:
+    """values / pdf, and 0 where the pdf is 0 or infinite.
+
+    Samplers put directions there with probability 0 (the paper maps' density is infinite on the
+    axes, where the weight 1/pdf tends to 0; the cosine density vanishes on the horizon).
+
+    Examples
+    --------
+    >>> from symsphere.apps.study.samplers import weighted
+    >>> weighted([1.0, 1.0, 1.0], [2.0, 0.0, float("inf")]).tolist()
+    [0.5, 0.0, 0.0]
+    """
+    values = np.asarray(values, dtype=np.float64)
+    pdf = np.asarray(pdf, dtype=np.float64)
+    ok = (pdf > 0) & np.isfinite(pdf)
+    out = np.zeros(np.broadcast_shapes(values.shape, pdf.shape))
+    np.divide(values, pdf, out=out, where=ok)
+    return out
+
+
+def samplers(config: StudyConfig, domain: str) -> list[Sampler]:
+    """The samplers of *config* on *domain*: the scheme (every map x point set), then the peers."""
+    scheme = [
+        Sampler.scheme(method, points, domain)
+        for method in config.scheme_methods
+        for points in config.scheme_points
+    ]
+    peers = config.sphere_peers if domain == "sphere" else config.hemisphere_peers
+    return scheme + [Sampler.of_peer(PEERS[peer], points) for peer, points in peers]
+
+
+def all_samplers(config: StudyConfig) -> list[Sampler]:
+    """The samplers of every domain of *config*."""
+    return [s for domain in domains(config) for s in samplers(config, domain)]
