@@ -34,12 +34,17 @@ API_INDEX = ROOT / "docs" / "api" / "index.rst"
 
 # Public modules without a page of their own, and why.
 NOT_DOCUMENTED = {
-    "symsphere.cli": "the command line; documented by `symsphere --help` and the narrative pages",
-    "symsphere.demo": "the `symsphere demo` job behind the command line",
-    "symsphere.study": "the `symsphere study` job; docs/study.md documents it",
+    "symsphere.apps": "a package of applications without names of its own; its modules have pages",
+    "symsphere.cli": "the old import path of symsphere.apps.cli, kept for users' code",
+    "symsphere.demo": "the old import path of symsphere.apps.demo, kept for users' code",
+    "symsphere.study": "the old import path of symsphere.apps.study (and quality), kept for users' code",
     "symsphere.render.image": "its public names are documented on the symsphere.render page",
     "symsphere.render.renderer": "its public names are documented on the symsphere.render page",
     "symsphere.render.scene": "its public names are documented on the symsphere.render page",
+    **{
+        f"symsphere.apps.study.{name}": "the study's internals; symsphere.apps.study documents its interface"
+        for name in ("command", "config", "figures", "report", "results", "run", "samplers")
+    },
 }
 
 # Documented modules with public names that lack an example (or constants without a doc comment).
@@ -53,8 +58,12 @@ INCOMPLETE = {
     "symsphere.peers": "no Examples: Peer",
     "symsphere.integrands": "no Examples: Integrand",
     "symsphere.stats": "no Examples: Chi2Result",
+    "symsphere.quality": "no Examples: SlopeFit",
     "symsphere.distributed": "no Examples: sample_hemisphere, integrate, render, connect, local_client, close_client",
+    "symsphere.io": "no Examples: atomic_directory, stream_directions; DIRECTION_SUFFIXES has no doc comment",
     "symsphere.render": "no Examples for 26 of 31 names; FILTERS, MATERIAL_KINDS, SYMMETRIC_SAMPLERS have no doc comment",
+    "symsphere.apps.cli": "no Examples: main, build_parser",
+    "symsphere.apps.study": "no Examples: StudyConfig, run_study_command",
 }
 
 
