@@ -35,7 +35,7 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
 templates_path = ["_templates"]
-nitpicky = False
+nitpicky = False  # docstrings name numpy and scipy types that no inventory resolves offline
 
 # --- autodoc / autosummary ------------------------------------------------------------------------
 autosummary_generate = True
