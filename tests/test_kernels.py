@@ -158,21 +158,3 @@ def test_iter_validates_eagerly():
         iter_sphere(480, chunk=50)
     with pytest.raises(ValueError, match="'n'=10 is not a multiple of 24"):
         iter_hemisphere(10)
-
-
-@pytest.mark.parametrize("points", ["sobol", "halton"])
-def test_base_points_of_an_engine_taken_twice(points):
-    source = BasePoints(points, 4, total=4096)
-    first = source.take(0, 4096)
-    assert np.array_equal(source.take(0, 4096), first)  # from the start again (scipy: fast_forward(0) raises)
-    assert np.array_equal(source.take(100, 200), first[100:200])
-
-
-def test_base_points_any_stretch():
-    source = BasePoints("random", 4, total=3 * BLOCK)
-    whole = source.take(0, 3 * BLOCK)
-    for start, stop in [(0, 1), (BLOCK - 1, BLOCK + 1), (5, 2 * BLOCK + 7), (3 * BLOCK, 3 * BLOCK)]:
-        assert np.array_equal(BasePoints("random", 4, total=3 * BLOCK).take(start, stop), whole[start:stop])
-        assert np.array_equal(source.take(start, stop), whole[start:stop])
-    with pytest.raises(ValueError, match="'start'"):
-        source.take(2, 1)

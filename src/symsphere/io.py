@@ -13,11 +13,22 @@ import contextlib
 import os
 import secrets
 import shutil
+from collections.abc import Callable, Collection, Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
-__all__ = ["DIRECTION_SUFFIXES", "atomic_path", "atomic_directory", "save_directions", "stream_directions"]
+from ._typing import FloatArray
+
+__all__ = [
+    "DIRECTION_SUFFIXES",
+    "atomic_path",
+    "atomic_directory",
+    "check_suffix",
+    "save_directions",
+    "stream_directions",
+]
 
 DIRECTION_SUFFIXES = (".npy", ".csv")
 
@@ -31,7 +42,7 @@ def _temporary_name(target: Path, kind: str) -> Path:
 
 
 @contextlib.contextmanager
-def atomic_path(path):
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a fresh temporary file path that replaces *path* on success.
 
     Parameters
@@ -84,7 +95,9 @@ def atomic_path(path):
 
 
 @contextlib.contextmanager
-def atomic_directory(path, *, replaceable=None):
+def atomic_directory(
+    path: str | os.PathLike[str], *, replaceable: Collection[str] | None = None
+) -> Iterator[Path]:
     """Yield a fresh temporary directory that replaces the directory *path* on success.
 
     Parameters
@@ -130,7 +143,7 @@ def atomic_directory(path, *, replaceable=None):
         raise
 
 
-def _check_replaceable(target: Path, allowed: set) -> None:
+def _check_replaceable(target: Path, allowed: set[str]) -> None:
     if not (target.exists() or target.is_symlink()):
         return
     if target.is_symlink() or not target.is_dir():
@@ -144,7 +157,7 @@ def _check_replaceable(target: Path, allowed: set) -> None:
         )
 
 
-def save_directions(path, directions, *, name="path"):
+def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, name: str = "path") -> None:
     """Write an (n, 3) array of directions to ``.npy`` or ``.csv``, atomically.
 
     Parameters
@@ -180,7 +193,7 @@ def save_directions(path, directions, *, name="path"):
     stream_directions(path, len(directions), directions.dtype, lambda out: [directions], name=name)
 
 
-def check_suffix(path, name="path"):
+def check_suffix(path: str | os.PathLike[str], name: str = "path") -> str:
     """The lower-case suffix of *path*, if it is one of DIRECTION_SUFFIXES."""
     suffix = Path(path).suffix.lower()
     if suffix not in DIRECTION_SUFFIXES:
@@ -189,7 +202,15 @@ def check_suffix(path, name="path"):
     return suffix
 
 
-def stream_directions(path, n, dtype, blocks, *, name="path", progress=None):
+def stream_directions(
+    path: str | os.PathLike[str],
+    n: int,
+    dtype: npt.DTypeLike,
+    blocks: Callable[[FloatArray | None], Iterable[FloatArray]],
+    *,
+    name: str = "path",
+    progress: Callable[[int], object] | None = None,
+) -> None:
     """Write *n* directions, produced block by block, to ``.npy`` or ``.csv``, atomically.
 
     Parameters

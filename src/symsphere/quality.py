@@ -14,10 +14,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
 import numpy.typing as npt
+
+from ._threads import start_threads
+from ._typing import Float64Array
 
 __all__ = ["LOG_FLOOR", "SlopeFit", "cap_discrepancy", "cap_discrepancy_squared", "fit_slope", "rmse"]
 
@@ -49,7 +53,8 @@ def rmse(estimates: npt.ArrayLike, exact: float | npt.ArrayLike) -> np.ndarray:
     estimates = np.asarray(estimates, dtype=np.float64)
     if estimates.shape[-1] < 1:
         raise ValueError("'estimates' must hold at least one repetition")
-    return np.sqrt(np.mean((estimates - exact) ** 2, axis=-1))
+    error: npt.NDArray[Any] = np.sqrt(np.mean((estimates - exact) ** 2, axis=-1))
+    return error
 
 
 @dataclass(frozen=True)
@@ -172,7 +177,8 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
         if w.shape != (n,) or not np.all(np.isfinite(w)):
             raise ValueError(f"'weights' must be finite with shape ({n},), got {w.shape}")
     total = float(np.sum(w))
-    pair_sum = _weighted_distance_sum(x, w)
+    start_threads()  # a parallel kernel: passive OpenMP waiting, as for the sampling kernels
+    pair_sum = float(_weighted_distance_sum(x, w))
     return total * total - 0.25 * pair_sum - (4.0 / 3.0) * total + 2.0 / 3.0
 
 
@@ -203,18 +209,18 @@ def cap_discrepancy(points: npt.ArrayLike, weights: npt.ArrayLike | None = None)
 
 
 @numba.njit(cache=True)
-def _row_distance_sum(x, w, i):  # pragma: no cover - compiled
+def _row_distance_sum(x: Float64Array, w: Float64Array, i: int) -> float:  # pragma: no cover - compiled
     """w_i * sum over j > i of w_j |x_i - x_j|."""
     xi, yi, zi = x[i, 0], x[i, 1], x[i, 2]
     row = 0.0
     for j in range(i + 1, x.shape[0]):
         dx, dy, dz = xi - x[j, 0], yi - x[j, 1], zi - x[j, 2]
         row += w[j] * math.sqrt(dx * dx + dy * dy + dz * dz)
-    return w[i] * row
+    return float(w[i] * row)
 
 
 @numba.njit(parallel=True, cache=True)
-def _weighted_distance_sum(x, w):  # pragma: no cover - compiled
+def _weighted_distance_sum(x: Float64Array, w: Float64Array) -> float:  # pragma: no cover - compiled
     """sum over i != j of w_i w_j |x_i - x_j|: rows r and N-1-r share a task, so the tasks are equal."""
     n = x.shape[0]
     total = 0.0
