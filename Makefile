@@ -1,12 +1,14 @@
 # Two commands do all the set-up on a fresh machine (Python >= 3.11 with pip and venv):
 #   make demo   install into .venv, then sample, test uniformity and write symsphere-demo/report.md
 #   make test   install into .venv (with the test extras), then run the whole test suite
+#   make docs   install the docs extra too, then build the HTML docs (docs/_build/html; warnings are errors)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -37,6 +39,15 @@ bench: $(STAMP)
 	fi
 	$(BIN)/python benchmarks/bench_sample.py
 	$(BIN)/python benchmarks/first_sample.py
+
+# make docs: Sphinx + numpydoc API reference and the Markdown pages (docs/conf.py).  -E re-reads
+# every page, so that a warning in an unchanged page still fails the next build too.
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	$(BIN)/python -m sphinx -E -W --keep-going -b html docs docs/_build/html
 
 clean:
 	rm -rf $(VENV) symsphere-demo .pytest_cache

@@ -1,4 +1,4 @@
-"""symsphere: exactly uniform, symmetric Monte Carlo and quasi-Monte Carlo sampling of directions.
+"""Exactly uniform, symmetric Monte Carlo and quasi-Monte Carlo sampling of directions.
 
 The sphere is cut into 48 congruent orthogonal spherical triangles (the
 hemisphere into 24) by the coordinate and bisector planes (Dimov, Penzov &
@@ -7,6 +7,27 @@ One point of the fundamental triangle T0 = {z >= x >= y >= 0} gives 48 (24)
 directions by signed coordinate permutations.  The paper's two maps from the
 unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
+
+The names below are the package's everyday interface; each is documented in
+its module (:mod:`symsphere.sampling`, :mod:`symsphere.integrate`,
+:mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`).
+:mod:`symsphere.stats`, :mod:`symsphere.peers` and :mod:`symsphere.integrands`
+are imported on first use.
+
+Examples
+--------
+>>> import numpy as np
+>>> import symsphere as ss
+>>> d = ss.sample_sphere(48 * 1000, rng=1)       # rows 48 i ... 48 i + 47: the orbit of one point
+>>> d.shape
+(48000, 3)
+>>> k, base = ss.fold(d[13])                     # which triangle, and the preimage in T0
+>>> bool(np.allclose(ss.orbit(base)[k], d[13]))
+True
+>>> p = ss.sample_sphere(48 * 10_000, method="paper1", rng=3)   # the paper's map: not uniform,
+>>> f = lambda w: np.exp(w[:, 0])                               # but unbiased weighted by 1/pdf
+>>> bool(abs(np.mean(f(p) / ss.sphere_pdf(p, "paper1")) - 2 * np.pi * (np.e - 1 / np.e)) < 0.1)
+True
 """
 
 from __future__ import annotations

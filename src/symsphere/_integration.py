@@ -54,6 +54,30 @@ class IntegrationResult:
         Independent units behind the standard error: orbits or replicates.
     unit : str
         ``'orbit'``, ``'replicate'`` or ``'run'``.
+    domain : str
+        ``'sphere'`` or ``'hemisphere'``.
+    method : str
+        The map onto T0 (``'equal_area'``, ``'paper1'`` or ``'paper2'``).
+    points : str
+        The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, or the
+        class name of the ``QMCEngine`` given.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import integrate
+    >>> f = lambda w: np.stack([np.exp(w[:, 0]), w[:, 2] ** 2], axis=1)   # two integrands at once
+    >>> result = integrate(f, n=48 * 1024, rng=0)
+    >>> result.integral.shape, result.unit, result.n_units, result.n_evaluations
+    ((2,), 'orbit', 1024, 49152)
+    >>> low, high = result.confidence_interval
+    >>> bool(low[0] < 2 * np.pi * (np.e - 1 / np.e) < high[0])
+    True
+    >>> bool(result.standard_error[1] < 1e-12)     # the orbit average of z**2 is exactly 1/3
+    True
+    >>> result = integrate(lambda w: np.exp(w[:, 0]), n=48 * 1024, points="sobol", rng=0)
+    >>> result.unit, result.n_units, result.points      # 8 scramblings of the Sobol' points
+    ('replicate', 8, 'sobol')
     """
 
     integral: float | Float64Array

@@ -59,10 +59,14 @@ def integrate(
         Map onto T0; the paper's maps are weighted by 1/pdf, so the estimate
         stays unbiased.
     points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
+        The base points of the unit square (as in :func:`symsphere.sample_sphere`); they decide
+        the independent units of the standard error (see the module's description).
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (``domain='hemisphere'`` only).  For the
         rendering equation, integrate ``L(w) * f_r * max(0, w . normal)``.
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Seeds the points (or their randomisations).  The same seed gives the same result, however
+        the work is split.
     replicates : int, optional
         Independent randomisations for stratified and QMC points (default 8);
         must be None or 1 for random points and for a QMCEngine.
@@ -72,6 +76,8 @@ def integrate(
     Returns
     -------
     IntegrationResult
+        The estimate, its standard error and confidence interval, and the number of independent
+        units behind them.
 
     Examples
     --------

@@ -138,11 +138,12 @@ def iter_sphere(
         block is written into its rows and yielded as a view of them, so a run
         can fill a file larger than memory.
 
-    Yields
-    ------
-    ndarray, shape (m, 3)
+    Returns
+    -------
+    iterator of ndarray, shape (m, 3)
         Consecutive blocks; concatenated, they equal ``sample_sphere(n_total, ...)``
-        with the same arguments.
+        with the same arguments.  The arguments are checked at the call, not at the
+        first block.
 
     Examples
     --------
@@ -168,7 +169,25 @@ def iter_hemisphere(
     dtype: DTypeLike = np.float64,
     out: FloatArray | None = None,
 ) -> Iterator[FloatArray]:
-    """Directions of :func:`sample_hemisphere` in blocks (see :func:`iter_sphere`).
+    """Directions of :func:`sample_hemisphere` in blocks, for runs larger than memory.
+
+    Parameters
+    ----------
+    n_total : int
+        Directions in all, a positive multiple of 24.
+    chunk : int
+        Directions per block (a multiple of 24; the last block may be shorter).
+    normal, method, points, rng, dtype
+        As in :func:`sample_hemisphere`.
+    out : ndarray, optional
+        An (n_total, 3) array of the given dtype (a ``numpy.memmap`` too), filled block by
+        block as in :func:`iter_sphere`.
+
+    Returns
+    -------
+    iterator of ndarray, shape (m, 3)
+        Consecutive blocks; concatenated, they equal ``sample_hemisphere(n_total, ...)``
+        with the same arguments.
 
     Examples
     --------
