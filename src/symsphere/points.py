@@ -1,11 +1,11 @@
 """Point sets on the unit square: the inputs of the maps.
 
-``'random'``      independent uniform points;
-``'stratified'``  a jittered sqrt(m) x sqrt(m) grid, one point per cell (m must be a square);
-``'sobol'``       scrambled Sobol' points (``scipy.stats.qmc.Sobol``); a warning, as scipy
-                  gives, when m is not a power of 2, since the balance properties need it;
-``'halton'``      scrambled Halton points (``scipy.stats.qmc.Halton``);
-any ``scipy.stats.qmc.QMCEngine`` with ``d == 2``, used from its current state (which advances).
+- ``'random'``: independent uniform points;
+- ``'stratified'``: a jittered sqrt(m) x sqrt(m) grid, one point per cell (m must be a square);
+- ``'sobol'``: scrambled Sobol' points (``scipy.stats.qmc.Sobol``); a warning, as scipy
+  gives, when m is not a power of 2, since the balance properties need it;
+- ``'halton'``: scrambled Halton points (``scipy.stats.qmc.Halton``);
+- any ``scipy.stats.qmc.QMCEngine`` with ``d == 2``, used from its current state (which advances).
 
 Points are addressed by index, so that any stretch ``[start, stop)`` can be made on
 its own and every chunking of a run gives the same points (:class:`BasePoints`).

@@ -123,7 +123,7 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
     """Squared spherical-cap L2 discrepancy of points on S², exact, by Stolarsky's invariance principle.
 
     With the caps C(x, t) = {y : x.y >= t} and sigma the normalised surface
-    measure (sigma(C(x, t)) = (1 - t)/2),
+    measure (sigma(C(x, t)) = (1 - t)/2)::
 
         D^2 = integral over t in [-1, 1] and x in S^2 of
               (sum_i w_i 1[x_i in C(x, t)] - sigma(C(x, t)))^2 dsigma(x) dt.
@@ -131,15 +131,15 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
     Stolarsky's invariance principle (Stolarsky 1973; Brauchart & Dick, Proc.
     AMS 141 (2013) 2085-2096, with C_2 = 1/4 on S^2) turns it into a sum of
     distances: the kernel integral of the product of two cap indicators is
-    1 - |y - z|/4, so
+    ``1 - |y - z|/4``, so::
 
         D^2 = (sum w)^2 - (1/4) sum_{i,j} w_i w_j |x_i - x_j| - (4/3) sum w + 2/3,
 
     which for equal weights w_i = 1/N is the classical
-    D^2 = 1/3 - (1/(4 N^2)) sum_{i,j} |x_i - x_j|.  For N independent uniform
-    points E D^2 = 1/(3N) (since E|x - y| = 4/3).  D is also the worst-case
+    ``D^2 = 1/3 - (1/(4 N^2)) sum_{i,j} |x_i - x_j|``.  For N independent uniform
+    points E D^2 = 1/(3N) (since ``E|x - y| = 4/3``).  D is also the worst-case
     error of the rule sum_i w_i f(x_i) for the mean of f over the sphere in
-    the Sobolev space H^(3/2)(S^2) with reproducing kernel 1 - |x - y|/4.
+    the Sobolev space H^(3/2)(S^2) with reproducing kernel ``1 - |x - y|/4``.
 
     Parameters
     ----------

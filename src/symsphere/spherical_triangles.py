@@ -43,7 +43,7 @@ def square_to_spherical_triangle(uv: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arr
     u selects the sub-triangle A B C' of area u * area(ABC), with C' on the
     edge AC: the angle at A is alpha, and the area condition
     alpha + beta' + gamma' - pi = A' together with the spherical law of
-    cosines gives cos(b') = |AC'| in closed form (the paper's q).  Then v
+    cosines gives ``cos(b') = |AC'|`` in closed form (the paper's q).  Then v
     places the point on the arc from B to C' with cos of its distance to B
     uniform on [C'.B, 1], which is uniform in area because the strip between
     two such arcs through B has area proportional to d(cos).
@@ -80,7 +80,7 @@ def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arra
 
     The arc from B through d meets the edge AC at C' (the intersection of
     the two great circles); u = area(A B C') / area(ABC) and
-    v = (1 - d.B) / (1 - C'.B), both differences evaluated as |p - B|^2 / 2.
+    v = (1 - d.B) / (1 - C'.B), both differences evaluated as ``|p - B|^2 / 2``.
     At d = B, u = 0 by convention.
 
     Parameters

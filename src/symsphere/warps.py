@@ -174,11 +174,11 @@ def square_to_octahedral_sphere(uv: npt.ArrayLike) -> FloatArray:
     """Clarberg's equal-area map of the square onto the sphere (JGT 2008).
 
     With (a, b) = 2 (u, v) - 1, the square is an unfolded octahedron: the
-    diamond |a| + |b| <= 1 is the upper hemisphere, the four corner triangles
+    diamond ``|a| + |b| <= 1`` is the upper hemisphere, the four corner triangles
     fold onto the lower one.  In each octant the L1 "radius" r (``|a| + |b|``
-    inside the diamond, ``2 - |a| - |b|`` outside) sets 1 - |z| = r^2, which is
+    inside the diamond, ``2 - |a| - |b|`` outside) sets ``1 - |z| = r^2``, which is
     equal-area because the area of a triangle with legs r grows like r^2 and
-    the polar cap like 1 - |z|; the position along the octant's edge,
+    the polar cap like ``1 - |z|``; the position along the octant's edge,
     linear in the square, sets the azimuth linearly.  So every octant of the
     square (area 1/8) goes to an octant of the sphere (area pi/2): the
     density is 1/(4 pi).  sin(theta) = r sqrt(2 - r^2), without cancellation.
@@ -205,8 +205,8 @@ def square_to_octahedral_sphere(uv: npt.ArrayLike) -> FloatArray:
 def octahedral_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     """Inverse of :func:`square_to_octahedral_sphere`.
 
-    r = sqrt(1 - |z|), evaluated as sqrt((x^2 + y^2) / (1 + |z|)); the share
-    of the octant's edge is (2/pi) atan2(|y|, |x|); the signs of x and y pick
+    ``r = sqrt(1 - |z|)``, evaluated as ``sqrt((x^2 + y^2) / (1 + |z|))``; the share
+    of the octant's edge is ``(2/pi) atan2(|y|, |x|)``; the signs of x and y pick
     the quadrant of the square, the sign of z the diamond or a corner.
 
     Examples
@@ -224,7 +224,7 @@ def square_to_octahedral_hemisphere(uv: npt.ArrayLike) -> FloatArray:
     """Clarberg's equal-area map of the square onto the hemisphere z >= 0.
 
     The square [-1, 1]^2 is turned by 45 degrees and shrunk onto the diamond
-    |a'| + |b'| <= 1 (a' = (a + b)/2, b' = (b - a)/2, a constant Jacobian of
+    ``|a'| + |b'| <= 1`` (a' = (a + b)/2, b' = (b - a)/2, a constant Jacobian of
     1/2), which the upper half of :func:`square_to_octahedral_sphere` lifts
     onto the hemisphere: density 1/(2 pi).
 
@@ -256,7 +256,7 @@ def square_to_concentric_disk(uv: npt.ArrayLike) -> FloatArray:
     """Shirley & Chiu's concentric map of the square onto the unit disk (1997).
 
     With (a, b) = 2 (u, v) - 1, concentric squares go to concentric circles:
-    if |a| >= |b|, radius a and angle (pi/4)(b/a); else radius b and angle
+    if ``|a| >= |b|``, radius a and angle (pi/4)(b/a); else radius b and angle
     pi/2 - (pi/4)(a/b).  Each of the four triangular sectors is stretched
     uniformly, so the map is area-preserving up to the constant pi/4 per unit
     square area: density 1/pi on the disk.
@@ -319,7 +319,7 @@ def square_to_cosine_hemisphere(uv: npt.ArrayLike) -> FloatArray:
     z = sqrt(1 - x^2 - y^2), has density (1/pi) cos(theta) in solid angle,
     since the projection onto the disk scales area by cos(theta)
     (Malley's method; pbrt-v4 ``SampleCosineHemisphere``).  z is evaluated
-    as sqrt((1 - rho)(1 + rho)), rho = max(|a|, |b|) the disk radius.
+    as sqrt((1 - rho)(1 + rho)), rho = ``max(|a|, |b|)`` the disk radius.
 
     Examples
     --------
@@ -408,7 +408,16 @@ def _pick_scalar(condition, a, b):
 
 @_register_jitable
 def uniform_sphere_point(u, v):
-    """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v."""
+    """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v.
+
+    Scalars or arrays in, a tuple (x, y, z) out; numba compiles it (``register_jitable``).
+
+    Examples
+    --------
+    >>> from symsphere.warps import uniform_sphere_point
+    >>> [round(float(c), 6) for c in uniform_sphere_point(0.25, 0.5)]
+    [-0.866025, 0.0, 0.5]
+    """
     z = 1.0 - 2.0 * u
     r = 2.0 * np.sqrt(u * (1.0 - u))
     phi = 2.0 * np.pi * v
@@ -417,7 +426,14 @@ def uniform_sphere_point(u, v):
 
 @_register_jitable
 def uniform_hemisphere_point(u, v):
-    """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere)."""
+    """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere).
+
+    Examples
+    --------
+    >>> from symsphere.warps import uniform_hemisphere_point
+    >>> [round(float(c), 6) for c in uniform_hemisphere_point(0.5, 0.25)]
+    [0.0, 0.866025, 0.5]
+    """
     r = np.sqrt((1.0 - u) * (1.0 + u))
     phi = 2.0 * np.pi * v
     return r * np.cos(phi), r * np.sin(phi), u
@@ -425,7 +441,14 @@ def uniform_hemisphere_point(u, v):
 
 @_register_jitable
 def concentric_disk_point(u, v):
-    """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk."""
+    """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk.
+
+    Examples
+    --------
+    >>> from symsphere.warps import concentric_disk_point
+    >>> [float(c) for c in concentric_disk_point(1.0, 0.5)]
+    [1.0, 0.0]
+    """
     a = 2.0 * u - 1.0
     b = 2.0 * v - 1.0
     wide = np.abs(a) >= np.abs(b)
@@ -440,7 +463,14 @@ def concentric_disk_point(u, v):
 
 @_register_jitable
 def cosine_hemisphere_point(u, v):
-    """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho))."""
+    """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho)).
+
+    Examples
+    --------
+    >>> from symsphere.warps import cosine_hemisphere_point
+    >>> [float(c) for c in cosine_hemisphere_point(0.5, 0.5)]
+    [0.0, 0.0, 1.0]
+    """
     x, y = concentric_disk_point(u, v)
     rho = np.maximum(np.abs(2.0 * u - 1.0), np.abs(2.0 * v - 1.0))
     z = np.sqrt(np.maximum((1.0 - rho) * (1.0 + rho), 0.0))
