@@ -50,11 +50,7 @@ NOT_DOCUMENTED = {
 # Documented modules with public names that lack an example (or constants without a doc comment).
 # Delete an entry when its module is complete: the strict xfail then turns into a pass.
 INCOMPLETE = {
-    "symsphere.distributed": "no Examples: sample_hemisphere, integrate, render, connect, local_client, close_client",
-    "symsphere.io": "no Examples: atomic_directory, check_suffix, stream_directions; DIRECTION_SUFFIXES has no doc comment",
     "symsphere.render": "no Examples for 26 of 31 names; FILTERS, MATERIAL_KINDS, SYMMETRIC_SAMPLERS have no doc comment",
-    "symsphere.apps.cli": "no Examples: main, build_parser",
-    "symsphere.apps.study": "no Examples: StudyConfig, run_study_command",
 }
 
 

@@ -109,8 +109,8 @@ class Integrand:
     >>> bool(abs(result.integral - g.exact) < 1e-3)
     True
 
-    A new integrand: z^2 is not invariant, but the mean over an orbit of any unit p is
-    |p|^2 / 3, so the symmetric scheme integrates it exactly:
+    A new integrand: z^2 is not invariant, but its mean over the orbit of any point p is
+    ``|p|^2 / 3``, so the symmetric scheme integrates it exactly:
 
     >>> z2 = Integrand("z2", "sphere", lambda d: np.asarray(d)[..., 2] ** 2, 4 * np.pi / 3,
     ...                "z^2; exact: 4 pi / 3", smooth=True, invariant=False, orbit_exact=True)

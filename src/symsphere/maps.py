@@ -369,7 +369,7 @@ _REGISTRY: dict[MapMethod, TriangleMap] = {
     "paper2": TriangleMap("paper2", _paper2_point, _paper2_density, _paper2_inverse, False),
 }
 METHODS = tuple(_REGISTRY)
-"""tuple of str: the maps onto T0, ``('equal_area', 'paper1', 'paper2')``, the choices of ``method=``.
+"""tuple of str: the names of the maps onto T0, the choices of ``method=``.
 
 Only ``'equal_area'``, the default, is uniform; ``'paper1'`` and ``'paper2'`` are the paper's
 Algorithms 1 and 2 as printed, with their exact densities (:func:`triangle_pdf`)."""

@@ -39,8 +39,8 @@ __all__ = ["POINT_SETS", "BLOCK", "BasePoints", "unit_square_points", "check_poi
 POINT_SETS: tuple[PointSet, ...] = ("random", "stratified", "sobol", "halton")
 """tuple of str: the named point sets of the unit square, the choices of ``points=``.
 
-``('random', 'stratified', 'sobol', 'halton')``, described in the module docstring; ``points=``
-also takes a ``scipy.stats.qmc.QMCEngine`` with ``d == 2`` (see :func:`check_points`)."""
+They are described in the module docstring; ``points=`` also takes a ``scipy.stats.qmc.QMCEngine``
+with ``d == 2`` (see :func:`check_points`)."""
 
 BLOCK = 4096
 """Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""

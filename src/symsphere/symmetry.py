@@ -24,7 +24,7 @@ from ._validation import check_choice, check_directions
 __all__ = ["SPHERE_MAPS", "HEMISPHERE_MAPS", "DOMAINS", "orbit", "fold", "orbit_size"]
 
 DOMAINS: tuple[Domain, ...] = ("sphere", "hemisphere")
-"""tuple of str: ``('sphere', 'hemisphere')``, the choices of ``domain=``; the hemisphere is z >= 0."""
+"""tuple of str: the choices of ``domain=``: the sphere (48 triangles) or the hemisphere z >= 0 (24)."""
 
 # Source coordinate of each output position, per table row (Table 1):
 # P0 (x, y, z), P1 (y, x, z), P2 (z, y, x), P3 (z, x, y), P4 (x, z, y), P5 (y, z, x).
