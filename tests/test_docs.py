@@ -50,20 +50,7 @@ NOT_DOCUMENTED = {
 # Documented modules with public names that lack an example (or constants without a doc comment).
 # Delete an entry when its module is complete: the strict xfail then turns into a pass.
 INCOMPLETE = {
-    "symsphere": "constants without a doc comment: METHODS (maps.py), POINT_SETS (points.py)",
-    "symsphere.maps": "no Examples: TriangleMap, get_map; METHODS has no doc comment",
-    "symsphere.symmetry": "no Examples: orbit_size; DOMAINS has no doc comment",
-    "symsphere.frames": "no Examples: frame, to_world, to_local",
-    "symsphere.points": "no Examples: check_points; POINT_SETS has no doc comment",
-    "symsphere.peers": "no Examples: Peer",
-    "symsphere.integrands": "no Examples: Integrand",
-    "symsphere.stats": "no Examples: Chi2Result",
-    "symsphere.quality": "no Examples: SlopeFit",
-    "symsphere.distributed": "no Examples: sample_hemisphere, integrate, render, connect, local_client, close_client",
-    "symsphere.io": "no Examples: atomic_directory, check_suffix, stream_directions; DIRECTION_SUFFIXES has no doc comment",
     "symsphere.render": "no Examples for 26 of 31 names; FILTERS, MATERIAL_KINDS, SYMMETRIC_SAMPLERS have no doc comment",
-    "symsphere.apps.cli": "no Examples: main, build_parser",
-    "symsphere.apps.study": "no Examples: StudyConfig, run_study_command",
 }
 
 

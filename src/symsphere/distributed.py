@@ -75,7 +75,35 @@ def sample_sphere(n, *, chunks=48 * BLOCK * DEFAULT_CHUNK_BLOCKS, method="equal_
 def sample_hemisphere(
     n, *, chunks=24 * BLOCK * DEFAULT_CHUNK_BLOCKS, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64
 ):
-    """A dask array of the directions of :func:`symsphere.sample_hemisphere` (see :func:`sample_sphere`)."""
+    """A dask array of the directions of :func:`symsphere.sample_hemisphere` (see :func:`sample_sphere`).
+
+    Parameters
+    ----------
+    n : int
+        A positive multiple of 24.
+    chunks : int
+        Rows per chunk: a multiple of ``24 * symsphere.points.BLOCK`` (98 304).
+    normal, method, points, rng, dtype
+        As in :func:`symsphere.sample_hemisphere`; the computed array equals its
+        result bit for bit.
+
+    Returns
+    -------
+    dask.array.Array, shape (n, 3)
+
+    Examples
+    --------
+    Any Dask scheduler computes it (``client.compute(d)`` on a cluster); here, threads:
+
+    >>> import numpy as np, symsphere
+    >>> from symsphere import distributed
+    >>> d = distributed.sample_hemisphere(24 * 5000, chunks=24 * 4096, normal=[0, 1, 0], rng=3)
+    >>> d.shape, d.chunks[0]
+    ((120000, 3), (98304, 21696))
+    >>> local = symsphere.sample_hemisphere(24 * 5000, normal=[0, 1, 0], rng=3)
+    >>> bool(np.array_equal(d.compute(scheduler="threads"), local))
+    True
+    """
     from ._validation import check_normal
 
     return _dask_directions(n, chunks, 24, check_normal(normal), method, points, rng, dtype)
@@ -103,6 +131,17 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     -------
     symsphere.IntegrationResult
         Equal, bit for bit, to ``symsphere.integrate(f, **kwargs)``.
+
+    Examples
+    --------
+    >>> import numpy as np, symsphere
+    >>> from symsphere.distributed import close_client, integrate, local_client
+    >>> client = local_client(1)
+    >>> f = lambda d: np.exp(d @ [0.7, -0.4, 0.5])
+    >>> result = integrate(f, client=client, n=48 * 4, rng=1)
+    >>> result == symsphere.integrate(f, n=48 * 4, rng=1)          # bit for bit
+    True
+    >>> close_client(client)
     """
     from distributed import as_completed
 
@@ -148,6 +187,31 @@ def render(
     added in the same order on the client, so the image equals the single-process
     one bit for bit.  ``seconds`` of the result is the wall time of the whole run,
     ``startup_seconds`` 0 and ``threads`` the number of workers.
+
+    Parameters
+    ----------
+    scene, width, height, spp, sampler, method, pixel_filter, seed, integrator
+        As in :func:`symsphere.render.render`.
+    client : distributed.Client, optional
+        Default: a ``LocalCluster`` with one single-threaded worker per core,
+        started for this call and closed after it.
+    passes_per_task : int
+        Sample passes per task.
+    progress : bool
+        Show a progress bar over the tasks as they complete.
+
+    Returns
+    -------
+    symsphere.render.RenderResult
+
+    Examples
+    --------
+    >>> from symsphere.distributed import close_client, local_client, render
+    >>> client = local_client(1)
+    >>> result = render("cornell", client=client, width=16, height=12, spp=24, seed=1)
+    >>> result.image.shape, result.paths, result.threads
+    ((12, 16, 3), 4608, 1)
+    >>> close_client(client)
     """
     from distributed import as_completed
 
@@ -173,7 +237,40 @@ def render(
 
 
 def connect(address, *, timeout=10):
-    """A ``distributed.Client`` for the scheduler at *address*, or a clear error within *timeout* seconds."""
+    """A ``distributed.Client`` for the scheduler at *address*, or a clear error within *timeout* seconds.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler's address, as ``dask scheduler`` prints it (``tcp://HOST:8786``).
+    timeout : float
+        Seconds to wait for the scheduler.
+
+    Returns
+    -------
+    distributed.Client
+        Pass it as ``client=`` to :func:`integrate` and :func:`render`, or compute the
+        arrays of :func:`sample_sphere` with it; close it with :func:`close_client`
+        (the cluster keeps running).
+
+    Raises
+    ------
+    ConnectionError
+        If no scheduler answers at *address* within *timeout*.
+
+    Examples
+    --------
+    A small cluster in this process stands in for ``dask scheduler`` and ``dask worker``:
+
+    >>> from distributed import LocalCluster
+    >>> from symsphere.distributed import close_client, connect
+    >>> cluster = LocalCluster(n_workers=1, processes=False, dashboard_address=None)
+    >>> client = connect(cluster.scheduler_address)
+    >>> len(client.scheduler_info()["workers"])
+    1
+    >>> close_client(client)
+    >>> cluster.close()
+    """
     from distributed import Client
 
     try:
@@ -187,7 +284,29 @@ def connect(address, *, timeout=10):
 
 
 def local_client(workers=None):
-    """A ``LocalCluster`` client: *workers* single-threaded worker processes (default: one per core)."""
+    """A ``LocalCluster`` client: *workers* single-threaded worker processes (default: one per core).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes, each with one thread (the kernels of a task run single-threaded).
+
+    Returns
+    -------
+    distributed.Client
+        A client of its own cluster; close both with :func:`close_client`.
+
+    Examples
+    --------
+    >>> from symsphere.distributed import close_client, integrate, local_client
+    >>> client = local_client(workers=1)
+    >>> len(client.scheduler_info()["workers"])
+    1
+    >>> result = integrate(lambda d: d[:, 2] ** 2, client=client, n=48 * 4, rng=1)
+    >>> round(result.integral, 10)                     # 4 pi / 3: exact from one orbit
+    4.1887902048
+    >>> close_client(client)
+    """
     from distributed import Client, LocalCluster
 
     workers = (os.cpu_count() or 1) if workers is None else check_count(workers, "workers")
@@ -196,7 +315,23 @@ def local_client(workers=None):
 
 
 def close_client(client):
-    """Close *client*, and its cluster too if it runs one of its own (as :func:`local_client`'s does)."""
+    """Close *client*, and its cluster too if it runs one of its own (as :func:`local_client`'s does).
+
+    A client of a remote scheduler (:func:`connect`) is closed and its cluster left running.
+
+    Parameters
+    ----------
+    client : distributed.Client
+
+    Examples
+    --------
+    >>> from symsphere.distributed import close_client, local_client
+    >>> client = local_client(1)
+    >>> cluster = client.cluster
+    >>> close_client(client)
+    >>> client.status, cluster.status.name
+    ('closed', 'closed')
+    """
     cluster = getattr(client, "cluster", None)  # None for a client of a remote scheduler
     client.close()
     if cluster is not None:

@@ -44,8 +44,27 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
 def frame(normal: npt.ArrayLike) -> Float64Array:
     """Rows (t, b, n) of a right-handed orthonormal frame with third axis *normal*.
 
-    *normal* must be a unit float64 3-vector (validate with
-    ``symsphere._validation.check_normal``).
+    Parameters
+    ----------
+    normal : array_like, shape (3,)
+        A unit vector, trusted: not validated or normalised here (the samplers validate
+        theirs with ``symsphere._validation.check_normal``).
+
+    Returns
+    -------
+    ndarray, shape (3, 3), float64
+        The basis: rows t, b and *normal*, orthonormal with determinant +1; the identity for
+        ``normal = (0, 0, 1)``.  Use it with :func:`to_world` and :func:`to_local`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.frames import frame
+    >>> basis = frame([0.48, 0.6, 0.64])
+    >>> basis[2]
+    array([0.48, 0.6 , 0.64])
+    >>> bool(np.allclose(basis @ basis.T, np.eye(3))), round(float(np.linalg.det(basis)), 12)
+    (True, 1.0)
     """
     nx, ny, nz = (float(c) for c in normal)
     t, b = frame_rows(nx, ny, nz)
@@ -53,10 +72,64 @@ def frame(normal: npt.ArrayLike) -> Float64Array:
 
 
 def to_world(local: FloatArray, basis: Float64Array) -> FloatArray:
-    """Local coordinates (..., 3) to world directions: ``local @ basis``."""
+    """Local coordinates (..., 3) to world directions: ``local @ basis``.
+
+    Parameters
+    ----------
+    local : ndarray, shape (..., 3)
+        Coordinates in the frame: the hemisphere about (0, 0, 1) is the hemisphere about the
+        frame's normal.
+    basis : ndarray, shape (3, 3)
+        A frame from :func:`frame` (any orthonormal rows).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        The same directions in world coordinates (numpy's result type of the two inputs).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symsphere
+    >>> from symsphere.frames import frame, to_world
+    >>> normal = np.array([0.48, 0.6, 0.64])
+    >>> to_world(np.array([0.0, 0.0, 1.0]), frame(normal))      # the pole goes to the normal
+    array([0.48, 0.6 , 0.64])
+    >>> d = to_world(symsphere.sample_hemisphere(24 * 4, rng=1), frame(normal))
+    >>> bool(np.all(d @ normal >= 0))                           # the hemisphere about the normal
+    True
+    >>> bool(np.allclose(d, symsphere.sample_hemisphere(24 * 4, normal=normal, rng=1)))
+    True
+    """
     return local @ basis
 
 
 def to_local(world: FloatArray, basis: Float64Array) -> FloatArray:
-    """World directions (..., 3) to local coordinates: ``world @ basis.T``."""
+    """World directions (..., 3) to local coordinates: ``world @ basis.T``.
+
+    The inverse of :func:`to_world` (the basis is orthonormal).
+
+    Parameters
+    ----------
+    world : ndarray, shape (..., 3)
+        Directions in world coordinates.
+    basis : ndarray, shape (3, 3)
+        A frame from :func:`frame` (any orthonormal rows).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Their coordinates in the frame: the third is the cosine to the frame's normal.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.frames import frame, to_local, to_world
+    >>> basis = frame([0.0, 1.0, 0.0])
+    >>> to_local(np.array([0.0, 1.0, 0.0]), basis)             # the normal is the local pole
+    array([0., 0., 1.])
+    >>> w = np.array([[0.6, 0.0, 0.8], [0.0, -0.6, 0.8]])
+    >>> bool(np.allclose(to_world(to_local(w, basis), basis), w))
+    True
+    """
     return world @ basis.T

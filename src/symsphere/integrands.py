@@ -96,6 +96,27 @@ class Integrand:
         on it (see ``docs/integrands.md``).  Verified in the tests.
     params : mapping
         The parameters (directions, angles, vertices, ...), read-only.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import symsphere
+    >>> from symsphere.integrands import INTEGRANDS, Integrand, orbit_average
+    >>> g = INTEGRANDS["exp"]
+    >>> g.domain, g.smooth, g.orbit_exact
+    ('sphere', True, False)
+    >>> result = symsphere.integrate(g.f, n=48 * 4096, rng=1)
+    >>> bool(abs(result.integral - g.exact) < 1e-3)
+    True
+
+    A new integrand: z^2 is not invariant, but its mean over the orbit of any point p is
+    ``|p|^2 / 3``, so the symmetric scheme integrates it exactly:
+
+    >>> z2 = Integrand("z2", "sphere", lambda d: np.asarray(d)[..., 2] ** 2, 4 * np.pi / 3,
+    ...                "z^2; exact: 4 pi / 3", smooth=True, invariant=False, orbit_exact=True)
+    >>> p = symsphere.square_to_triangle([0.3, 0.6])          # a point of T0
+    >>> bool(np.isclose(4 * np.pi * orbit_average(z2, p), z2.exact))
+    True
     """
 
     name: str

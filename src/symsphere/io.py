@@ -31,6 +31,7 @@ __all__ = [
 ]
 
 DIRECTION_SUFFIXES = (".npy", ".csv")
+"""tuple of str: the file suffixes (lower case; matched case-insensitively) :func:`save_directions` writes."""
 
 _CSV_FORMATS = {np.dtype(np.float64): "%.17g", np.dtype(np.float32): "%.9g"}  # shortest exact round trip
 
@@ -122,6 +123,28 @@ def atomic_directory(
     *path* is first renamed aside, the new one renamed in, and the old one
     deleted.  Readers see either the old or the new directory, except in the
     instant between the two renames, when *path* does not exist.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from symsphere.io import atomic_directory
+    >>> out = os.path.join(tempfile.mkdtemp(), "report")
+    >>> with atomic_directory(out) as tmp:
+    ...     _ = (tmp / "report.md").write_text("# results")
+    >>> os.listdir(out)
+    ['report.md']
+
+    A second run replaces the folder only if it holds nothing but files a run writes:
+
+    >>> with atomic_directory(out, replaceable={"report.md"}) as tmp:
+    ...     _ = (tmp / "report.md").write_text("# new results")
+    >>> open(os.path.join(out, "report.md")).read()
+    '# new results'
+    >>> with atomic_directory(out) as tmp:
+    ...     pass
+    Traceback (most recent call last):
+        ...
+    FileExistsError: ... holds files this program did not write (report.md); refusing to replace it: ...
     """
     target = Path(path)
     allowed = set(replaceable or ())
@@ -194,7 +217,35 @@ def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, 
 
 
 def check_suffix(path: str | os.PathLike[str], name: str = "path") -> str:
-    """The lower-case suffix of *path*, if it is one of DIRECTION_SUFFIXES."""
+    """The lower-case suffix of *path*, if it is one of DIRECTION_SUFFIXES.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file name for :func:`save_directions` or :func:`stream_directions`.
+    name : str, optional
+        How the error message calls *path* (the command line passes ``'--out'``).
+
+    Returns
+    -------
+    str
+        ``'.npy'`` or ``'.csv'`` (see :data:`DIRECTION_SUFFIXES`).
+
+    Raises
+    ------
+    ValueError
+        If the suffix is not one of :data:`DIRECTION_SUFFIXES`.
+
+    Examples
+    --------
+    >>> from symsphere.io import check_suffix
+    >>> check_suffix("directions.NPY")
+    '.npy'
+    >>> check_suffix("directions.txt", "--out")
+    Traceback (most recent call last):
+        ...
+    ValueError: '--out' must end in one of .npy, .csv, got 'directions.txt'
+    """
     suffix = Path(path).suffix.lower()
     if suffix not in DIRECTION_SUFFIXES:
         allowed = ", ".join(DIRECTION_SUFFIXES)
@@ -234,6 +285,22 @@ def stream_directions(
     -----
     The file appears only when complete: an interrupted or failed run leaves
     no file under *path* (see :func:`atomic_path`).
+
+    Examples
+    --------
+    With :func:`symsphere.iter_sphere`, which fills *out* in place when given one
+    (memory stays at one block, for any *n*):
+
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> import symsphere
+    >>> from symsphere.io import stream_directions
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.npy")
+    >>> n = 48 * 1000
+    >>> blocks = lambda out: symsphere.iter_sphere(n, chunk=48 * 256, rng=1, out=out)
+    >>> stream_directions(path, n, np.float64, blocks)
+    >>> bool(np.array_equal(np.load(path), symsphere.sample_sphere(n, rng=1)))
+    True
     """
     suffix = check_suffix(path, name)
     dtype = np.dtype(dtype)

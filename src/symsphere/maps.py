@@ -60,6 +60,35 @@ class TriangleMap:
     compiled by numba, the scalar kernels of :mod:`symsphere._kernels`.
     ``inverse`` takes and returns float64 arrays.  All three trust their
     inputs; the public functions of this module validate.
+
+    Attributes
+    ----------
+    name : str
+        The key in :data:`METHODS`.
+    point : callable
+        ``point(u, v) -> (x, y, z)``, elementwise on float64 arrays (or scalars).
+    density : callable
+        ``density(x, y, z)``: the density with respect to solid angle, elementwise;
+        0 outside T0.
+    inverse : callable
+        Directions (..., 3) in T0 to points (..., 2) of the unit square.
+    uniform : bool
+        Whether the density is the constant 12/pi (only ``'equal_area'``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.maps import get_map
+    >>> m = get_map("equal_area")
+    >>> m.name, m.uniform
+    ('equal_area', True)
+    >>> p = m.forward(np.array([[0.5, 0.5], [0.25, 1.0]]))    # (m, 2) -> (m, 3)
+    >>> p.shape
+    (2, 3)
+    >>> m.pdf(p)                                             # 12/pi on T0
+    array([3.81971863, 3.81971863])
+    >>> bool(np.allclose(m.inverse(p), [[0.5, 0.5], [0.25, 1.0]]))
+    True
     """
 
     name: str
@@ -168,7 +197,31 @@ def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> Fl
 
 
 def get_map(method: MapMethod) -> TriangleMap:
-    """The registered :class:`TriangleMap` called *method*."""
+    """The registered :class:`TriangleMap` called *method*.
+
+    Parameters
+    ----------
+    method : {'equal_area', 'paper1', 'paper2'}
+        One of :data:`METHODS`.
+
+    Returns
+    -------
+    TriangleMap
+
+    Raises
+    ------
+    ValueError
+        If *method* is not one of :data:`METHODS` (the message names ``method``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.maps import METHODS, get_map
+    >>> {name: get_map(name).uniform for name in METHODS}
+    {'equal_area': True, 'paper1': False, 'paper2': False}
+    >>> get_map("paper1").forward(np.array([0.0, 1.0]))      # u = 0, v = 1: (1, 0, 1)/sqrt 2
+    array([0.70710678, 0.        , 0.70710678])
+    """
     return _REGISTRY[check_choice(method, "method", METHODS)]
 
 
@@ -316,3 +369,7 @@ _REGISTRY: dict[MapMethod, TriangleMap] = {
     "paper2": TriangleMap("paper2", _paper2_point, _paper2_density, _paper2_inverse, False),
 }
 METHODS = tuple(_REGISTRY)
+"""tuple of str: the names of the maps onto T0, the choices of ``method=``.
+
+Only ``'equal_area'``, the default, is uniform; ``'paper1'`` and ``'paper2'`` are the paper's
+Algorithms 1 and 2 as printed, with their exact densities (:func:`triangle_pdf`)."""

@@ -37,6 +37,10 @@ if TYPE_CHECKING:
 __all__ = ["POINT_SETS", "BLOCK", "BasePoints", "unit_square_points", "check_points"]
 
 POINT_SETS: tuple[PointSet, ...] = ("random", "stratified", "sobol", "halton")
+"""tuple of str: the named point sets of the unit square, the choices of ``points=``.
+
+They are described in the module docstring; ``points=`` also takes a ``scipy.stats.qmc.QMCEngine``
+with ``d == 2`` (see :func:`check_points`)."""
 
 BLOCK = 4096
 """Base points per unit of work of the integrator and of :mod:`symsphere.distributed`."""
@@ -176,7 +180,40 @@ class BasePoints:
 
 
 def check_points(points: object) -> QMCEngine | None:
-    """Validate *points*; return the engine if it is a QMCEngine, else None."""
+    """Validate *points*; return the engine if it is a QMCEngine, else None.
+
+    Parameters
+    ----------
+    points : object
+        What a ``points=`` argument was given: a name in :data:`POINT_SETS` or a
+        ``scipy.stats.qmc.QMCEngine`` with ``d == 2``.
+
+    Returns
+    -------
+    scipy.stats.qmc.QMCEngine or None
+        The engine itself (not copied: drawing from it advances it), or None for a name.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, or an engine whose dimension ``d`` is not 2.
+    TypeError
+        For anything else.
+
+    Examples
+    --------
+    >>> from scipy.stats import qmc
+    >>> from symsphere.points import check_points
+    >>> check_points("sobol") is None
+    True
+    >>> engine = qmc.Halton(d=2, rng=1)
+    >>> check_points(engine) is engine
+    True
+    >>> check_points("grid")
+    Traceback (most recent call last):
+        ...
+    ValueError: 'grid' is not a valid points; use one of {'random', 'stratified', 'sobol', 'halton'}
+    """
     if isinstance(points, str):
         check_choice(points, "points", POINT_SETS)
         return None

@@ -100,6 +100,19 @@ class Chi2Result:
         The domain tested.
     n_samples : int
         Number of samples given, including any outside the domain.
+
+    Examples
+    --------
+    >>> import symsphere
+    >>> from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
+    >>> d = one_per_orbit(symsphere.sample_sphere(48 * 5000, rng=1), 48, rng=2)
+    >>> res = chi2_test(d, uniform_pdf("sphere"))
+    >>> res.passed, res.dof, res.observed.shape, int(res.observed.sum())
+    (True, 31, (8, 4), 5000)
+    >>> bool(res.p_value >= res.threshold), round(res.integral, 9)
+    (True, 1.0)
+    >>> print(str(res).splitlines()[0])                      # str(res) is a short report
+    chi2 test on the sphere: PASSED
     """
 
     statistic: float

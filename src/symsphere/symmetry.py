@@ -24,6 +24,7 @@ from ._validation import check_choice, check_directions
 __all__ = ["SPHERE_MAPS", "HEMISPHERE_MAPS", "DOMAINS", "orbit", "fold", "orbit_size"]
 
 DOMAINS: tuple[Domain, ...] = ("sphere", "hemisphere")
+"""tuple of str: the choices of ``domain=``: the sphere (48 triangles) or the hemisphere z >= 0 (24)."""
 
 # Source coordinate of each output position, per table row (Table 1):
 # P0 (x, y, z), P1 (y, x, z), P2 (z, y, x), P3 (z, x, y), P4 (x, z, y), P5 (y, z, x).
@@ -59,7 +60,28 @@ SIGNS.setflags(write=False)
 
 
 def orbit_size(domain: Domain) -> int:
-    """Number of triangles of *domain*: 48 for the sphere, 24 for the hemisphere."""
+    """Number of triangles of *domain*: 48 for the sphere, 24 for the hemisphere.
+
+    It is the number of directions one base point of T0 gives, so the sample sizes
+    ``n`` of the samplers are multiples of it.
+
+    Parameters
+    ----------
+    domain : {'sphere', 'hemisphere'}
+        One of :data:`DOMAINS`.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from symsphere.symmetry import DOMAINS, orbit, orbit_size
+    >>> [orbit_size(domain) for domain in DOMAINS]
+    [48, 24]
+    >>> orbit([0.2, 0.1, 0.9], "hemisphere").shape[0] == orbit_size("hemisphere")
+    True
+    """
     return 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
 
 

@@ -46,7 +46,24 @@ class _UsageError(Exception):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``symsphere`` command (one sub-parser per verb)."""
+    """The argument parser of the ``symsphere`` command (one sub-parser per verb).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Verbs ``sample``, ``integrate``, ``study``, ``render`` and ``demo``; the parsed
+        namespace has the verb in ``verb`` and its function in ``handler`` (what :func:`main`
+        calls).
+
+    Examples
+    --------
+    >>> from symsphere.apps.cli import build_parser
+    >>> args = build_parser().parse_args(["sample", "--n", "4800", "--out", "d.npy"])
+    >>> args.verb, args.n, args.domain, args.method, args.points, args.seed
+    ('sample', 4800, 'sphere', 'equal_area', 'random', None)
+    >>> build_parser().parse_args(["integrate", "--integrand", "exp", "--n", "480", "--workers", "2"]).workers
+    2
+    """
     parser = argparse.ArgumentParser(
         prog="symsphere",
         description="Exactly uniform, 48-fold symmetric sampling of the sphere and hemisphere.",
@@ -229,7 +246,33 @@ def _close_client(client):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status."""
+    """Run the ``symsphere`` command with *argv* (default ``sys.argv[1:]``); return the exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after the program name (see the module docstring and ``symsphere --help``).
+
+    Returns
+    -------
+    int
+        0 on success, 2 for invalid arguments (the message on stderr names the argument), 1 when
+        the output cannot be written, 130 on Ctrl-C.  Errors are reported, not raised.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from symsphere.apps.cli import main
+    >>> path = os.path.join(tempfile.mkdtemp(), "directions.npy")
+    >>> main(["sample", "--n", "48", "--seed", "1", "--out", path])
+    wrote 48 directions (sphere, equal_area, random, seed 1, float64) to ... in ... s
+    0
+    >>> np.load(path).shape
+    (48, 3)
+    >>> main(["sample", "--n", "50", "--out", path])        # not a multiple of 48: exit status 2
+    2
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -70,6 +70,39 @@ def run_study_command(args: argparse.Namespace) -> int:
 
     Invalid values raise ValueError naming the option (the ``symsphere`` command turns it into exit
     status 2); an unwritable output raises OSError (exit status 1).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed by the parser of :func:`add_study_parser`: ``out``, ``config`` (a name in
+        :data:`CONFIGS`), ``seed``, ``repetitions``, ``k_max`` and ``no_progress``.
+
+    Returns
+    -------
+    int
+        0, once the report folder is written (its path is printed).
+
+    Examples
+    --------
+    The study takes a while, even small (about a minute on 2 cores), so the run is not executed
+    here; the arguments are checked before any work is done:
+
+    >>> import argparse, os, tempfile
+    >>> from symsphere.apps.study import add_study_parser, run_study_command
+    >>> parser = argparse.ArgumentParser(prog="symsphere")
+    >>> _ = add_study_parser(parser.add_subparsers(dest="verb"))
+    >>> out = os.path.join(tempfile.mkdtemp(), "study-report")
+    >>> args = parser.parse_args(["study", "--config", "small", "--k-max", "4", "--repetitions", "2",
+    ...                           "--out", out])
+    >>> args.handler is run_study_command
+    True
+    >>> run_study_command(args)  # doctest: +SKIP
+    report: .../study-report/report.md  (and report.html, CSV tables and figures in ...; ... s)
+    0
+    >>> run_study_command(parser.parse_args(["study", "--repetitions", "1", "--out", out]))
+    Traceback (most recent call last):
+        ...
+    ValueError: --repetitions must be >= 2, got 1
     """
     check_seed(args.seed, "--seed")
     config = CONFIGS[args.config]

@@ -96,6 +96,24 @@ class StudyConfig:
         Directions per density map, a multiple of 48 (>= 4800).
     warp_samples : int
         Points of the unit square per warp histogram (>= 1000).
+
+    Examples
+    --------
+    A configuration is validated when it is made; pass it to :func:`run_study` as ``config=``.
+
+    >>> from symsphere.apps.study import CONFIGS, StudyConfig
+    >>> config = StudyConfig(name="exp", k_max=8, repetitions=8, integrands=("exp",),
+    ...                      scheme_points=("random", "sobol"))
+    >>> config.ks                                   # n = 48 * 2**k
+    (2, 3, 4, 5, 6, 7, 8)
+    >>> config.replace(k_max=10, repetitions=16).ks[-1]
+    10
+    >>> CONFIGS["small"].replace(name="smaller", k_max=4).k_max
+    4
+    >>> config.replace(repetitions=1)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'repetitions' must be >= 2 (an RMSE needs repeated estimates), got 1
     """
 
     name: str = "custom"
