@@ -62,6 +62,15 @@ def _kind(obj):
     return "data"
 
 
+def _assigns(module, name):
+    """Whether *module*'s source assigns *name* at its top level (where a constant is defined)."""
+    try:
+        source = inspect.getsource(module)
+    except (OSError, TypeError):
+        return False
+    return re.search(rf"^{re.escape(name)}\s*(:[^=]*)?=", source, flags=re.MULTILINE) is not None
+
+
 def _api_members(modules):
     """For each module: its __all__ as (name, kind, target) in order.
 
@@ -83,6 +92,8 @@ def _api_members(modules):
             else:
                 owners = [m for m in modules if member in exports[m] and exports[m][member] is obj]
                 defining = [m for m in owners if getattr(obj, "__module__", None) == m]
+                if not hasattr(obj, "__module__") or kind == "data":  # a constant: where it is assigned
+                    defining = defining or [m for m in owners if _assigns(loaded[m], member)]
                 deeper = [m for m in owners if m != "symsphere"]
                 target = (defining or deeper or [name])[0] + "." + member
             # A long or multi-line value (the (48, 3, 3) tables) is left out of the signature line.
