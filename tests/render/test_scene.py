@@ -21,7 +21,7 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.render import _integrator as K
+from symsphere.render import _probes as P
 
 # --- smallpt's scene, pinned ------------------------------------------------------
 
@@ -99,7 +99,7 @@ def test_every_ray_from_inside_the_room_hits_what_it_hits_in_smallpt():
     hits = []
     for scene in (_unclipped_cornell(), cornell()):
         a = scene.arrays(4, 4)
-        hits.append(K.first_hits(origins, directions, a["spheres"], a["quads"], a["eps"]))
+        hits.append(P.first_hits(origins, directions, a["spheres"], a["quads"], a["eps"]))
     np.testing.assert_array_equal(hits[0][1], hits[1][1])
     np.testing.assert_array_equal(hits[0][0], hits[1][0])
     assert np.sum(hits[1][1] == 8) > 30_000  # the light is among the hits
