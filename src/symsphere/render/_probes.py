@@ -81,7 +81,10 @@ def first_hits(origins, directions, spheres, quads, eps):
 
 @njit(**KERNEL_OPTIONS)
 def emitter_samples(point, obj, seed, count, spheres, quads):
-    """*count* :func:`~symsphere.render._emitters.sample_emitter` draws from *point* (stream *seed*): columns wx, wy, wz, distance, pdf, ok."""
+    """*count* :func:`~symsphere.render._emitters.sample_emitter` draws from *point* (stream *seed*).
+
+    Columns wx, wy, wz, distance, pdf, ok.
+    """
     out = np.empty((count, 6))
     state = np.uint64(seed)
     for i in range(count):
@@ -92,7 +95,10 @@ def emitter_samples(point, obj, seed, count, spheres, quads):
 
 @njit(**KERNEL_OPTIONS)
 def emitter_pdfs(point, obj, ts, cosines, spheres, quads):
-    """:func:`~symsphere.render._emitters.emitter_pdf` from *point* of hits of *obj* at distances *ts* with |cos| *cosines*."""
+    """:func:`~symsphere.render._emitters.emitter_pdf` from *point* of hits of *obj* at distances *ts*.
+
+    *cosines*: |cos| between each ray and the emitter's normal at the hit.
+    """
     out = np.empty(ts.shape[0])
     for i in range(ts.shape[0]):
         out[i] = emitter_pdf(point[0], point[1], point[2], obj, ts[i], cosines[i], spheres, quads)
