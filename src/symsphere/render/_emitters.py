@@ -3,8 +3,9 @@
 Scalar numba functions (``register_jitable``), inlined into the path-tracing
 kernel of :mod:`symsphere.render._integrator`, which calls :func:`choose_light`,
 :func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.
-The tables are those of :meth:`symsphere.render.Scene.arrays`: spheres
-(``SPHERE_COLUMNS`` rows) and quads (``QUAD_COLUMNS`` rows), column-wise.
+The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
+spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
+``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
 
 Emitters are sampled as pbrt-v4 and Mitsuba 3 do (:func:`sample_emitter`):
 a full sphere seen from outside uniformly in the cone it subtends (pdf
