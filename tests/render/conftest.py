@@ -1,11 +1,11 @@
-"""Tests of symsphere.render call its numba kernels directly: check the kernels' disk cache first, as
-the renderer does before its first kernel (nothing happens at import)."""
+"""Tests of symsphere.render call its numba kernels directly (the small ones of ``render._probes``): check
+the kernels' disk cache first, as the renderer does before its first kernel (nothing happens at import)."""
 
 import pytest
 
-from symsphere.render import _integrator
+from symsphere.render import _probes
 
 
 @pytest.fixture(autouse=True, scope="session")
 def _kernels_prepared():
-    _integrator.prepare_kernels()
+    _probes.prepare_kernels()  # and the integrator's

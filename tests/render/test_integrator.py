@@ -1,4 +1,4 @@
-"""symsphere.render._integrator: frame, samplers and their pdfs, MIS, emitter sampling, NEE, and the statistics.
+"""symsphere.render._integrator and _emitters: frame, samplers and their pdfs, MIS, emitter sampling, NEE, statistics.
 
 Statistical tests use fixed seeds (a run passes or fails reproducibly); each
 family's threshold is Sidak-corrected so that a correct renderer fails any
@@ -72,7 +72,9 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
+from symsphere.render import _emitters as E
 from symsphere.render import _integrator as K
+from symsphere.render import _probes as P
 from symsphere.symmetry import fold, orbit
 from symsphere.wedge import WEDGE_MAPS
 
@@ -125,7 +127,7 @@ def test_symmetric_groups_take_every_orbit_member_of_one_base(name, sampler, met
     code = METHOD_CODES[method]
     groups = 3
     for depth in (0, 1, 5):
-        out = K.pattern_directions(sampler, code, full, np.uint64(7), 1234, depth, groups * n)
+        out = P.pattern_directions(sampler, code, full, np.uint64(7), 1234, depth, groups * n)
         bases = []
         for g in range(groups):
             block = out[g * n : (g + 1) * n, :3]
@@ -146,7 +148,7 @@ def test_symmetric_members_are_shuffled_between_vertices():
     """Sample s must not keep member s mod 24 at every vertex (that would confine it to one triangle)."""
     members = []
     for depth in range(6):
-        out = K.pattern_directions(K.SYMMETRIC, 0, False, np.uint64(3), 99, depth, 24)
+        out = P.pattern_directions(K.SYMMETRIC, 0, False, np.uint64(3), 99, depth, 24)
         members.append(fold(out[:, :3], domain="sphere")[0])
     assert len({tuple(m) for m in members}) > 1
 
@@ -162,7 +164,7 @@ _COSINE_CODES = (K.COSINE, K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL)
 def test_sampled_directions_weights_and_pdfs(sampler, full):
     """Weights |cos| / (pi pdf) and pdfs of every sampler against their closed forms (orbit: maps.triangle_pdf)."""
     code = METHOD_CODES["paper1"]
-    out = K.pattern_directions(sampler, code, full, np.uint64(11), 5, 2, 480)
+    out = P.pattern_directions(sampler, code, full, np.uint64(11), 5, 2, 480)
     directions, weights, pdfs = out[:, :3], out[:, 3], out[:, 4]
     np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=0, atol=1e-14)
     if not full:
@@ -181,7 +183,7 @@ def test_sampled_directions_weights_and_pdfs(sampler, full):
     np.testing.assert_allclose(weights, expected_weight, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(pdfs, expected_pdf, rtol=1e-12, atol=1e-15)
     # bsdf_pdf, which MIS evaluates at light-sampled directions, is the same density
-    np.testing.assert_allclose(K.bsdf_pdfs(sampler, code, full, directions), expected_pdf, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(P.bsdf_pdfs(sampler, code, full, directions), expected_pdf, rtol=1e-12, atol=1e-15)
 
 
 @pytest.mark.parametrize("full, n", [(False, 8), (True, 16)])
@@ -190,7 +192,7 @@ def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, ful
     """Groups of 8 (16) samples: the 8 z-keeping signed permutations (x {z, -z}) of one cosine wedge point."""
     groups = 4
     for depth in (0, 3):
-        out = K.pattern_directions(sampler, 0, full, np.uint64(5), 77, depth, groups * n)
+        out = P.pattern_directions(sampler, 0, full, np.uint64(5), 77, depth, groups * n)
         bases = []
         for g in range(groups):
             block = out[g * n : (g + 1) * n, :3]
@@ -206,7 +208,7 @@ def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, ful
 
 
 def test_paper_map_weights_use_their_density():
-    out = K.pattern_directions(K.ORBIT, METHOD_CODES["paper2"], False, np.uint64(1), 0, 0, 240)
+    out = P.pattern_directions(K.ORBIT, METHOD_CODES["paper2"], False, np.uint64(1), 0, 0, 240)
     _, base = fold(out[:, :3], domain="sphere")
     expected = np.abs(out[:, 2]) * 24 / (np.pi * triangle_pdf(base, "paper2"))
     np.testing.assert_allclose(out[:, 3], expected, rtol=1e-12)
@@ -221,7 +223,7 @@ def test_bsdf_pdfs_integrate_to_one():
     critical = stats.norm.isf(_sidak(len(cases)) / 2)
     for sampler, full in cases:
         d = directions if full else np.column_stack([directions[:, 0], directions[:, 1], np.abs(directions[:, 2])])
-        values = K.bsdf_pdfs(sampler, METHOD_CODES["equal_area"], full, d) * (4 * np.pi if full else 2 * np.pi)
+        values = P.bsdf_pdfs(sampler, METHOD_CODES["equal_area"], full, d) * (4 * np.pi if full else 2 * np.pi)
         error = values.std(ddof=1) / math.sqrt(values.size)
         assert abs(values.mean() - 1) < critical * max(error, 1e-12), (sampler, full, values.mean(), error)
 
@@ -231,7 +233,7 @@ def test_bsdf_pdfs_integrate_to_one():
 
 @njit
 def _heuristic(a, b):
-    return K.power_heuristic(a, b)
+    return E.power_heuristic(a, b)
 
 
 def test_power_heuristic():
@@ -296,7 +298,7 @@ def test_emitter_pdf_integrates_to_one_over_the_visible_emitter(name, emitter, p
     count = 400_000
     directions, q = _cone(axis, cos_max, count, rng)
     origins = np.broadcast_to(np.asarray(point, dtype=np.float64), directions.shape).copy()
-    ts, hits = K.first_hits(origins, directions, spheres, quads, 1e-9)
+    ts, hits = P.first_hits(origins, directions, spheres, quads, 1e-9)
     hit = hits == 0
     assert 0.05 < hit.mean() <= 1.0
     if is_quad:
@@ -305,7 +307,7 @@ def test_emitter_pdf_integrates_to_one_over_the_visible_emitter(name, emitter, p
         normals = (origins[hit] + ts[hit, None] * directions[hit] - spheres[:3, 0]) / spheres[3, 0]
         cosines = np.abs(np.sum(normals * directions[hit], axis=1))
     values = np.zeros(count)
-    values[hit] = K.emitter_pdfs(np.asarray(point, dtype=np.float64), 0, ts[hit], cosines, spheres, quads) / q
+    values[hit] = P.emitter_pdfs(np.asarray(point, dtype=np.float64), 0, ts[hit], cosines, spheres, quads) / q
     mean, error = values.mean(), values.std(ddof=1) / math.sqrt(count)
     critical = stats.norm.isf(_sidak(len(_PDF_CASES)) / 2)
     assert abs(mean - 1) < critical * error and error < 0.01, (mean, error)
@@ -317,11 +319,11 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
     is_quad = isinstance(emitter, Quad)
     spheres, quads = _tables(quads=(emitter,)) if is_quad else _tables(spheres=(emitter,))
     p = np.asarray(point, dtype=np.float64)
-    out = K.emitter_samples(p, 0, 3, 20_000, spheres, quads)
+    out = P.emitter_samples(p, 0, 3, 20_000, spheres, quads)
     assert np.all(out[:, 5] == 1) and np.all(np.isfinite(out)) and np.all(out[:, 4] > 0)
     w = out[:, :3]
     np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-14)
-    ts, hits = K.first_hits(np.broadcast_to(p, w.shape).copy(), w, spheres, quads, 1e-9)
+    ts, hits = P.first_hits(np.broadcast_to(p, w.shape).copy(), w, spheres, quads, 1e-9)
     assert np.all(hits == 0)  # every sampled direction reaches the emitter
     cone = out[0, 3] < 0
     if cone:  # directions: the hit is the sampled point
@@ -338,7 +340,7 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
         if emitter.clip is not None:
             a, d = spheres[5:8, 0], spheres[8, 0]
             assert np.all(q @ a >= d - 1e-9 * np.abs(d) - 1e-12)
-    np.testing.assert_allclose(K.emitter_pdfs(p, 0, ts, cosines, spheres, quads), out[:, 4], rtol=1e-6)
+    np.testing.assert_allclose(P.emitter_pdfs(p, 0, ts, cosines, spheres, quads), out[:, 4], rtol=1e-6)
 
 
 def test_cap_and_cone_and_quad_samples_have_their_distributions():
@@ -350,7 +352,7 @@ def test_cap_and_cone_and_quad_samples_have_their_distributions():
     # cornell's cap: the height y of the sampled point is uniform on [81.33, 81.6]
     spheres, quads = _tables(spheres=(_CORNELL_LIGHT,))
     p = np.array([40.0, 20.0, 70.0])
-    out = K.emitter_samples(p, 0, 81, 4000, spheres, quads)
+    out = P.emitter_samples(p, 0, 81, 4000, spheres, quads)
     y = p[1] + out[:, 3] * out[:, 1]
     assert y.max() <= 81.6 + 1e-9 and y.min() >= 81.33 - 1e-9
     assert stats.kstest((y - 81.33) / 0.27, "uniform").pvalue > critical_p
@@ -360,14 +362,14 @@ def test_cap_and_cone_and_quad_samples_have_their_distributions():
     # a sphere from outside: cos to the centre uniform on [cos theta_max, 1]
     spheres, quads = _tables(spheres=(Sphere((0, 0, 0), 1.0, "lamp"),))
     p = np.array([0.0, 0.0, 3.0])
-    out = K.emitter_samples(p, 0, 82, 4000, spheres, quads)
+    out = P.emitter_samples(p, 0, 82, 4000, spheres, quads)
     cos_max = math.sqrt(1 - 1 / 9)
     assert stats.kstest((-out[:, 2] - cos_max) / (1 - cos_max), "uniform").pvalue > critical_p
     # a parallelogram: both coordinates uniform
     quad = Quad((-0.5, -0.5, 0), (1, 0, 0), (0.5, 1.5, 0), "lamp")
     spheres, quads = _tables(quads=(quad,))
     p = np.array([0.1, 0.2, -1.0])
-    out = K.emitter_samples(p, 0, 83, 4000, spheres, quads)
+    out = P.emitter_samples(p, 0, 83, 4000, spheres, quads)
     q = p + out[:, 3:4] * out[:, :3]
     st = np.linalg.solve(np.array([[1, 0.5], [0, 1.5]]), (q[:, :2] - [-0.5, -0.5]).T).T
     for column in st.T:
@@ -394,7 +396,7 @@ def test_rectangle_samples_are_uniform_in_solid_angle(point):
     assert quads[25, 0] == 1.0  # recognised as a rectangle
     p = np.asarray(point, dtype=np.float64)
     count = 40_000
-    out = K.emitter_samples(p, 0, 17, count, spheres, quads)
+    out = P.emitter_samples(p, 0, 17, count, spheres, quads)
     assert np.all(out[:, 5] == 1)
     q = p + out[:, 3:4] * out[:, :3]
     np.testing.assert_allclose(q[:, 2], 0.0, atol=1e-12)  # on the rectangle's plane ...
@@ -422,7 +424,7 @@ def test_clipped_sphere_intersection_against_numpy():
     directions = center + rng.uniform(-1.5, 1.5, size=(100_000, 3)) - origins  # ... aimed near it
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
     eps = 1e-7
-    ts, hits = K.first_hits(origins, directions, spheres, quads, eps)
+    ts, hits = P.first_hits(origins, directions, spheres, quads, eps)
     oc = origins - center
     b = -np.sum(oc * directions, axis=1)
     disc = b * b - np.sum(oc * oc, axis=1) + radius * radius
@@ -600,3 +602,16 @@ def test_translucent_scene_path_agrees_with_bsdf(sampler, translucent_reference)
     seed0 = 60_000 + 100 * _TRANSLUCENT_SAMPLERS.index(sampler)
     block_mean, block_variance = _replicate_stats(translucent_scene(), "path", sampler, 96, seed0)
     _z_check(block_mean, block_variance, *translucent_reference, teeth=0.2)
+
+
+def test_the_disk_cache_guard_covers_every_module_the_kernel_inlines():
+    # The guard's file list is derived from the kernel module's imports: the emitters, split out of
+    # _integrator.py, and the random numbers are in it; the test probes (their own guard) are not.
+    from pathlib import Path
+
+    from symsphere._numba_cache import kernel_dependencies
+
+    names = {Path(p).name for p in kernel_dependencies(K.render_pass)}
+    assert {"_integrator.py", "_emitters.py", "_random.py", "_kernels.py", "frames.py", "warps.py", "wedge.py"} <= names
+    assert "_probes.py" not in names
+    assert {"_probes.py", "_integrator.py", "_emitters.py"} <= {Path(p).name for p in kernel_dependencies(P.first_hits)}

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from symsphere.render import _integrator as K
+from symsphere.render import _probes as P
 from symsphere.render._random import nested_uniform_scramble, reverse_bits32, sobol2
 
 
@@ -32,7 +32,7 @@ def test_owen_sobol_equals_its_definition():
         return nested_uniform_scramble(x, h1 >> np.uint64(32)), nested_uniform_scramble(y, h2 & m32)
 
     for key in (np.uint64(1), np.uint64(0xDEADBEEF12345)):
-        points = K.sobol_points(512, key)
+        points = P.sobol_points(512, key)
         for i in range(0, 512, 7):
             x, y = definition(i, key)
             assert tuple(points[i]) == (int(x) / 2**32, int(y) / 2**32)
@@ -41,7 +41,7 @@ def test_owen_sobol_equals_its_definition():
 @pytest.mark.parametrize("key", [0, 1, 2**63 + 12345, 987654321])
 def test_owen_sobol_prefixes_are_nets(key):
     """The first 2^k points of one scramble form a (0, k, 2)-net: every dyadic box of area 2^-k holds one."""
-    points = K.sobol_points(2**10, np.uint64(key))
+    points = P.sobol_points(2**10, np.uint64(key))
     assert np.all((points >= 0) & (points < 1))
     for k in range(11):
         prefix = points[: 2**k]
@@ -53,7 +53,7 @@ def test_owen_sobol_prefixes_are_nets(key):
 
 
 def test_owen_scrambles_differ_between_keys():
-    a, b = K.sobol_points(64, np.uint64(1)), K.sobol_points(64, np.uint64(2))
+    a, b = P.sobol_points(64, np.uint64(1)), P.sobol_points(64, np.uint64(2))
     assert not np.any(np.all(a == b, axis=1))
 
 

@@ -93,7 +93,7 @@ def test_render_result_fields():
         (dict(sampler="cosine", method="paper1"), "method"),
         (dict(method="nope"), "method"),
         (dict(width=0), "width"),
-        (dict(spp=2.5), "spp"),
+        (dict(spp=0), "spp"),
         (dict(seed=-1), "seed"),
         (dict(pixel_filter="gauss"), "pixel_filter"),
         (dict(scene="nope"), "scene"),
@@ -108,6 +108,12 @@ def test_render_rejects_bad_arguments(kwargs, named):
     error = TypeError if named == "spp" else ValueError
     with pytest.raises(error, match=named):
         render(**arguments)
+
+
+def test_render_rejects_a_non_integer_count():
+    # check_count's convention (as symsphere.sample_sphere): a count of the wrong type is a TypeError
+    with pytest.raises(TypeError, match="'spp' must be an integer"):
+        render("cornell", width=4, height=4, spp=2.5, seed=0)
 
 
 # --- the render verb ----------------------------------------------------------------

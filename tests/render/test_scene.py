@@ -1,4 +1,5 @@
-"""symsphere.render.scene: smallpt's Cornell box, clipped spheres, the emitter tables, scene files and validation."""
+"""symsphere.render.scene, scene_files, scenes: smallpt's Cornell box, clipped spheres, the emitter tables, scene files,
+validation; every name still importable from symsphere.render.scene."""
 
 import dataclasses
 import json
@@ -21,7 +22,7 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.render import _integrator as K
+from symsphere.render import _probes as P
 
 # --- smallpt's scene, pinned ------------------------------------------------------
 
@@ -99,7 +100,7 @@ def test_every_ray_from_inside_the_room_hits_what_it_hits_in_smallpt():
     hits = []
     for scene in (_unclipped_cornell(), cornell()):
         a = scene.arrays(4, 4)
-        hits.append(K.first_hits(origins, directions, a["spheres"], a["quads"], a["eps"]))
+        hits.append(P.first_hits(origins, directions, a["spheres"], a["quads"], a["eps"]))
     np.testing.assert_array_equal(hits[0][1], hits[1][1])
     np.testing.assert_array_equal(hits[0][0], hits[1][0])
     assert np.sum(hits[1][1] == 8) > 30_000  # the light is among the hits
@@ -324,3 +325,27 @@ def test_the_documented_scene_file_loads_and_renders(tmp_path):
     }  # fmt: skip
     assert any(s.clip is not None for s in scene.spheres)
     assert render(str(path), width=16, height=12, spp=24, seed=0).image.mean() > 0
+
+
+def test_every_name_is_still_importable_from_scene():
+    # The scene files and the built-in scenes have their own modules; symsphere.render.scene re-exports
+    # their names (lazily: they import it), and SceneError keeps its public identity.
+    import pickle
+
+    import symsphere.render as render_package
+    from symsphere.render import scene, scene_files, scenes
+
+    moved = {"load_scene": scene_files, "scene_from_dict": scene_files, "SCENES": scenes, "cornell": scenes,
+             "furnace": scenes, "get_scene": scenes, "translucent_scene": scenes}  # fmt: skip
+    for name in scene.__all__:
+        assert getattr(scene, name) is getattr(render_package, name), name
+        if name in moved:
+            assert getattr(scene, name) is getattr(moved[name], name), name
+    assert set(moved) <= set(dir(scene))
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        scene.nope  # noqa: B018
+    from symsphere.render.scene import SceneError as error_class, get_scene as getter
+
+    assert getter is scenes.get_scene and error_class is render_package.SceneError
+    assert f"{error_class.__module__}.{error_class.__qualname__}" == "symsphere.render.scene.SceneError"
+    assert type(pickle.loads(pickle.dumps(error_class("x")))) is error_class

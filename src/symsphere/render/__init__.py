@@ -33,7 +33,6 @@ from .renderer import (
 )
 from .scene import (
     MATERIAL_KINDS,
-    SCENES,
     Camera,
     HalfSpace,
     Material,
@@ -41,17 +40,13 @@ from .scene import (
     Scene,
     SceneError,
     Sphere,
-    cornell,
     dielectric,
     diffuse,
-    furnace,
-    get_scene,
-    load_scene,
     mirror,
-    scene_from_dict,
     translucent,
-    translucent_scene,
 )
+from .scene_files import load_scene, scene_from_dict
+from .scenes import SCENES, cornell, furnace, get_scene, translucent_scene
 
 __all__ = [
     "FILTERS",

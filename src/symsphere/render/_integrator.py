@@ -1,7 +1,10 @@
 """The path-tracing kernels: two estimators of the rendering equation, one numba kernel.
 
-All numba code of the renderer that is not random-number plumbing
-(:mod:`symsphere.render._random`) is here.  Direction sampling at diffuse
+The renderer's numba code is here, except the emitters
+(:mod:`symsphere.render._emitters`: sampling, densities, selection, the power
+heuristic), the random-number plumbing (:mod:`symsphere.render._random`) and
+the small kernels for the tests (:mod:`symsphere.render._probes`), all
+inlined into :func:`render_pass`.  Direction sampling at diffuse
 vertices goes through scalar library functions -- the maps and the orbit
 (``triangle_point``, ``triangle_density``, ``orbit_member`` of
 :mod:`symsphere._kernels`), the classic uniform and cosine maps
@@ -32,24 +35,22 @@ every diffuse and translucent vertex, combined with the BSDF-sampled hits by
 multiple importance sampling (Veach 1997, power heuristic beta = 2; pbrt-v4
 ``PathIntegrator``, Mitsuba 3 ``path``).  At such a vertex x one emitter is
 chosen with probability proportional to its power (mean emitted radiance x
-area; :func:`symsphere.render.scene._light_tables`), a point or direction on it
-is sampled (:func:`sample_emitter`) with solid-angle pdf p_l (times the
+area; ``lights`` of :meth:`symsphere.render.Scene.arrays`), a point or direction on it
+is sampled (:func:`~symsphere.render._emitters.sample_emitter`) with solid-angle pdf p_l (times the
 selection probability), one shadow ray decides visibility, and
 ``f |cos| Le w_l / p_l`` is added with ``w_l = p_l^2 / (p_l^2 + p_b^2)``, p_b
 the density with which the vertex's direction sampler draws that direction
 (:func:`bsdf_pdf`).  When the BSDF-sampled ray from x hits an emitter, its
 emission is weighted by ``w_b = p_b^2 / (p_b^2 + p_l^2)`` with p_l from
-:func:`emitter_pdf`.  Emission seen by the camera or after a mirror or
+:func:`~symsphere.render._emitters.emitter_pdf`.  Emission seen by the camera or after a mirror or
 dielectric (specular) bounce is counted by BSDF sampling alone (weight 1),
 as is the background.  NEE is skipped at the last vertex allowed by
 ``max_depth``, so that both estimators estimate the same truncated sum.
 
-Emitters are sampled as pbrt-v4 and Mitsuba 3 do (:func:`sample_emitter`):
-a full sphere seen from outside uniformly in the cone it subtends (pdf
-``1 / (2 pi (1 - cos theta_max))``), from inside (or on it) by area; a
-clipped sphere (a spherical cap) by area on the cap, uniform in height
-(Archimedes: the area of a spherical zone is 2 pi r h); a parallelogram by
-area.  Area densities are converted to solid angle, ``p_w = d^2 / (|cos_l| A)``.
+Emitters are sampled as pbrt-v4 and Mitsuba 3 do (:mod:`symsphere.render._emitters`):
+a full sphere seen from outside uniformly in the cone it subtends, from
+inside (or on it) by area; a clipped sphere (a spherical cap) by area on the
+cap; a rectangle uniformly in solid angle, any other parallelogram by area.
 
 Russian roulette (as Mitsuba 3's ``path`` integrator): after the throughput
 update at vertex v (0-based), if ``v + 1 >= rr_depth`` the path survives with
@@ -86,6 +87,7 @@ from .._threads import start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
+from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
 from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
@@ -104,39 +106,16 @@ CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image p
 # lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
 # light_pmf: the selection probability of every object (0 for non-emitters)
 
-_OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
-_PI = math.pi
+KERNEL_OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
 _INV_PI = 1.0 / math.pi
-_INV_2PI = 0.5 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if it hits it within this
-_MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
-_ONE_MINUS_EPSILON = 1.0 - 2.0**-53
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _ODD = np.uint64(0xD6E8FEB86659FD93)
 _ONE = np.uint64(1)
-_S32 = np.uint64(32)
-_M32 = np.uint64(0xFFFFFFFF)
-_TWO_M31 = 2.0**-31
-
-
-@register_jitable
-def to_world(lx, ly, lz, nx, ny, nz):
-    """Local (x, y, z) about the unit normal n (z along n) to world coordinates."""
-    t, b = frame_rows(nx, ny, nz)
-    return _rows_to_world(lx, ly, lz, t, b, nx, ny, nz)
-
-
-@register_jitable
-def _rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
-    return (
-        lx * t[0] + ly * b[0] + lz * nx,
-        lx * t[1] + ly * b[1] + lz * ny,
-        lx * t[2] + ly * b[2] + lz * nz,
-    )
 
 
 @register_jitable
@@ -196,7 +175,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
             x, y, z = uniform_sphere_point(u01(b1), u01(b2))
             return x, y, z, 4.0 * abs(z), _INV_4PI, state
         x, y, z = uniform_hemisphere_point(u01(b1), u01(b2))
-        return x, y, z, 2.0 * z, _INV_2PI, state
+        return x, y, z, 2.0 * z, INV_2PI, state
     if sampler == COSINE:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
@@ -205,7 +184,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
             state, b3 = next_u64(state)
             if b3 >> np.uint64(63):
                 z = -z
-            return x, y, z, 2.0, abs(z) * _INV_2PI, state
+            return x, y, z, 2.0, abs(z) * INV_2PI, state
         return x, y, z, 1.0, z * _INV_PI, state
     cosine = sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
     if cosine:
@@ -238,7 +217,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
         bx, by, bz = cosine_wedge_point(u, v)
         x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
         if full:
-            return x, y, z, 2.0, abs(z) * _INV_2PI, state
+            return x, y, z, 2.0, abs(z) * INV_2PI, state
         return x, y, z, 1.0, z * _INV_PI, state
     bx, by, bz = triangle_point(u, v, code)
     density = triangle_density(bx, by, bz, code)
@@ -262,9 +241,9 @@ def bsdf_pdf(sampler, code, full, x, y, z):
     only for z >= 0.
     """
     if sampler == UNIFORM:
-        return _INV_4PI if full else _INV_2PI
+        return _INV_4PI if full else INV_2PI
     if sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL:
-        return abs(z) * _INV_2PI if full else z * _INV_PI
+        return abs(z) * INV_2PI if full else z * _INV_PI
     a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
     if a < b:
         a, b = b, a
@@ -380,270 +359,6 @@ def plain_spheres(spheres):
     while n < spheres.shape[1] and spheres[8, n] == -np.inf:
         n += 1
     return n
-
-
-# --- emitters ------------------------------------------------------------------------
-
-
-@register_jitable
-def _sphere_cone(px, py, pz, i, spheres):
-    """(e = c - p, |e|^2, p outside the sphere): whether a full sphere is sampled by its cone from p.
-
-    One expression, used by :func:`sample_emitter` and :func:`emitter_pdf`
-    alike, so that both make the same choice for the same point (a point on
-    the sphere may round either way; both choices are valid there).
-    """
-    ex = spheres[0, i] - px
-    ey = spheres[1, i] - py
-    ez = spheres[2, i] - pz
-    d2 = ex * ex + ey * ey + ez * ez
-    return ex, ey, ez, d2, d2 > spheres[4, i] and spheres[8, i] == -np.inf
-
-
-@register_jitable
-def _angle_between(ax, ay, az, bx, by, bz):
-    """The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 ``AngleBetween``)."""
-    if ax * bx + ay * by + az * bz < 0.0:
-        return _PI - 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((ax + bx) ** 2 + (ay + by) ** 2 + (az + bz) ** 2)))
-    return 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2 + (bz - az) ** 2)))
-
-
-@register_jitable
-def _unit_cross(ax, ay, az, bx, by, bz):
-    cx = ay * bz - az * by
-    cy = az * bx - ax * bz
-    cz = ax * by - ay * bx
-    inv = 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
-    return cx * inv, cy * inv, cz * inv
-
-
-@register_jitable
-def spherical_rectangle(px, py, pz, j, quads):
-    """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
-    Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
-
-    In the frame (x, y, z) of its edges, with z flipped to point away from
-    the rectangle (so z0 < 0), the corners are (x0 | x1, y0 | y1, z0).  The
-    planes through p and each edge have unit normals n0..n3; the spherical
-    rectangle's interior angles are g_i = angle(-n_i, n_(i+1)) and its solid
-    angle S = g0 + g1 + g2 + g3 - 2 pi.  Returns (S, x0, y0, z0, x1, y1,
-    zsign, b0 = n0.z, b1 = n2.z, k = 2 pi - g2 - g3); S = 0 when p is in the
-    rectangle's plane.
-    """
-    ex, ey, ez = quads[17, j], quads[18, j], quads[19, j]
-    fx, fy, fz = quads[20, j], quads[21, j], quads[22, j]
-    gx = ey * fz - ez * fy
-    gy = ez * fx - ex * fz
-    gz = ex * fy - ey * fx
-    dx = quads[0, j] - px
-    dy = quads[1, j] - py
-    dz = quads[2, j] - pz
-    x0 = dx * ex + dy * ey + dz * ez
-    y0 = dx * fx + dy * fy + dz * fz
-    z0 = dx * gx + dy * gy + dz * gz
-    zsign = 1.0
-    if z0 > 0.0:
-        zsign = -1.0
-        z0 = -z0
-    if not z0 < 0.0:
-        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 0.0
-    x1 = x0 + quads[23, j]
-    y1 = y0 + quads[24, j]
-    n0x, n0y, n0z = _unit_cross(x0, y0, z0, x1, y0, z0)
-    n1x, n1y, n1z = _unit_cross(x1, y0, z0, x1, y1, z0)
-    n2x, n2y, n2z = _unit_cross(x1, y1, z0, x0, y1, z0)
-    n3x, n3y, n3z = _unit_cross(x0, y1, z0, x0, y0, z0)
-    g0 = _angle_between(-n0x, -n0y, -n0z, n1x, n1y, n1z)
-    g1 = _angle_between(-n1x, -n1y, -n1z, n2x, n2y, n2z)
-    g2 = _angle_between(-n2x, -n2y, -n2z, n3x, n3y, n3z)
-    g3 = _angle_between(-n3x, -n3y, -n3z, n0x, n0y, n0z)
-    solid_angle = max(0.0, g0 + g1 + g2 + g3 - 2.0 * _PI)
-    return solid_angle, x0, y0, z0, x1, y1, zsign, n0z, n2z, 2.0 * _PI - g2 - g3
-
-
-@register_jitable
-def disk_point(state):
-    """A uniform point (x, y) of the unit disk and r^2 = x^2 + y^2 > 0: rejection from the square.
-
-    One 64-bit draw per trial, 32 bits per coordinate; accepted with
-    probability pi/4.  (x, y) / r is a uniform direction and r^2 is uniform
-    on (0, 1], independent of it, so one point gives a height and an azimuth
-    without a sine or a cosine (measured: cos + sin cost ~35 ns here).
-    """
-    while True:
-        state, bits = next_u64(state)
-        x = np.float64(bits >> _S32) * _TWO_M31 - 1.0
-        y = np.float64(bits & _M32) * _TWO_M31 - 1.0
-        r2 = x * x + y * y
-        if r2 <= 1.0 and r2 > 0.0:
-            return x, y, r2, state
-
-
-@register_jitable
-def sample_emitter(px, py, pz, obj, state, spheres, quads):
-    """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
-
-    w is a unit direction, pdf its solid-angle density (without the emitter's
-    selection probability).  distance is that of the sampled point, or -1 when
-    a direction was sampled (cone): then any hit of *obj* along w is the
-    sampled one.  ``ok`` is False for a degenerate sample (zero distance or a
-    grazing point), which contributes nothing.  *state* is the path's stream.
-
-    - a full sphere seen from outside: uniform in the cone it subtends
-      (pbrt-v4 ``Sphere::Sample(ctx, u)``, Mitsuba 3 ``Sphere::sample_direction``):
-      ``sin^2 theta_max = r^2 / |c - p|^2``, ``1 - cos theta = u (1 - cos theta_max)``,
-      ``1 - cos theta_max = sin^2 theta_max / (1 + cos theta_max)`` (no cancellation
-      for small cones), pdf ``1 / (2 pi (1 - cos theta_max))``;
-    - a full sphere seen from inside or on it, and a clipped sphere: by area on
-      the cap of height h about the axis a (h = 2 r: the whole sphere), uniform
-      in height by Archimedes' hat-box theorem: ``w = u h`` below the pole
-      c + r a, ring radius ``sqrt(w (2 r - w))``, uniform azimuth; area
-      ``2 pi r h``;
-    - a rectangle (a parallelogram with orthogonal edges) seen under a solid
-      angle S >= 1e-3: uniformly in S (:func:`spherical_rectangle`; Urena et
-      al. 2013, section 4), pdf ``1 / S``;
-    - any other parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
-
-    For the sphere cases u and the azimuth come from one uniform disk point
-    (:func:`disk_point`): u = r^2, (cos, sin) = (x, y) / r, so that e.g. the
-    ring point is ``(x, y) sqrt(h (2 r - w))``.  Area densities become
-    solid-angle ones as ``|q - p|^2 / (|cos_l| area)``, cos_l between w and the
-    emitter's normal at q.
-    """
-    n_spheres = spheres.shape[1]
-    if obj < n_spheres:
-        r = spheres[3, obj]
-        inv_r = spheres[10, obj]
-        x, y, u, state = disk_point(state)
-        clipped = spheres[8, obj] != -np.inf
-        cone = False
-        ex, ey, ez, d2 = 0.0, 0.0, 0.0, 1.0
-        if not clipped:  # (a clipped sphere is never sampled by its cone: skip the test)
-            ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
-        if cone:
-            sin2 = spheres[4, obj] / d2
-            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
-            one_minus_cos_max = sin2 / (1.0 + cos_max)
-            w = u * one_minus_cos_max  # 1 - cos theta
-            scale = math.sqrt(max(0.0, one_minus_cos_max * (2.0 - w)))  # sin theta / sqrt(u)
-            inv = 1.0 / math.sqrt(d2)
-            wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
-            return wx, wy, wz, -1.0, _INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0, state
-        if clipped:
-            ax, ay, az = spheres[5, obj], spheres[6, obj], spheres[7, obj]
-        else:
-            ax, ay, az = 0.0, 0.0, 1.0
-        height = spheres[9, obj]
-        w = u * height  # depth below the pole c + r a
-        scale = math.sqrt(max(0.0, height * (2.0 * r - w)))  # ring radius / sqrt(u)
-        ox, oy, oz = to_world(x * scale, y * scale, r - w, ax, ay, az)  # q - c
-        qx = spheres[0, obj] + ox
-        qy = spheres[1, obj] + oy
-        qz = spheres[2, obj] + oz
-        nx, ny, nz = ox * inv_r, oy * inv_r, oz * inv_r
-        area = 2.0 * _PI * r * height
-    else:
-        j = obj - n_spheres
-        state, b1 = next_u64(state)
-        state, b2 = next_u64(state)
-        u = u01(b1)
-        v = u01(b2)
-        if quads[25, j] != 0.0:
-            solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, k = spherical_rectangle(px, py, pz, j, quads)
-            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
-                au = u * solid_angle + k
-                fu = (math.cos(au) * b0 - b1_) / math.sin(au)
-                cu = math.copysign(1.0 / math.sqrt(fu * fu + b0 * b0), fu)
-                cu = min(max(cu, -_ONE_MINUS_EPSILON), _ONE_MINUS_EPSILON)
-                xu = min(max(-(cu * z0) / math.sqrt(max(0.0, 1.0 - cu * cu)), x0), x1)
-                dd = math.sqrt(xu * xu + z0 * z0)
-                h0 = y0 / math.sqrt(dd * dd + y0 * y0)
-                h1 = y1 / math.sqrt(dd * dd + y1 * y1)
-                hv = h0 + v * (h1 - h0)
-                yv = (hv * dd) / math.sqrt(1.0 - hv * hv) if hv * hv < 1.0 - 1e-12 else y1
-                yv = min(max(yv, y0), y1)
-                lz = z0 * zsign  # back to the frame of the edges
-                gx = quads[18, j] * quads[22, j] - quads[19, j] * quads[21, j]
-                gy = quads[19, j] * quads[20, j] - quads[17, j] * quads[22, j]
-                gz = quads[17, j] * quads[21, j] - quads[18, j] * quads[20, j]
-                wx = xu * quads[17, j] + yv * quads[20, j] + lz * gx
-                wy = xu * quads[18, j] + yv * quads[21, j] + lz * gy
-                wz = xu * quads[19, j] + yv * quads[22, j] + lz * gz
-                dist = math.sqrt(wx * wx + wy * wy + wz * wz)
-                if not dist > 0.0:
-                    return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
-                inv = 1.0 / dist
-                return wx * inv, wy * inv, wz * inv, dist, 1.0 / solid_angle, True, state
-        qx = quads[0, j] + u * quads[3, j] + v * quads[6, j]
-        qy = quads[1, j] + u * quads[4, j] + v * quads[7, j]
-        qz = quads[2, j] + u * quads[5, j] + v * quads[8, j]
-        nx, ny, nz = quads[9, j], quads[10, j], quads[11, j]
-        area = quads[16, j]
-    dx = qx - px
-    dy = qy - py
-    dz = qz - pz
-    dist2 = dx * dx + dy * dy + dz * dz
-    dist = math.sqrt(dist2)
-    if not dist > 0.0:
-        return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
-    inv = 1.0 / dist
-    dx *= inv
-    dy *= inv
-    dz *= inv
-    cos_l = abs(dx * nx + dy * ny + dz * nz)
-    if not cos_l > 0.0:
-        return dx, dy, dz, dist, 0.0, False, state
-    return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
-
-
-@register_jitable
-def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
-    """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
-
-    *cos_l* is |cos| between the ray and the emitter's normal at the hit.
-    The same case analysis as :func:`sample_emitter` (cone, cap, rectangle, parallelogram).
-    """
-    n_spheres = spheres.shape[1]
-    if obj < n_spheres:
-        _, _, _, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
-        if cone:
-            sin2 = spheres[4, obj] / d2
-            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
-            return _INV_2PI * (1.0 + cos_max) / sin2
-        area = 2.0 * _PI * spheres[3, obj] * spheres[9, obj]
-    else:
-        j = obj - n_spheres
-        if quads[25, j] != 0.0:
-            solid_angle = spherical_rectangle(px, py, pz, j, quads)[0]
-            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:
-                return 1.0 / solid_angle
-        area = quads[16, j]
-    if not cos_l > 0.0:
-        return np.inf
-    return t * t / (cos_l * area)
-
-
-@register_jitable
-def choose_light(lights, u):
-    """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
-    last = lights.shape[1] - 1
-    j = 0
-    while j < last and u >= lights[1, j]:
-        j += 1
-    return j
-
-
-@register_jitable
-def power_heuristic(pdf, other):
-    """Veach's power heuristic (beta = 2) ``pdf^2 / (pdf^2 + other^2)``, as ``1 / (1 + (other / pdf)^2)``.
-
-    The quotient form handles pdf = inf (weight 1; the paper maps' vertex,
-    where the sample's throughput weight is 0 anyway) and other = 0.
-    """
-    if not pdf > 0.0:
-        return 0.0
-    ratio = other / pdf
-    return 1.0 / (1.0 + ratio * ratio)
 
 
 @register_jitable(inline="always")  # numba-IR inlining: no call, no reference counting of the arrays
@@ -770,7 +485,7 @@ def radiance(
                 br *= materials[m, 4] * weight
                 bg *= materials[m, 5] * weight
                 bb *= materials[m, 6] * weight
-            dx, dy, dz = _rows_to_world(x, y, z, t_row, b_row, nx, ny, nz)
+            dx, dy, dz = rows_to_world(x, y, z, t_row, b_row, nx, ny, nz)
             specular = False
         elif kind == MIRROR:
             c2 = 2.0 * cos_in  # cos_in = d . n_facing <= 0
@@ -835,7 +550,7 @@ def radiance(
     return lr, lg, lb
 
 
-@njit(parallel=True, **_OPTIONS)
+@njit(parallel=True, **KERNEL_OPTIONS)
 def render_pass(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
     rr_depth, max_depth, integrator, sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
@@ -868,84 +583,6 @@ def render_pass(
             accum[row, col, 0] += sr
             accum[row, col, 1] += sg
             accum[row, col, 2] += sb
-
-
-# --- small kernels for tests and documentation ------------------------------------------
-
-
-@njit(**_OPTIONS)
-def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
-    """Local directions, weights and pdfs (columns x, y, z, weight, pdf) of samples 0..samples-1 of *pixel*.
-
-    The same :func:`sample_local` the integrator calls, with each sample's
-    own stream advanced as if its path had reached *depth* with no other
-    random draws; for the symmetric samplers the stream is not used.
-    """
-    out = np.empty((samples, 5))
-    key = pixel_key(seed, pixel)
-    for s in range(samples):
-        state = path_state(key, s)
-        x, y, z, weight, pdf, state = sample_local(sampler, code, full, key, s, depth, state)
-        out[s, 0] = x
-        out[s, 1] = y
-        out[s, 2] = z
-        out[s, 3] = weight
-        out[s, 4] = pdf
-    return out
-
-
-@njit(**_OPTIONS)
-def bsdf_pdfs(sampler, code, full, directions):
-    """:func:`bsdf_pdf` of each local unit direction (rows of *directions*)."""
-    out = np.empty(directions.shape[0])
-    for i in range(directions.shape[0]):
-        out[i] = bsdf_pdf(sampler, code, full, directions[i, 0], directions[i, 1], directions[i, 2])
-    return out
-
-
-@njit(**_OPTIONS)
-def first_hits(origins, directions, spheres, quads, eps):
-    """:func:`intersect` for each ray: (t, object index) arrays."""
-    count = origins.shape[0]
-    ts = np.empty(count)
-    hits = np.empty(count, dtype=np.int64)
-    scratch = np.empty(max(spheres.shape[1], quads.shape[1], 1))
-    plain = plain_spheres(spheres)
-    for i in range(count):
-        ts[i], hits[i] = intersect(
-            origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1], directions[i, 2],
-            spheres, plain, quads, eps, scratch,
-        )  # fmt: skip
-    return ts, hits
-
-
-@njit(**_OPTIONS)
-def emitter_samples(point, obj, seed, count, spheres, quads):
-    """*count* :func:`sample_emitter` draws from *point* (stream *seed*): columns wx, wy, wz, distance, pdf, ok."""
-    out = np.empty((count, 6))
-    state = np.uint64(seed)
-    for i in range(count):
-        wx, wy, wz, dist, pdf, ok, state = sample_emitter(point[0], point[1], point[2], obj, state, spheres, quads)
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = wx, wy, wz, dist, pdf, ok
-    return out
-
-
-@njit(**_OPTIONS)
-def emitter_pdfs(point, obj, ts, cosines, spheres, quads):
-    """:func:`emitter_pdf` from *point* of hits of *obj* at distances *ts* with |cos| *cosines*."""
-    out = np.empty(ts.shape[0])
-    for i in range(ts.shape[0]):
-        out[i] = emitter_pdf(point[0], point[1], point[2], obj, ts[i], cosines[i], spheres, quads)
-    return out
-
-
-@njit(**_OPTIONS)
-def sobol_points(count, key):
-    """The first *count* points of the Owen-scrambled 2D Sobol' sequence with 64-bit *key*."""
-    out = np.empty((count, 2))
-    for i in range(count):
-        out[i, 0], out[i, 1] = owen_sobol2(i, key)
-    return out
 
 
 _ready = False

@@ -16,7 +16,8 @@ from .._kernels import METHOD_CODES
 from .._validation import check_count
 from . import _integrator as _k
 from .image import save_npy, save_pfm, save_png
-from .scene import Scene, get_scene
+from .scene import Scene
+from .scenes import get_scene
 
 __all__ = [
     "FILTERS",

@@ -1,0 +1,123 @@
+"""Checks of the values in a scene, shared by :mod:`symsphere.render.scene` and
+:mod:`symsphere.render.scene_files`: numbers, integers, 3-vectors, colours and lists.
+
+Each check returns the value converted to plain Python floats / ints / tuples,
+or raises :class:`SceneError` with a message that names the field (*where*).
+:class:`SceneError` is defined here, below both of its users, and is public as
+``symsphere.render.SceneError`` and ``symsphere.render.scene.SceneError``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+__all__ = ["BLACK", "SceneError", "color", "integer", "number", "sequence", "vector"]
+
+BLACK: tuple[float, float, float] = (0.0, 0.0, 0.0)
+"""The colour (0, 0, 0): no emission, no background."""
+
+
+class SceneError(ValueError):
+    """A scene (from Python or a file) is invalid; the message names the field.
+
+    Examples
+    --------
+    >>> from symsphere.render import Camera, Scene, SceneError, Sphere, diffuse
+    >>> try:
+    ...     Scene("s", Camera((0, 0, 5), (0, 0, -1), 40), {"m": diffuse(0.5)}, (Sphere((0, 0, 0), -1, "m"),))
+    ... except SceneError as error:
+    ...     print(error)
+    scene 's': spheres[0].radius must be positive, got -1.0
+    """
+
+    __module__ = "symsphere.render.scene"  # its public home (repr, pickling), which re-exports it
+
+
+def sequence(value: Any, where: str) -> list[Any]:
+    """*value* (any iterable but a string or a mapping) as a list.
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import sequence
+    >>> sequence((1, 2), "spheres")
+    [1, 2]
+    """
+    if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__iter__"):
+        raise SceneError(f"{where} must be a list, got {type(value).__name__}")
+    return list(value)
+
+
+def number(value: Any, where: str) -> float:
+    """*value*, a finite real number (not a bool), as a float.
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import number
+    >>> number(2, "camera.fov")
+    2.0
+    >>> number(float("nan"), "camera.fov")
+    Traceback (most recent call last):
+    ...
+    symsphere.render.scene.SceneError: camera.fov must be finite, got nan
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise SceneError(f"{where} must be a number, got {value!r}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise SceneError(f"{where} must be finite, got {result!r}")
+    return result
+
+
+def integer(value: Any, where: str, minimum: int) -> int:
+    """*value*, an integer (not a bool) >= *minimum*, as an int.
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import integer
+    >>> integer(5, "settings.rr_depth", 1)
+    5
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise SceneError(f"{where} must be an integer, got {value!r}")
+    if value < minimum:
+        raise SceneError(f"{where} must be >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def vector(value: Any, where: str) -> tuple[float, ...]:
+    """*value*, 3 finite numbers, as a tuple of floats.
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import vector
+    >>> vector([0, 1, 5], "camera.position")
+    (0.0, 1.0, 5.0)
+    """
+    if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
+        raise SceneError(f"{where} must be 3 numbers [x, y, z], got {value!r}")
+    return tuple(number(c, f"{where}[{i}]") for i, c in enumerate(value))
+
+
+def color(value: Any, where: str, upper: float | None) -> tuple[float, ...]:
+    """*value*, a number (grey) or 3 numbers [r, g, b] in [0, upper] (``upper=None``: >= 0), as 3 floats.
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import color
+    >>> color(0.5, "materials.white.albedo", upper=1.0)
+    (0.5, 0.5, 0.5)
+    """
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        value = (value, value, value)
+    elif isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
+        raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {value!r}")
+    rgb = tuple(number(c, where) for c in value)
+    for c in rgb:
+        if c < 0 or (upper is not None and c > upper):
+            allowed = f"in [0, {upper:g}]" if upper is not None else ">= 0"
+            raise SceneError(f"{where} must be {allowed}, got {list(rgb)}")
+    return rgb
