@@ -70,6 +70,7 @@ INTEGRATORS = ("path", "bsdf")
 SYMMETRIC_SAMPLERS = ("symmetric", "symmetric_sobol")
 """The samplers that take a ``method`` (the map onto T0)."""
 FILTERS = ("box", "tent")
+"""Pixel filters: ``box`` (uniform in the pixel) and ``tent`` (smallpt's 2 x 2 subpixel tent)."""
 _SAMPLER_CODES = {
     "symmetric": _k.SYMMETRIC,
     "symmetric_sobol": _k.SYMMETRIC_SOBOL,
@@ -356,7 +357,7 @@ def plan_passes(
 
 
 def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.ndarray]:
-    """The images (sums, not means) of passes ``first_pass .. stop_pass - 1``, each summed from zero.
+    """The images (sums, not means) of passes ``first_pass`` to ``stop_pass - 1``, each summed from zero.
 
     Examples
     --------

@@ -57,6 +57,7 @@ __all__ = [
 ]
 
 MATERIAL_KINDS = ("diffuse", "translucent", "mirror", "dielectric")
+"""The materials of the scene format: Lambertian reflection, Lambertian reflection and transmission, mirror, glass."""
 _KIND_CODES = {"diffuse": _k.DIFFUSE, "translucent": _k.TRANSLUCENT, "mirror": _k.MIRROR, "dielectric": _k.DIELECTRIC}
 
 
@@ -148,7 +149,7 @@ def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
 
 @dataclass(frozen=True)
 class HalfSpace:
-    """The closed half-space ``{p : normal . (p - point) >= 0}`` (*normal* need not be unit).
+    """The closed half-space ``{p : dot(normal, p - point) >= 0}`` (*normal* need not be unit).
 
     Examples
     --------
@@ -260,7 +261,7 @@ class Scene:
 
     @property
     def ray_epsilon(self) -> float:
-        """The ray offset used: *epsilon*, or 1e-6 * max(1, |camera.position|)."""
+        """The ray offset used: *epsilon*, or ``1e-6 * max(1, |camera.position|)``."""
         if self.epsilon is not None:
             return self.epsilon
         return 1e-6 * max(1.0, math.sqrt(sum(c * c for c in self.camera.position)))
