@@ -16,6 +16,7 @@ from scipy import optimize
 from symsphere import bins, stats
 from symsphere.bins import bin_probabilities, equal_area_bins
 from symsphere.stats import uniform_pdf
+from references import LINEAR_NORM, cmax, cosine_pdf, linear_triangle_pdf, pole_pdf
 
 INV_SQRT3 = 1.0 / math.sqrt(3.0)
 
@@ -25,38 +26,7 @@ INV_SQRT3 = 1.0 / math.sqrt(3.0)
 # ---------------------------------------------------------------------------
 
 
-def in_t0(d):
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    return (z >= x) & (x >= y) & (y >= 0)
-
-
-def cosine_pdf(d):
-    return np.maximum(d[:, 2], 0) / np.pi
-
-
-def pole_pdf(d):
-    """Density of pole_sampler: 4 x / (pi z^2 (x^2 + y^2)) on T0 (1/sin(theta) at the pole)."""
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    r2 = x * x + y * y
-    inside = in_t0(d) & (r2 > 0)
-    safe_r2 = np.where(inside, r2, 1.0)
-    safe_z = np.where(inside, z, 1.0)
-    return np.where(inside, 4 * x / (np.pi * safe_z**2 * safe_r2), 0.0)
-
-
-# Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
-LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
-
-
-def linear_triangle_pdf(d):
-    return np.where(in_t0(d), LINEAR_NORM * d[:, 2], 0.0)
-
-
 # ---- exact per-bin integrals on T0 from antiderivatives in phi ----------------
-
-
-def cmax(phi):
-    return np.cos(phi) / np.sqrt(1 + np.cos(phi) ** 2)
 
 
 def _crossing(c, a, b):

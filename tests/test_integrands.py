@@ -13,31 +13,9 @@ import pytest
 
 import symsphere as ss
 from symsphere import integrands as I
+from references import cap_rule
 
 Z_AXIS = np.array([0.0, 0.0, 1.0])
-
-
-def _frame(axis):
-    axis = np.asarray(axis, dtype=np.float64)
-    axis = axis / np.linalg.norm(axis)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    t = np.cross(axis, helper)
-    t /= np.linalg.norm(t)
-    return t, np.cross(axis, t), axis
-
-
-def cap_rule(axis, cos_lo, cos_hi, n_cos, n_psi):
-    """Nodes and weights for the region cos_lo <= w.axis <= cos_hi (GL in cos t x trapezoid in psi)."""
-    x, w = np.polynomial.legendre.leggauss(n_cos)
-    cos = 0.5 * (cos_hi - cos_lo) * x + 0.5 * (cos_hi + cos_lo)
-    wc = 0.5 * (cos_hi - cos_lo) * w
-    psi = 2 * np.pi * np.arange(n_psi) / n_psi
-    c, p = np.meshgrid(cos, psi, indexing="ij")
-    s = np.sqrt(np.maximum(0.0, (1 - c) * (1 + c)))
-    t, b, n = _frame(axis)
-    d = (s * np.cos(p))[..., None] * t + (s * np.sin(p))[..., None] * b + c[..., None] * n
-    weights = wc[:, None] * np.full(n_psi, 2 * np.pi / n_psi)
-    return d.reshape(-1, 3), weights.ravel()
 
 
 def polygon_rule(vertices, order=24):

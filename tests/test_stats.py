@@ -33,6 +33,8 @@ from symsphere.stats import (
     uniform_pdf,
 )
 
+from references import cosine_pdf, in_t0, linear_triangle_pdf, pole_pdf
+
 SIGNIFICANCE = 0.01
 TEST_COUNT = 10  # chi-square tests expected to pass, in this file (incl. slow)
 LEVEL = dict(significance=SIGNIFICANCE, test_count=TEST_COUNT)
@@ -53,11 +55,6 @@ def uniform_hemisphere(n, seed):
     d = uniform_sphere(n, seed)
     d[:, 2] = np.abs(d[:, 2])
     return d
-
-
-def in_t0(d):
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    return (z >= x) & (x >= y) & (y >= 0)
 
 
 def uniform_triangle_rejection(n, seed):
@@ -88,10 +85,6 @@ def cosine_hemisphere_malley(n, seed):
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
-def cosine_pdf(d):
-    return np.maximum(d[:, 2], 0) / np.pi
-
-
 def pole_sampler(n, seed):
     """phi ~ U[0, pi/4], then x/z = tan(theta) cos(phi) ~ U[0, 1]: lies in T0."""
     rng = np.random.default_rng(seed)
@@ -100,24 +93,6 @@ def pole_sampler(n, seed):
     theta = np.arctan(v / np.cos(phi))
     s = np.sin(theta)
     return np.stack([s * np.cos(phi), s * np.sin(phi), np.cos(theta)], axis=1)
-
-
-def pole_pdf(d):
-    """Density of pole_sampler: 4 x / (pi z^2 (x^2 + y^2)) on T0 (1/sin(theta) at the pole)."""
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    r2 = x * x + y * y
-    inside = in_t0(d) & (r2 > 0)
-    safe_r2 = np.where(inside, r2, 1.0)
-    safe_z = np.where(inside, z, 1.0)
-    return np.where(inside, 4 * x / (np.pi * safe_z**2 * safe_r2), 0.0)
-
-
-# Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
-LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
-
-
-def linear_triangle_pdf(d):
-    return np.where(in_t0(d), LINEAR_NORM * d[:, 2], 0.0)
 
 
 def cap_sampler(n, seed):
@@ -134,10 +109,6 @@ def cap_pdf(d):
 
 
 # The lower boundary of T0 in cos theta (tests/test_bins.py has the per-bin integrals).
-def cmax(phi):
-    return np.cos(phi) / np.sqrt(1 + np.cos(phi) ** 2)
-
-
 # ---------------------------------------------------------------------------
 # Chi-square tests expected to pass (TEST_COUNT of them, incl. slow)
 # ---------------------------------------------------------------------------
