@@ -23,7 +23,10 @@
       tangent plane facing the camera (x = 1, x = 99, z = 0, z = 170, y = 0,
       y = 81.6 for ``cornell``), spanning the box the six planes bound (1 unit
       of overlap at the edges);
-    - an emitting sphere whose centre is beyond one of those planes
+    - a sphere with a ``clip`` half-space (``symsphere.render.HalfSpace``, where
+      the renderer has it) -> the cap it keeps, as a triangle mesh (24 rings x
+      96 segments);
+    - otherwise, a sphere whose centre is beyond one of those planes
       (``cornell``'s light: radius 600, centre (50, 681.6 - .27, 81.6)) -> the
       cap of it on the room side of the plane, as a triangle mesh (24 rings x
       96 segments; the cap's radius is 18.0, its height 0.27), and the zone
@@ -163,39 +166,36 @@ def _wall_planes(scene):
     return planes
 
 
-def _zone_mesh(center, radius, axis, toward, theta0, theta1, rings, segments=96):
-    """Vertices and faces of the zone theta0 <= theta <= theta1 of a sphere, theta from the pole at
-    ``center + toward * radius * e_axis``; a cap when theta0 = 0.  Faces are wound so that their
-    normals point out of the sphere."""
-    center = np.asarray(center, dtype=np.float64)
-    other = [a for a in range(3) if a != axis]
+def _zone_mesh(center, radius, pole, theta0, theta1, rings, segments=96):
+    """Vertices and faces of the zone theta0 <= theta <= theta1 of a sphere, theta measured from the
+    unit direction *pole* (a cap when theta0 = 0).  Faces are wound so that their normals point out
+    of the sphere."""
+    center, pole = np.asarray(center, dtype=np.float64), np.asarray(pole, dtype=np.float64)
+    helper = np.eye(3)[int(np.argmin(np.abs(pole)))]
+    t = np.cross(pole, helper)
+    t /= np.linalg.norm(t)
+    b = np.cross(pole, t)
     vertices = []
     first = 1 if theta0 == 0 else 0
     if first:
-        pole = center.copy()
-        pole[axis] += toward * radius
-        vertices.append(pole)
+        vertices.append(center + radius * pole)
     for i in range(first, rings + 1):
         theta = theta0 + (theta1 - theta0) * i / rings
         for j in range(segments):
             phi = 2 * math.pi * j / segments
-            p = center.copy()
-            p[axis] += toward * radius * math.cos(theta)
-            p[other[0]] += radius * math.sin(theta) * math.cos(phi)
-            p[other[1]] += radius * math.sin(theta) * math.sin(phi)
-            vertices.append(p)
+            vertices.append(center + radius * (math.cos(theta) * pole + math.sin(theta) * (math.cos(phi) * t + math.sin(phi) * b)))
     vertices = np.array(vertices)
 
     def ring(i, j):
-        return first + (i - 1 + (1 - first)) * segments + (j % segments)
+        return first + (i - first) * segments + (j % segments)
 
     faces = []
     if first:
         faces += [(0, ring(1, j), ring(1, j + 1)) for j in range(segments)]
-    for i in range(1 if first else 0, rings):
+    for i in range(first, rings):
         for j in range(segments):
-            a, b, c, d = ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1)
-            faces += [(a, c, d), (a, d, b)]
+            a, b_, c, d = ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1)
+            faces += [(a, c, d), (a, d, b_)]
     faces = np.array(faces)
     v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
     outward = np.einsum("ij,ij->i", np.cross(v1 - v0, v2 - v0), (v0 + v1 + v2) / 3 - center) > 0
@@ -267,31 +267,37 @@ def mitsuba_dict(scene: Scene, width: int, height: int, spp: int, *, workdir=Non
         if sphere.radius >= HUGE_RADIUS:
             continue
         material = materials[sphere.material]
-        clip = [
+        beyond = [
             (axis, coordinate)
             for axis, coordinate, sign, _ in planes
             if (sphere.center[axis] - coordinate) * sign < 0  # centre beyond the plane, outside the room
         ]
-        if clip:
-            if len(clip) > 1:
+        parts = {}  # name -> (pole, theta0, theta1, rings, emitter sampling weight)
+        clip = getattr(sphere, "clip", None)  # symsphere.render.HalfSpace, on a branch with clipped spheres
+        if clip is not None:  # keep n . (p - q) >= 0: the cap about n of the sphere
+            n = np.asarray(clip.normal, dtype=np.float64) / np.linalg.norm(clip.normal)
+            lowest = float(n @ (np.asarray(clip.point, dtype=np.float64) - np.asarray(sphere.center)))
+            parts["cap"] = (n, 0.0, math.acos(min(max(lowest / sphere.radius, -1.0), 1.0)), 24, 1.0)
+        elif beyond:
+            if len(beyond) > 1:
                 raise ValueError(f"sphere {k} lies beyond more than one wall")
-            axis, coordinate = clip[0]
-            toward = math.copysign(1.0, coordinate - sphere.center[axis])  # from the centre to the room
+            axis, coordinate = beyond[0]
+            n = np.zeros(3)
+            n[axis] = math.copysign(1.0, coordinate - sphere.center[axis])  # from the centre to the room
             depth = abs(coordinate - sphere.center[axis])
             theta_cap = math.acos(min(depth / sphere.radius, 1.0))
             theta_band = math.acos(min(max((depth - BAND) / sphere.radius, -1.0), 1.0))
-            for part, (theta0, theta1, rings, weight) in {
-                "cap": (0.0, theta_cap, 24, 1.0),
-                "band": (theta_cap, theta_band, 32, 0.0),
-            }.items():
-                vertices, faces = _zone_mesh(sphere.center, sphere.radius, axis, toward, theta0, theta1, rings)
-                path = os.path.join(workdir, f"sphere{k}_{part}.obj")
-                _write_obj(path, vertices, faces)
-                shape = {"type": "obj", "filename": path, "face_normals": True, **_shape_extras(material)}
-                if "emitter" in shape:
-                    shape["emitter"] = dict(shape["emitter"], sampling_weight=weight)
-                result[f"sphere{k}_{part}"] = shape
-        else:
+            parts["cap"] = (n, 0.0, theta_cap, 24, 1.0)
+            parts["band"] = (n, theta_cap, theta_band, 32, 0.0)
+        for part, (pole, theta0, theta1, rings, weight) in parts.items():
+            vertices, faces = _zone_mesh(sphere.center, sphere.radius, pole, theta0, theta1, rings)
+            path = os.path.join(workdir, f"sphere{k}_{part}.obj")
+            _write_obj(path, vertices, faces)
+            shape = {"type": "obj", "filename": path, "face_normals": True, **_shape_extras(material)}
+            if "emitter" in shape:
+                shape["emitter"] = dict(shape["emitter"], sampling_weight=weight)
+            result[f"sphere{k}_{part}"] = shape
+        if not parts:
             result[f"sphere{k}"] = {
                 "type": "sphere",
                 "center": [float(c) for c in sphere.center],

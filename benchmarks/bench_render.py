@@ -272,8 +272,11 @@ def _integrator_choices():
     parameters = inspect.signature(render).parameters
     if "integrator" not in parameters:
         return (None,), None
+    import symsphere.render
+
     default = parameters["integrator"].default
-    return tuple(sorted(("path", "bsdf"), key=lambda name: name != default)), default
+    available = getattr(symsphere.render, "INTEGRATORS", ("path", "bsdf"))
+    return tuple(sorted((i for i in ("path", "bsdf") if i in available), key=lambda name: name != default)), default
 
 
 def _rel_mse(image, reference):
@@ -313,8 +316,9 @@ class _Ours:
         return result.image, result.seconds
 
     def warm_up(self, spp):
-        self.render_small = render(self.scene, width=8, height=8, spp=1, sampler=self.sampler, seed=0,
-                                   **({} if self.integrator is None else {"integrator": self.integrator}))  # fmt: skip
+        """Compile the kernel or load it from numba's cache (render() times only after that anyway)."""
+        extra = {} if self.integrator is None else {"integrator": self.integrator}
+        render(self.scene, width=8, height=8, spp=1, sampler=self.sampler, seed=0, threads=self.threads, **extra)
 
 
 class _Mitsuba:
