@@ -509,8 +509,10 @@ def _equal_time_scene(name, args, integrators, default_integrator, mitsuba_ok, m
 def _summary(runs, paths):
     rel = statistics.fmean(r["rel_mse"] for r in runs)
     seconds = statistics.fmean(r["seconds"] for r in runs)
+    spread = statistics.stdev(r["rel_mse"] for r in runs) / math.sqrt(len(runs)) if len(runs) > 1 else None
     return dict(
         rel_mse=rel,
+        rel_mse_se=spread,
         flip=statistics.fmean(r["flip"] for r in runs),
         seconds=seconds,
         paths_per_second=paths / seconds,
@@ -574,7 +576,10 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
     tiles = [(f"reference: ours, {references['symsphere']['spp']} spp", ref["symsphere"][0].image)]
     if "mitsuba" in ref:
         tiles.append((f"reference: Mitsuba, {references['mitsuba']['spp']} spp", ref["mitsuba"][0].image))
-    for key, (image, spp, seconds, rel, flip) in keep.items():
+    for key in records:
+        if key not in keep:
+            continue
+        image, spp, seconds, rel, flip = keep[key]
         label = records[key]["label"].replace("`", "")
         tiles.append((f"{label}\n{spp} spp, {seconds:.2f} s, relMSE {rel:.3g}, FLIP {flip:.3f}", image))
     columns = min(5, len(tiles))
@@ -631,9 +636,46 @@ def equal_time(args):
         )
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(results, indent=1))  # after every scene: a partial run leaves its numbers
+    _equal_time_answer(results)
     _equal_time_targets(results)
     out.write_text(json.dumps(results, indent=1))
     print(f"\nwrote {out}", file=sys.stderr)
+
+
+def _equal_time_answer(results):
+    """Each symmetric sampler against i.i.d. cosine sampling, with the default (NEE) integrator when there is one."""
+    integrator = results["default_integrator"] or "bsdf"
+    base_key = f"cosine/{integrator}"
+    budgets = [str(b) for b in results["budgets"]]
+    lines = [
+        f"Symmetric samplers against `cosine`, integrator `{integrator}`: relMSE ratio at {results['equal_spp']} spp "
+        "(below 1: the symmetric sampler is better; ± from the seed-to-seed spread) and efficiency ratio at each "
+        "budget (above 1: better at equal time):",
+        "",
+        "| scene | sampler | relMSE / cosine's, equal spp | " + " | ".join(f"efficiency × cosine's, {b} s" for b in budgets)
+        + " |",
+        "|---|---|---:|" + "---:|" * len(budgets),
+    ]  # fmt: skip
+    for scene in results["scenes"]:
+        records = scene["strategies"]
+        if base_key not in records:
+            continue
+        base = records[base_key]
+        for key, record in records.items():
+            sampler = key.split("/")[0]
+            if not key.endswith(f"/{integrator}") or not sampler.startswith("symmetric"):
+                continue
+            a, b = record["equal_spp_summary"], base["equal_spp_summary"]
+            ratio = a["rel_mse"] / b["rel_mse"]
+            error = ""
+            if a["rel_mse_se"] is not None and b["rel_mse_se"] is not None:
+                error = f" ± {ratio * math.hypot(a['rel_mse_se'] / a['rel_mse'], b['rel_mse_se'] / b['rel_mse']):.2f}"
+            efficiency = [record["budgets"][x]["efficiency"] / base["budgets"][x]["efficiency"] for x in budgets]
+            lines.append(f"| {scene['scene']} | `{sampler}` | {ratio:.2f}{error} | "
+                         + " | ".join(f"{e:.2f}" for e in efficiency) + " |")  # fmt: skip
+    text = "\n".join(lines)
+    results["answer_markdown"] = text
+    print("\n" + text)
 
 
 def _equal_time_targets(results):
