@@ -149,7 +149,7 @@ def render(
     """
     from distributed import as_completed
 
-    from .render.renderer import _plan as _render_plan
+    from .render.renderer import plan_passes as _render_plan
 
     plan = _render_plan(scene, width, height, spp, sampler, method, pixel_filter, seed)
     passes_per_task = check_count(passes_per_task, "passes_per_task")

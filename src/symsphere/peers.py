@@ -881,13 +881,72 @@ def _wrap_unit(t):
     return np.where(t >= 1.0, 0.0, t)
 
 
-def _uniform_sphere(uv):
-    # pbrt-v4 / Mitsuba: z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v.
-    u, v = uv[..., 0], uv[..., 1]
+# --- elementwise formulas -------------------------------------------------------------
+# Each map below is written once, as an elementwise function of (u, v) that numpy applies to
+# arrays and numba compiles for scalars (``register_jitable``): the path tracer's kernels
+# (symsphere.render._integrator) call the very same formulas.  ``_pick`` is np.where for
+# arrays and a conditional expression in numba.
+
+from numba.extending import overload as _overload  # noqa: E402
+from numba.extending import register_jitable as _register_jitable  # noqa: E402
+
+
+def _pick(condition, a, b):
+    """``np.where(condition, a, b)``; in numba code, ``a if condition else b`` (scalars)."""
+    return np.where(condition, a, b)
+
+
+@_overload(_pick)
+def _pick_scalar(condition, a, b):
+    def impl(condition, a, b):
+        return a if condition else b
+
+    return impl
+
+
+@_register_jitable
+def uniform_sphere_point(u, v):
+    """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v."""
     z = 1.0 - 2.0 * u
     r = 2.0 * np.sqrt(u * (1.0 - u))
     phi = 2.0 * np.pi * v
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    return r * np.cos(phi), r * np.sin(phi), z
+
+
+@_register_jitable
+def uniform_hemisphere_point(u, v):
+    """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere)."""
+    r = np.sqrt((1.0 - u) * (1.0 + u))
+    phi = 2.0 * np.pi * v
+    return r * np.cos(phi), r * np.sin(phi), u
+
+
+@_register_jitable
+def concentric_disk_point(u, v):
+    """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk."""
+    a = 2.0 * u - 1.0
+    b = 2.0 * v - 1.0
+    wide = np.abs(a) >= np.abs(b)
+    r = _pick(wide, a, b)
+    safe = _pick(r != 0, r, 1.0)
+    # angle (pi/4)(b/a) in the wide sectors, pi/2 - (pi/4)(a/b) in the others:
+    # x = r cos, y = r sin; for the others cos(pi/2 - t) = sin t.
+    t = 0.25 * np.pi * _pick(wide, b, a) / safe
+    c, s = np.cos(t), np.sin(t)
+    return r * _pick(wide, c, s), r * _pick(wide, s, c)
+
+
+@_register_jitable
+def cosine_hemisphere_point(u, v):
+    """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho))."""
+    x, y = concentric_disk_point(u, v)
+    rho = np.maximum(np.abs(2.0 * u - 1.0), np.abs(2.0 * v - 1.0))
+    z = np.sqrt(np.maximum((1.0 - rho) * (1.0 + rho), 0.0))
+    return x, y, z
+
+
+def _uniform_sphere(uv):
+    return np.stack(uniform_sphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _uniform_sphere_inverse(d):
@@ -900,10 +959,7 @@ def _uniform_sphere_inverse(d):
 
 
 def _uniform_hemisphere(uv):
-    u, v = uv[..., 0], uv[..., 1]
-    r = np.sqrt((1.0 - u) * (1.0 + u))
-    phi = 2.0 * np.pi * v
-    return np.stack([r * np.cos(phi), r * np.sin(phi), u], axis=-1)
+    return np.stack(uniform_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _uniform_hemisphere_inverse(d):
@@ -979,19 +1035,7 @@ def _octahedral_hemisphere_inverse(d):
 
 
 def _concentric(uv):
-    # Shirley & Chiu (1997): concentric squares -> concentric circles.
-    a = 2.0 * uv[..., 0] - 1.0
-    b = 2.0 * uv[..., 1] - 1.0
-    wide = np.abs(a) >= np.abs(b)
-    r = np.where(wide, a, b)
-    safe = np.where(r != 0, r, 1.0)
-    # angle (pi/4)(b/a) in the wide sectors, pi/2 - (pi/4)(a/b) in the others:
-    # x = r cos, y = r sin; for the others cos(pi/2 - t) = sin t.
-    t = 0.25 * np.pi * np.where(wide, b, a) / safe
-    c, s = np.cos(t), np.sin(t)
-    x = r * np.where(wide, c, s)
-    y = r * np.where(wide, s, c)
-    return np.stack([x, y], axis=-1)
+    return np.stack(concentric_disk_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _concentric_inverse(p):
@@ -1009,10 +1053,7 @@ def _concentric_inverse(p):
 
 
 def _cosine_hemisphere(uv):
-    disk = _concentric(uv)
-    rho = np.maximum(np.abs(2.0 * uv[..., 0] - 1.0), np.abs(2.0 * uv[..., 1] - 1.0))
-    z = np.sqrt(np.maximum((1.0 - rho) * (1.0 + rho), 0.0))  # Malley: lift to the hemisphere
-    return np.concatenate([disk, z[..., None]], axis=-1)
+    return np.stack(cosine_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _cosine_hemisphere_inverse(d):

@@ -15,11 +15,23 @@ See docs/rendering.md.
 """
 
 from .image import linear_to_srgb, load_pfm, save_image, save_npy, save_pfm, save_png, tonemap
-from .renderer import FILTERS, SAMPLERS, SYMMETRIC_SAMPLERS, RenderResult, render, write_outputs
+from .renderer import (
+    FILTERS,
+    INTEGRATORS,
+    SAMPLERS,
+    SYMMETRIC_SAMPLERS,
+    RenderPlan,
+    RenderResult,
+    plan_passes,
+    render,
+    render_passes,
+    write_outputs,
+)
 from .scene import (
     MATERIAL_KINDS,
     SCENES,
     Camera,
+    HalfSpace,
     Material,
     Quad,
     Scene,
@@ -39,13 +51,16 @@ from .scene import (
 
 __all__ = [
     "FILTERS",
+    "INTEGRATORS",
     "MATERIAL_KINDS",
     "SAMPLERS",
     "SCENES",
     "SYMMETRIC_SAMPLERS",
     "Camera",
+    "HalfSpace",
     "Material",
     "Quad",
+    "RenderPlan",
     "RenderResult",
     "Scene",
     "SceneError",
@@ -59,7 +74,9 @@ __all__ = [
     "load_pfm",
     "load_scene",
     "mirror",
+    "plan_passes",
     "render",
+    "render_passes",
     "save_image",
     "save_npy",
     "save_pfm",

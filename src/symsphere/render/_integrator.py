@@ -1,17 +1,22 @@
-"""The path-tracing kernels: BSDF-sampling-only Monte Carlo solution of the rendering equation.
+"""The path-tracing kernels: two estimators of the rendering equation, one numba kernel.
 
 All numba code of the renderer that is not random-number plumbing
 (:mod:`symsphere.render._random`) is here.  Direction sampling at diffuse
-vertices goes through the scalar functions of :mod:`symsphere._kernels`
-(``triangle_point``, ``triangle_density``, ``orbit_member``), so no map or
-orbit formula is restated.
+vertices goes through scalar library functions -- the maps and the orbit
+(``triangle_point``, ``triangle_density``, ``orbit_member`` of
+:mod:`symsphere._kernels`), the classic uniform and cosine maps
+(``uniform_hemisphere_point`` etc. of :mod:`symsphere.peers`), the frame
+(:func:`symsphere.frames.frame_rows`) and the cosine-weighted wedge map
+(:func:`symsphere.wedge.cosine_wedge_point`) -- so
+no formula is restated.
 
-Estimator
----------
-A camera path is traced until it escapes, is absorbed (zero throughput) or
-is stopped by Russian roulette.  At every vertex the emitted radiance times
-the throughput is added (emission is two-sided).  Diffuse vertices sample a
-direction with pdf p and multiply the throughput by ``f cos / p``:
+Estimators (``integrator``)
+---------------------------
+``BSDF`` (smallpt's): a camera path is traced until it escapes, is absorbed
+(zero throughput) or is stopped by Russian roulette.  At every vertex the
+emitted radiance times the throughput is added (emission is two-sided).
+Diffuse vertices sample a direction with pdf p and multiply the throughput by
+``f cos / p``:
 
 - Lambertian reflection: ``f = albedo / pi`` on the side of the incoming ray,
   directions on the hemisphere about the facing normal;
@@ -22,6 +27,30 @@ direction with pdf p and multiply the throughput by ``f cos / p``:
 - smooth dielectric: reflection with probability F (exact unpolarised
   Fresnel), refraction otherwise, times the tint either way.
 
+``PATH`` (the default): the same paths, plus next-event estimation (NEE) at
+every diffuse and translucent vertex, combined with the BSDF-sampled hits by
+multiple importance sampling (Veach 1997, power heuristic beta = 2; pbrt-v4
+``PathIntegrator``, Mitsuba 3 ``path``).  At such a vertex x one emitter is
+chosen with probability proportional to its power (mean emitted radiance x
+area; :func:`symsphere.render.scene._light_tables`), a point or direction on it
+is sampled (:func:`sample_emitter`) with solid-angle pdf p_l (times the
+selection probability), one shadow ray decides visibility, and
+``f |cos| Le w_l / p_l`` is added with ``w_l = p_l^2 / (p_l^2 + p_b^2)``, p_b
+the density with which the vertex's direction sampler draws that direction
+(:func:`bsdf_pdf`).  When the BSDF-sampled ray from x hits an emitter, its
+emission is weighted by ``w_b = p_b^2 / (p_b^2 + p_l^2)`` with p_l from
+:func:`emitter_pdf`.  Emission seen by the camera or after a mirror or
+dielectric (specular) bounce is counted by BSDF sampling alone (weight 1),
+as is the background.  NEE is skipped at the last vertex allowed by
+``max_depth``, so that both estimators estimate the same truncated sum.
+
+Emitters are sampled as pbrt-v4 and Mitsuba 3 do (:func:`sample_emitter`):
+a full sphere seen from outside uniformly in the cone it subtends (pdf
+``1 / (2 pi (1 - cos theta_max))``), from inside (or on it) by area; a
+clipped sphere (a spherical cap) by area on the cap, uniform in height
+(Archimedes: the area of a spherical zone is 2 pi r h); a parallelogram by
+area.  Area densities are converted to solid angle, ``p_w = d^2 / (|cos_l| A)``.
+
 Russian roulette (as Mitsuba 3's ``path`` integrator): after the throughput
 update at vertex v (0-based), if ``v + 1 >= rr_depth`` the path survives with
 probability ``q = min(max(throughput), 0.95)`` and is divided by q.
@@ -30,13 +59,17 @@ ended every path (survival after depth 1024 is below 0.95**1019 ~ 1e-23).
 
 Samplers (codes)
 ----------------
-``UNIFORM`` classic uniform directions (z = u or 1 - 2u, phi = 2 pi v);
-``COSINE`` Shirley–Chiu concentric disk + Malley (the full sphere: a side
-with probability 1/2); ``ORBIT`` a random base point mapped onto T0 and a
-uniformly random orbit member, i.i.d.; ``SYMMETRIC`` the paper's pattern
-inside a pixel with random base points; ``SYMMETRIC_SOBOL`` the same with
-Owen-scrambled Sobol' base points.  See :func:`sample_local` for the exact
-mapping of (sample, vertex) to (group, member, base point).
+``UNIFORM`` classic uniform directions (``peers.uniform_hemisphere_point``,
+``uniform_sphere_point``); ``COSINE`` Shirley-Chiu concentric disk + Malley
+(``peers.cosine_hemisphere_point``; the full sphere: a side with probability
+1/2); ``ORBIT`` a random base point mapped onto T0 and a uniformly random
+orbit member, i.i.d.; ``SYMMETRIC`` the paper's pattern inside a pixel with
+random base points; ``SYMMETRIC_SOBOL`` the same with Owen-scrambled Sobol'
+base points; ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` the same
+pattern with the 8 signed permutations that keep z (16 with the side through
+transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4.  See
+:func:`sample_local` for the exact mapping of (sample, vertex) to (group,
+member, base point).
 """
 
 from __future__ import annotations
@@ -47,25 +80,37 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import register_jitable
 
-from .. import _kernels, _orbit_stores, maps, symmetry
+from .. import _kernels, _orbit_stores, frames, maps, peers, symmetry, wedge
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
+from ..frames import frame_rows
+from ..peers import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
+from ..wedge import cosine_wedge_point
 from . import _random
 from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
 
-UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL = 0, 1, 2, 3, 4
+UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
+PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
 
-SPHERE_COLUMNS = 5  # rows of the (5, n) sphere table: cx, cy, cz, r, r^2
-QUAD_COLUMNS = 16  # rows of the (16, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner
+# rows of the (10, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; 0 if
+# unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped)
+SPHERE_COLUMNS = 10
+# rows of the (17, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area
+QUAD_COLUMNS = 17
 MATERIAL_COLUMNS = 11  # kind, colour (3), transmittance (3), ior, emission (3)
 CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image plane at distance 1 (3 each), near
+# lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
+# light_pmf: the selection probability of every object (0 for non-emitters)
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
 _PI = math.pi
 _INV_PI = 1.0 / math.pi
+_INV_2PI = 0.5 / math.pi
+_INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
+_SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if it hits it within this
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -74,22 +119,14 @@ _ONE = np.uint64(1)
 
 
 @register_jitable
-def frame_rows(nx, ny, nz):
-    """Duff et al. (2017) frame about the unit normal n: rows t, b (n is the third row).
-
-    The scalar twin of :func:`symsphere.frames.frame` (which numba cannot
-    compile: it unpacks a generator); a test pins them equal.
-    """
-    sign = math.copysign(1.0, nz)
-    a = -1.0 / (sign + nz)
-    b = nx * ny * a
-    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
-
-
-@register_jitable
 def to_world(lx, ly, lz, nx, ny, nz):
     """Local (x, y, z) about the unit normal n (z along n) to world coordinates."""
     t, b = frame_rows(nx, ny, nz)
+    return _rows_to_world(lx, ly, lz, t, b, nx, ny, nz)
+
+
+@register_jitable
+def _rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
     return (
         lx * t[0] + ly * b[0] + lz * nx,
         lx * t[1] + ly * b[1] + lz * ny,
@@ -99,7 +136,7 @@ def to_world(lx, ly, lz, nx, ny, nz):
 
 @register_jitable
 def sample_local(sampler, code, full, key, s, depth, state):
-    """A direction about the local pole (0, 0, 1) and its weight ``|cos| / (pi pdf)``.
+    """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
 
     Parameters
     ----------
@@ -117,8 +154,10 @@ def sample_local(sampler, code, full, key, s, depth, state):
 
     Returns
     -------
-    (x, y, z, weight, state)
-        For a BSDF ``f = c / pi`` the throughput factor is ``c * weight``.
+    (x, y, z, weight, pdf, state)
+        For a BSDF ``f = c / pi`` the throughput factor is ``c * weight``;
+        pdf (solid angle) is what :func:`bsdf_pdf` returns for (x, y, z): the
+        marginal density of one sample, the one MIS needs.
 
     Notes
     -----
@@ -135,32 +174,39 @@ def sample_local(sampler, code, full, key, s, depth, state):
     ``ORBIT`` sampler (unbiased sample by sample, for any spp).  Without the
     offset a sample would keep member s mod n at every vertex, confined to
     one triangle of every local frame: biased.
+
+    ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` do the same with
+    n = 8 members, the signed permutations (x, y, z) -> (+-x, +-y, z),
+    (+-y, +-x, z) (``orbit_member`` 0..7), which keep z and hence the cosine
+    density; through transmission n = 16, members 8..15 being the same maps
+    followed by z -> -z (``orbit_member`` 24..31).  The base point is the
+    cosine-weighted map onto the wedge 0 <= phi <= pi/4
+    (:func:`symsphere.wedge.cosine_wedge_point`), whose
+    8 images tile the hemisphere: each sample is cosine-distributed.
     """
     if sampler == UNIFORM:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
-        u = u01(b1)
-        phi = 2.0 * _PI * u01(b2)
         if full:
-            z = 1.0 - 2.0 * u
-            weight = 4.0 * abs(z)
-        else:
-            z = u
-            weight = 2.0 * z
-        r = math.sqrt(max(0.0, 1.0 - z * z))
-        return r * math.cos(phi), r * math.sin(phi), z, weight, state
+            x, y, z = uniform_sphere_point(u01(b1), u01(b2))
+            return x, y, z, 4.0 * abs(z), _INV_4PI, state
+        x, y, z = uniform_hemisphere_point(u01(b1), u01(b2))
+        return x, y, z, 2.0 * z, _INV_2PI, state
     if sampler == COSINE:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
-        x, y = _concentric_disk(2.0 * u01(b1) - 1.0, 2.0 * u01(b2) - 1.0)
-        z = math.sqrt(max(0.0, 1.0 - x * x - y * y))
+        x, y, z = cosine_hemisphere_point(u01(b1), u01(b2))
         if full:
             state, b3 = next_u64(state)
             if b3 >> np.uint64(63):
                 z = -z
-            return x, y, z, 2.0, state
-        return x, y, z, 1.0, state
-    n = 48 if full else 24
+            return x, y, z, 2.0, abs(z) * _INV_2PI, state
+        return x, y, z, 1.0, z * _INV_PI, state
+    cosine = sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
+    if cosine:
+        n = 16 if full else 8
+    else:
+        n = 48 if full else 24
     if sampler == ORBIT:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
@@ -169,20 +215,26 @@ def sample_local(sampler, code, full, key, s, depth, state):
         v = u01(b2)
         member = below(b3, n)
     else:
-        if full:  # literal divisors: no integer division instruction
-            group = s // 48
+        if cosine:  # literal divisors: no integer division instruction
+            group = s // 16 if full else s // 8
         else:
-            group = s // 24
+            group = s // 48 if full else s // 24
         vertex_key = mix64(key ^ (np.uint64(depth) * _GOLDEN + np.uint64(n)))  # (pixel, vertex, orbit size)
         h = mix64(vertex_key ^ ((np.uint64(group) + _ONE) * _ODD))  # ... and group
         member = s - n * group + below(h, n)  # (s mod n + offset) mod n, both terms < n
         if member >= n:
             member -= n
-        if sampler == SYMMETRIC:
+        if sampler == SYMMETRIC or sampler == SYMMETRIC_COSINE:
             u = u01(mix64(h ^ _BASE_U))
             v = u01(mix64(h ^ _BASE_V))
         else:  # point `group` of the sequence scrambled for this (pixel, vertex, orbit size)
             u, v = owen_sobol2(group, vertex_key)
+    if cosine:
+        bx, by, bz = cosine_wedge_point(u, v)
+        x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
+        if full:
+            return x, y, z, 2.0, abs(z) * _INV_2PI, state
+        return x, y, z, 1.0, z * _INV_PI, state
     bx, by, bz = triangle_point(u, v, code)
     density = triangle_density(bx, by, bz, code)
     x, y, z = orbit_member(bx, by, bz, member)
@@ -190,21 +242,32 @@ def sample_local(sampler, code, full, key, s, depth, state):
         weight = abs(z) * n * _INV_PI / density  # density = +inf at the paper maps' vertex: weight 0
     else:
         weight = 0.0  # unreachable: triangle_point clamps into T0, where the density is positive
-    return x, y, z, weight, state
+    return x, y, z, weight, density / n, state
 
 
 @register_jitable
-def _concentric_disk(a, b):
-    """Shirley & Chiu (1997) concentric map of [-1, 1]^2 onto the unit disk."""
-    if a == 0.0 and b == 0.0:
-        return 0.0, 0.0
-    if abs(a) > abs(b):
-        r = a
-        phi = (_PI / 4.0) * (b / a)
-    else:
-        r = b
-        phi = (_PI / 2.0) - (_PI / 4.0) * (a / b)
-    return r * math.cos(phi), r * math.sin(phi)
+def bsdf_pdf(sampler, code, full, x, y, z):
+    """The solid-angle density with which *sampler* draws the local unit direction (x, y, z).
+
+    The marginal density of one sample (what :func:`sample_local` returns as
+    pdf): 1/(2 pi) (sphere 1/(4 pi)) for ``UNIFORM``; z / pi (sphere
+    |z| / (2 pi)) for ``COSINE`` and the symmetric cosine samplers;
+    ``triangle_density(fold(x, y, z)) / n`` for the orbit samplers, fold =
+    sorting |x|, |y|, |z| into T0 = {z >= x >= y >= 0}.  Hemisphere samplers:
+    only for z >= 0.
+    """
+    if sampler == UNIFORM:
+        return _INV_4PI if full else _INV_2PI
+    if sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL:
+        return abs(z) * _INV_2PI if full else z * _INV_PI
+    a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
+    if a < b:
+        a, b = b, a
+    if b < c:
+        b, c = c, b
+    if a < b:
+        a, b = b, a
+    return triangle_density(b, c, a, code) / (48 if full else 24)
 
 
 @register_jitable
@@ -238,7 +301,9 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
     is then the first smallest distance, spheres before quads: exactly what a
     branchy loop with ``t < t_best`` returns.  Sphere test as smallpt's:
     b = (c - o) . d, det = b^2 - |c - o|^2 + r^2, t = b -+ sqrt(det), in float64
-    (the 1e5-radius walls need it).
+    (the 1e5-radius walls need it).  A clipped sphere keeps a root only if
+    its point is in the half-space a . p >= d, i.e. ``(a . o - d) + t (a . d) >= 0``
+    (for an unclipped sphere a = 0, d = -inf: always); the nearer kept root wins.
     """
     t_best = np.inf
     hit = -1
@@ -252,8 +317,14 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
             det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
             root = math.sqrt(max(det, 0.0))
             near = b - root
-            t = near if near > eps else b + root
-            scratch[i] = t if (det >= 0.0 and t > eps) else np.inf
+            far = b + root
+            ax, ay, az = spheres[5, i], spheres[6, i], spheres[7, i]
+            side = (ax * ox + ay * oy + az * oz) - spheres[8, i]
+            slope = ax * dx + ay * dy + az * dz
+            near_ok = near > eps and side + near * slope >= 0.0
+            far_ok = far > eps and side + far * slope >= 0.0
+            t = near if near_ok else (far if far_ok else np.inf)
+            scratch[i] = t if det >= 0.0 else np.inf
         for i in range(n):
             if scratch[i] < t_best:
                 t_best = scratch[i]
@@ -283,10 +354,151 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
     return t_best, hit
 
 
+# --- emitters ------------------------------------------------------------------------
+
+
+@register_jitable
+def _sphere_cone(px, py, pz, i, spheres):
+    """(e = c - p, |e|^2, p outside the sphere): whether a full sphere is sampled by its cone from p.
+
+    One expression, used by :func:`sample_emitter` and :func:`emitter_pdf`
+    alike, so that both make the same choice for the same point (a point on
+    the sphere may round either way; both choices are valid there).
+    """
+    ex = spheres[0, i] - px
+    ey = spheres[1, i] - py
+    ez = spheres[2, i] - pz
+    d2 = ex * ex + ey * ey + ez * ez
+    return ex, ey, ez, d2, d2 > spheres[4, i] and spheres[8, i] == -np.inf
+
+
+@register_jitable
+def sample_emitter(px, py, pz, obj, u, v, spheres, quads):
+    """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok).
+
+    w is a unit direction, pdf its solid-angle density (without the emitter's
+    selection probability).  distance is that of the sampled point, or -1 when
+    a direction was sampled (cone): then any hit of *obj* along w is the
+    sampled one.  ``ok`` is False for a degenerate sample (zero distance or a
+    grazing point), which contributes nothing.
+
+    - a full sphere seen from outside: uniform in the cone it subtends
+      (pbrt-v4 ``Sphere::Sample(ctx, u)``, Mitsuba 3 ``Sphere::sample_direction``):
+      ``sin^2 theta_max = r^2 / |c - p|^2``, ``1 - cos theta = u (1 - cos theta_max)``,
+      ``1 - cos theta_max = sin^2 theta_max / (1 + cos theta_max)`` (no cancellation
+      for small cones), pdf ``1 / (2 pi (1 - cos theta_max))``;
+    - a full sphere seen from inside or on it, and a clipped sphere: by area on
+      the cap of height h about the axis a (h = 2 r: the whole sphere), uniform
+      in height by Archimedes' hat-box theorem: ``w = u h`` below the pole
+      c + r a, ring radius ``sqrt(w (2 r - w))``, azimuth ``2 pi v``; area
+      ``2 pi r h``;
+    - a parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
+
+    Area densities become solid-angle ones as ``|q - p|^2 / (|cos_l| area)``,
+    cos_l between w and the emitter's normal at q.
+    """
+    n_spheres = spheres.shape[1]
+    if obj < n_spheres:
+        r = spheres[3, obj]
+        ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
+        if cone:
+            sin2 = spheres[4, obj] / d2
+            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
+            one_minus_cos_max = sin2 / (1.0 + cos_max)
+            w = u * one_minus_cos_max  # 1 - cos theta
+            sin_t = math.sqrt(max(0.0, w * (2.0 - w)))
+            phi = 2.0 * _PI * v
+            inv = 1.0 / math.sqrt(d2)
+            wx, wy, wz = to_world(sin_t * math.cos(phi), sin_t * math.sin(phi), 1.0 - w, ex * inv, ey * inv, ez * inv)
+            return wx, wy, wz, -1.0, _INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0
+        if spheres[8, obj] == -np.inf:
+            ax, ay, az = 0.0, 0.0, 1.0
+        else:
+            ax, ay, az = spheres[5, obj], spheres[6, obj], spheres[7, obj]
+        height = spheres[9, obj]
+        w = u * height  # depth below the pole c + r a
+        ring = math.sqrt(max(0.0, w * (2.0 * r - w)))
+        phi = 2.0 * _PI * v
+        ox, oy, oz = to_world(ring * math.cos(phi), ring * math.sin(phi), r - w, ax, ay, az)  # q - c
+        qx = spheres[0, obj] + ox
+        qy = spheres[1, obj] + oy
+        qz = spheres[2, obj] + oz
+        inv_r = 1.0 / r
+        nx, ny, nz = ox * inv_r, oy * inv_r, oz * inv_r
+        area = 2.0 * _PI * r * height
+    else:
+        j = obj - n_spheres
+        qx = quads[0, j] + u * quads[3, j] + v * quads[6, j]
+        qy = quads[1, j] + u * quads[4, j] + v * quads[7, j]
+        qz = quads[2, j] + u * quads[5, j] + v * quads[8, j]
+        nx, ny, nz = quads[9, j], quads[10, j], quads[11, j]
+        area = quads[16, j]
+    dx = qx - px
+    dy = qy - py
+    dz = qz - pz
+    dist2 = dx * dx + dy * dy + dz * dz
+    dist = math.sqrt(dist2)
+    if not dist > 0.0:
+        return 0.0, 0.0, 1.0, 0.0, 0.0, False
+    inv = 1.0 / dist
+    dx *= inv
+    dy *= inv
+    dz *= inv
+    cos_l = abs(dx * nx + dy * ny + dz * nz)
+    if not cos_l > 0.0:
+        return dx, dy, dz, dist, 0.0, False
+    return dx, dy, dz, dist, dist2 / (cos_l * area), True
+
+
+@register_jitable
+def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
+    """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
+
+    *cos_l* is |cos| between the ray and the emitter's normal at the hit.
+    The same case analysis as :func:`sample_emitter` (cone, cap, parallelogram).
+    """
+    n_spheres = spheres.shape[1]
+    if obj < n_spheres:
+        _, _, _, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
+        if cone:
+            sin2 = spheres[4, obj] / d2
+            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
+            return _INV_2PI * (1.0 + cos_max) / sin2
+        area = 2.0 * _PI * spheres[3, obj] * spheres[9, obj]
+    else:
+        area = quads[16, obj - n_spheres]
+    if not cos_l > 0.0:
+        return np.inf
+    return t * t / (cos_l * area)
+
+
+@register_jitable
+def choose_light(lights, u):
+    """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
+    last = lights.shape[1] - 1
+    j = 0
+    while j < last and u >= lights[1, j]:
+        j += 1
+    return j
+
+
+@register_jitable
+def power_heuristic(pdf, other):
+    """Veach's power heuristic (beta = 2) ``pdf^2 / (pdf^2 + other^2)``, as ``1 / (1 + (other / pdf)^2)``.
+
+    The quotient form handles pdf = inf (weight 1; the paper maps' vertex,
+    where the sample's throughput weight is 0 anyway) and other = 0.
+    """
+    if not pdf > 0.0:
+        return 0.0
+    ratio = other / pdf
+    return 1.0 / (1.0 + ratio * ratio)
+
+
 @register_jitable(inline="always")  # numba-IR inlining: no call, no reference counting of the arrays
 def radiance(
-    spheres, sphere_material, quads, quad_material, materials, camera, background, eps, rr_depth, max_depth,
-    sampler, code, pixel_filter, key, s, row, col, width, height, scratch,
+    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
+    rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col, width, height, scratch,
 ):  # fmt: skip
     """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top."""
     state = path_state(key, s)
@@ -309,8 +521,32 @@ def radiance(
     br, bg, bb = 1.0, 1.0, 1.0
     lr, lg, lb = 0.0, 0.0, 0.0
     n_spheres = spheres.shape[1]
-    for depth in range(max_depth):
+    nee = integrator == PATH and lights.shape[1] > 0
+    specular = True  # the previous vertex (the camera counts) was specular: emission gets weight 1
+    pdf_bsdf = 0.0  # solid-angle pdf of the direction sampled at the previous diffuse vertex
+    # One intersect() site traces the path rays and the shadow rays in turn (a second inlined copy
+    # doubles the compile time): after a vertex with a shadow ray pending, the next trip through the
+    # loop traces it, adds its contribution if the sampled emitter point is what it hits, and then
+    # resumes the path (or ends it) from the saved direction.
+    shadow = False
+    alive = True
+    shadow_obj, shadow_dist = -1, 0.0
+    cr, cg, cb = 0.0, 0.0, 0.0  # the pending shadow ray's contribution if unoccluded
+    ndx, ndy, ndz = 0.0, 0.0, 0.0  # the path's next direction while the shadow ray is traced
+    px, py, pz = ox, oy, oz
+    depth = 0
+    while True:
         t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch)
+        if shadow:
+            if hit == shadow_obj and (shadow_dist < 0.0 or abs(t - shadow_dist) <= _SHADOW_TOLERANCE * shadow_dist + eps):
+                lr += cr
+                lg += cg
+                lb += cb
+            if not alive:
+                break
+            shadow = False
+            dx, dy, dz = ndx, ndy, ndz
+            continue
         if hit < 0:
             lr += br * background[0]
             lg += bg * background[1]
@@ -329,11 +565,17 @@ def radiance(
             q = hit - n_spheres
             nx, ny, nz = quads[9, q], quads[10, q], quads[11, q]
             m = quad_material[q]
-        lr += br * materials[m, 8]
-        lg += bg * materials[m, 9]
-        lb += bb * materials[m, 10]
-
         cos_in = dx * nx + dy * ny + dz * nz
+        er, eg, eb = materials[m, 8], materials[m, 9], materials[m, 10]
+        if er != 0.0 or eg != 0.0 or eb != 0.0:
+            mis = 1.0
+            if nee and not specular:  # BSDF-sampled hit of an emitter that NEE also samples
+                p_light = light_pmf[hit] * emitter_pdf(ox, oy, oz, hit, t, abs(cos_in), spheres, quads)
+                mis = power_heuristic(pdf_bsdf, p_light)
+            lr += br * er * mis
+            lg += bg * eg * mis
+            lb += bb * eb * mis
+
         entering = cos_in < 0.0
         if not entering:  # face the normal towards the incoming ray
             nx, ny, nz, cos_in = -nx, -ny, -nz, -cos_in
@@ -343,7 +585,31 @@ def radiance(
             if materials[m, 1] == 0.0 and materials[m, 2] == 0.0 and materials[m, 3] == 0.0:
                 if not full or (materials[m, 4] == 0.0 and materials[m, 5] == 0.0 and materials[m, 6] == 0.0):
                     break  # black: absorbed, whatever the direction
-            x, y, z, weight, state = sample_local(sampler, code, full, key, s, depth, state)
+            t_row, b_row = frame_rows(nx, ny, nz)
+            if nee and depth + 1 < max_depth:  # next-event estimation: one emitter, one shadow ray
+                state, b1 = next_u64(state)
+                state, b2 = next_u64(state)
+                state, b3 = next_u64(state)
+                obj = np.int64(lights[0, choose_light(lights, u01(b1))])
+                wx, wy, wz, dist, p_light, ok = sample_emitter(px, py, pz, obj, u01(b2), u01(b3), spheres, quads)
+                lz = wx * nx + wy * ny + wz * nz
+                if ok and (lz > 0.0 or (full and lz < 0.0)):
+                    c = 1 if lz > 0.0 else 4  # reflectance on the incoming side, transmittance on the other
+                    fr, fg, fb = materials[m, c], materials[m, c + 1], materials[m, c + 2]
+                    if fr != 0.0 or fg != 0.0 or fb != 0.0:
+                        p_light *= light_pmf[obj]
+                        lx = wx * t_row[0] + wy * t_row[1] + wz * t_row[2]
+                        ly = wx * b_row[0] + wy * b_row[1] + wz * b_row[2]
+                        p_b = bsdf_pdf(sampler, code, full, lx, ly, lz)
+                        g = abs(lz) * _INV_PI * power_heuristic(p_light, p_b) / p_light
+                        lm = sphere_material[obj] if obj < n_spheres else quad_material[obj - n_spheres]
+                        cr = br * fr * materials[lm, 8] * g
+                        cg = bg * fg * materials[lm, 9] * g
+                        cb = bb * fb * materials[lm, 10] * g
+                        shadow = cr != 0.0 or cg != 0.0 or cb != 0.0
+                        shadow_obj, shadow_dist = obj, dist
+                        ndx, ndy, ndz = wx, wy, wz  # swapped with the path's direction below
+            x, y, z, weight, pdf_bsdf, state = sample_local(sampler, code, full, key, s, depth, state)
             if z >= 0.0:
                 br *= materials[m, 1] * weight
                 bg *= materials[m, 2] * weight
@@ -352,7 +618,8 @@ def radiance(
                 br *= materials[m, 4] * weight
                 bg *= materials[m, 5] * weight
                 bb *= materials[m, 6] * weight
-            dx, dy, dz = to_world(x, y, z, nx, ny, nz)
+            dx, dy, dz = _rows_to_world(x, y, z, t_row, b_row, nx, ny, nz)
+            specular = False
         elif kind == MIRROR:
             c2 = 2.0 * cos_in  # cos_in = d . n_facing <= 0
             dx -= c2 * nx
@@ -361,6 +628,7 @@ def radiance(
             br *= materials[m, 1]
             bg *= materials[m, 2]
             bb *= materials[m, 3]
+            specular = True
         else:  # DIELECTRIC
             ior = materials[m, 7]
             eta = 1.0 / ior if entering else ior  # n_incident / n_transmitted
@@ -388,26 +656,37 @@ def radiance(
             br *= materials[m, 1]
             bg *= materials[m, 2]
             bb *= materials[m, 3]
+            specular = True
 
         if depth + 1 >= rr_depth:
             survive = min(max(br, bg, bb), _RR_CAP)
             state, bits = next_u64(state)
             if u01(bits) >= survive:
-                break
-            inv_q = 1.0 / survive
-            br *= inv_q
-            bg *= inv_q
-            bb *= inv_q
+                alive = False
+            else:
+                inv_q = 1.0 / survive
+                br *= inv_q
+                bg *= inv_q
+                bb *= inv_q
         elif br == 0.0 and bg == 0.0 and bb == 0.0:
-            break
+            alive = False
+        depth += 1
+        if depth >= max_depth:
+            alive = False
         ox, oy, oz = px, py, pz
+        if shadow:  # trace the shadow ray first; the path's direction waits in nd
+            dx, ndx = ndx, dx
+            dy, ndy = ndy, dy
+            dz, ndz = ndz, dz
+        elif not alive:
+            break
     return lr, lg, lb
 
 
 @njit(parallel=True, **_OPTIONS)
 def render_pass(
-    spheres, sphere_material, quads, quad_material, materials, camera, background, eps, rr_depth, max_depth,
-    sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
+    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
+    rr_depth, max_depth, integrator, sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
 ):  # fmt: skip
     """Add samples sample_start .. sample_start + sample_count - 1 of every pixel into *accum* (H, W, 3).
 
@@ -426,8 +705,9 @@ def render_pass(
             sr, sg, sb = 0.0, 0.0, 0.0
             for s in range(sample_start, sample_start + sample_count):
                 lr, lg, lb = radiance(
-                    spheres, sphere_material, quads, quad_material, materials, camera, background, eps,
-                    rr_depth, max_depth, sampler, code, pixel_filter, key, s, row, col, width, height, scratch,
+                    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
+                    background, eps, rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col,
+                    width, height, scratch,
                 )  # fmt: skip
                 sr += lr
                 sg += lg
@@ -437,24 +717,70 @@ def render_pass(
             accum[row, col, 2] += sb
 
 
+# --- small kernels for tests and documentation ------------------------------------------
+
+
 @njit(**_OPTIONS)
 def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
-    """Local directions and weights that samples 0..samples-1 of *pixel* draw at vertex *depth*.
+    """Local directions, weights and pdfs (columns x, y, z, weight, pdf) of samples 0..samples-1 of *pixel*.
 
     The same :func:`sample_local` the integrator calls, with each sample's
     own stream advanced as if its path had reached *depth* with no other
-    random draws; for the symmetric samplers the stream is not used.  For
-    tests and documentation.
+    random draws; for the symmetric samplers the stream is not used.
     """
-    out = np.empty((samples, 4))
+    out = np.empty((samples, 5))
     key = pixel_key(seed, pixel)
     for s in range(samples):
         state = path_state(key, s)
-        x, y, z, weight, state = sample_local(sampler, code, full, key, s, depth, state)
+        x, y, z, weight, pdf, state = sample_local(sampler, code, full, key, s, depth, state)
         out[s, 0] = x
         out[s, 1] = y
         out[s, 2] = z
         out[s, 3] = weight
+        out[s, 4] = pdf
+    return out
+
+
+@njit(**_OPTIONS)
+def bsdf_pdfs(sampler, code, full, directions):
+    """:func:`bsdf_pdf` of each local unit direction (rows of *directions*)."""
+    out = np.empty(directions.shape[0])
+    for i in range(directions.shape[0]):
+        out[i] = bsdf_pdf(sampler, code, full, directions[i, 0], directions[i, 1], directions[i, 2])
+    return out
+
+
+@njit(**_OPTIONS)
+def first_hits(origins, directions, spheres, quads, eps):
+    """:func:`intersect` for each ray: (t, object index) arrays."""
+    count = origins.shape[0]
+    ts = np.empty(count)
+    hits = np.empty(count, dtype=np.int64)
+    scratch = np.empty(max(spheres.shape[1], quads.shape[1], 1))
+    for i in range(count):
+        ts[i], hits[i] = intersect(
+            origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1], directions[i, 2],
+            spheres, quads, eps, scratch,
+        )  # fmt: skip
+    return ts, hits
+
+
+@njit(**_OPTIONS)
+def emitter_samples(point, obj, uv, spheres, quads):
+    """:func:`sample_emitter` from *point* for each row (u, v) of *uv*: columns wx, wy, wz, distance, pdf, ok."""
+    out = np.empty((uv.shape[0], 6))
+    for i in range(uv.shape[0]):
+        wx, wy, wz, dist, pdf, ok = sample_emitter(point[0], point[1], point[2], obj, uv[i, 0], uv[i, 1], spheres, quads)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = wx, wy, wz, dist, pdf, ok
+    return out
+
+
+@njit(**_OPTIONS)
+def emitter_pdfs(point, obj, ts, cosines, spheres, quads):
+    """:func:`emitter_pdf` from *point* of hits of *obj* at distances *ts* with |cos| *cosines*."""
+    out = np.empty(ts.shape[0])
+    for i in range(ts.shape[0]):
+        out[i] = emitter_pdf(point[0], point[1], point[2], obj, ts[i], cosines[i], spheres, quads)
     return out
 
 
@@ -467,18 +793,10 @@ def sobol_points(count, key):
     return out
 
 
-@njit(**_OPTIONS)
-def frame_matrix(nx, ny, nz):
-    """The frame of :func:`frame_rows` as a (3, 3) array of rows t, b, n (for tests)."""
-    t, b = frame_rows(nx, ny, nz)
-    out = np.empty((3, 3))
-    for j in range(3):
-        out[0, j] = t[j]
-        out[1, j] = b[j]
-    out[2, 0], out[2, 1], out[2, 2] = nx, ny, nz
-    return out
-
-
 invalidate_if_changed(
-    render_pass, [_random.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__, symmetry.__file__]
-)
+    render_pass,
+    [
+        _random.__file__, wedge.__file__, _kernels.__file__, maps.__file__, _orbit_stores.__file__,
+        symmetry.__file__, frames.__file__, peers.__file__,
+    ],
+)  # fmt: skip

@@ -1,11 +1,13 @@
-"""``render``: path-trace a scene with a chosen direction sampler, on all cores."""
+"""``render``: path-trace a scene with a chosen integrator and direction sampler, on all cores."""
 
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numba
 import numpy as np
@@ -13,11 +15,32 @@ import numpy as np
 from .._kernels import METHOD_CODES
 from . import _integrator as _k
 from .image import save_npy, save_pfm, save_png
-from .scene import get_scene
+from .scene import Scene, get_scene
 
-__all__ = ["SAMPLERS", "SYMMETRIC_SAMPLERS", "FILTERS", "RenderResult", "render", "write_outputs"]
+__all__ = [
+    "FILTERS",
+    "INTEGRATORS",
+    "SAMPLERS",
+    "SYMMETRIC_SAMPLERS",
+    "RenderPlan",
+    "RenderResult",
+    "plan_passes",
+    "render",
+    "render_passes",
+    "write_outputs",
+]
 
-SAMPLERS = ("symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine")
+SAMPLERS = (
+    "symmetric",
+    "symmetric_sobol",
+    "equal_area",
+    "paper1",
+    "paper2",
+    "uniform",
+    "cosine",
+    "symmetric_cosine",
+    "symmetric_cosine_sobol",
+)
 """Direction samplers at diffuse vertices (see docs/rendering.md):
 
 ``symmetric``        the paper's scheme inside a pixel: groups of 24 (48 through
@@ -29,10 +52,21 @@ SAMPLERS = ("symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "u
                      i.i.d.: a random base point mapped onto T0 by that map and a
                      uniformly random orbit member, weighted by 1/pdf;
 ``uniform``          classic independent uniform directions;
-``cosine``           cosine-weighted (Shirley–Chiu concentric disk + Malley).
+``cosine``           cosine-weighted (Shirley–Chiu concentric disk + Malley);
+``symmetric_cosine``, ``symmetric_cosine_sobol``
+                     cosine-weighted symmetric sampling: groups of 8 (16 through
+                     transmission) samples share a base point of a cosine-weighted
+                     map onto the wedge 0 <= phi <= pi/4 and take its images under
+                     the 8 signed permutations that keep z (x {z, -z}) in turn;
+                     random or Owen-scrambled Sobol' base points.
 """
 
+INTEGRATORS = ("path", "bsdf")
+"""``path``: next-event estimation + BSDF sampling, combined by MIS (power heuristic);
+``bsdf``: BSDF sampling only (smallpt's estimator)."""
+
 SYMMETRIC_SAMPLERS = ("symmetric", "symmetric_sobol")
+"""The samplers that take a ``method`` (the map onto T0)."""
 FILTERS = ("box", "tent")
 _SAMPLER_CODES = {
     "symmetric": _k.SYMMETRIC,
@@ -42,7 +76,10 @@ _SAMPLER_CODES = {
     "paper2": _k.ORBIT,
     "uniform": _k.UNIFORM,
     "cosine": _k.COSINE,
+    "symmetric_cosine": _k.SYMMETRIC_COSINE,
+    "symmetric_cosine_sobol": _k.SYMMETRIC_COSINE_SOBOL,
 }
+_INTEGRATOR_CODES = {"path": _k.PATH, "bsdf": _k.BSDF}
 _PATHS_PER_PASS = 200_000  # progress granularity: a kernel call per ~0.1 s
 
 
@@ -50,10 +87,27 @@ _PATHS_PER_PASS = 200_000  # progress granularity: a kernel call per ~0.1 s
 class RenderResult:
     """A rendered image and how it was made.
 
-    image : (height, width, 3) float64, mean linear radiance per pixel (unclamped)
-    seconds : wall time of the path tracing (after compilation / cache load)
-    startup_seconds : time to compile the kernel or load it from numba's cache
-    paths : width * height * spp camera paths;  paths_per_second = paths / seconds
+    Attributes
+    ----------
+    image : ndarray, shape (height, width, 3)
+        float64, mean linear radiance per pixel (unclamped).
+    scene, width, height, spp, sampler, method, pixel_filter, seed, integrator
+        The arguments of :func:`render` (``method`` None for samplers without one).
+    seconds : float
+        Wall time of the path tracing (after compilation / cache load).
+    startup_seconds : float
+        Time to compile the kernel or load it from numba's cache.
+    paths : int
+        ``width * height * spp`` camera paths; ``paths_per_second = paths / seconds``.
+    threads : int
+        numba threads used.
+
+    Examples
+    --------
+    >>> from symsphere.render import render
+    >>> result = render("furnace", width=8, height=6, spp=8, sampler="cosine", seed=1)
+    >>> result.image.shape, result.paths, result.integrator
+    ((6, 8, 3), 384, 'path')
     """
 
     image: np.ndarray = field(repr=False)
@@ -69,25 +123,31 @@ class RenderResult:
     startup_seconds: float
     paths: int
     threads: int
+    integrator: str = "path"
 
     @property
     def paths_per_second(self) -> float:
+        """Camera paths per second of wall time (``paths / seconds``)."""
         return self.paths / self.seconds if self.seconds > 0 else math.inf
 
 
 def render(
-    scene="cornell",
+    scene: Scene | str | os.PathLike = "cornell",
     *,
-    width=256,
-    height=192,
-    spp=96,
-    sampler="symmetric_sobol",
-    method=None,
-    pixel_filter="box",
-    seed=None,
-    threads=None,
-    progress=False,
-) -> RenderResult:
+    width: int = 256,
+    height: int = 192,
+    spp: int = 96,
+    sampler: Literal[
+        "symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine",
+        "symmetric_cosine", "symmetric_cosine_sobol",
+    ] = "symmetric_sobol",
+    method: Literal["equal_area", "paper1", "paper2"] | None = None,
+    pixel_filter: Literal["box", "tent"] = "box",
+    seed: int | None = None,
+    threads: int | None = None,
+    progress: bool = False,
+    integrator: Literal["path", "bsdf"] = "path",
+) -> RenderResult:  # fmt: skip
     """Path-trace *scene* and return the mean radiance per pixel.
 
     Parameters
@@ -98,9 +158,10 @@ def render(
     width, height, spp : int
         Image size and samples (camera paths) per pixel.  The symmetric
         samplers form complete orbits when spp is a multiple of 24 (48 if the
-        scene has translucent materials); any spp is unbiased.
+        scene has translucent materials; 8 and 16 for the symmetric cosine
+        samplers); any spp is unbiased.
     sampler : str
-        One of :data:`SAMPLERS`.
+        One of :data:`SAMPLERS`: the direction sampler at diffuse vertices.
     method : {'equal_area', 'paper1', 'paper2'}, optional
         The map from the square onto T0 for the symmetric samplers (default
         ``'equal_area'``).  The other samplers do not take it.
@@ -114,12 +175,25 @@ def render(
         numba threads (default: all).
     progress : bool
         Show a progress bar (tqdm, on stderr, only on a terminal).
+    integrator : {'path', 'bsdf'}
+        ``'path'``: next-event estimation and BSDF sampling combined by
+        multiple importance sampling (power heuristic); ``'bsdf'``: BSDF
+        sampling only (smallpt's estimator).  Both converge to the same image.
 
     Returns
     -------
     RenderResult
+
+    Examples
+    --------
+    >>> from symsphere.render import render
+    >>> result = render("cornell", width=8, height=6, spp=8, seed=1)
+    >>> result.image.shape, bool(result.image.max() > 0)
+    ((6, 8, 3), True)
+    >>> render("furnace", width=4, height=4, spp=4, seed=1, integrator="bsdf").integrator
+    'bsdf'
     """
-    plan = _plan(scene, width, height, spp, sampler, method, pixel_filter, seed)
+    plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     if threads is not None:
         threads = _positive_int(threads, "threads")
         if threads > numba.config.NUMBA_NUM_THREADS:
@@ -151,8 +225,18 @@ def render(
 
 
 @dataclass(frozen=True)
-class _RenderPlan:
-    """A validated render: everything a pass needs (picklable, for Dask workers)."""
+class RenderPlan:
+    """A validated render: everything a pass needs (picklable, for Dask workers).
+
+    Made by :func:`plan_passes`; rendered pass by pass with :func:`render_passes`.
+
+    Examples
+    --------
+    >>> from symsphere.render import plan_passes
+    >>> plan = plan_passes("cornell", 8, 6, 10, "cosine", None, "box", 1)
+    >>> plan.passes, plan.pass_range(0)
+    (1, (0, 10))
+    """
 
     scene: object
     width: int
@@ -164,16 +248,20 @@ class _RenderPlan:
     seed: int
     arguments: tuple = field(repr=False)  # the kernel's scene and sampler arguments
     per_pass: int
+    integrator: str = "path"
 
     @property
     def passes(self) -> int:
+        """The number of passes."""
         return -(-self.spp // self.per_pass)
 
-    def pass_range(self, index):
+    def pass_range(self, index: int) -> tuple[int, int]:
+        """(first sample, sample count) of pass *index*."""
         first = index * self.per_pass
         return first, min(self.per_pass, self.spp - first)
 
-    def result(self, accum, seconds, startup, threads):
+    def result(self, accum: np.ndarray, seconds: float, startup: float, threads: int) -> RenderResult:
+        """The :class:`RenderResult` of the summed image *accum* (all passes)."""
         return RenderResult(
             image=accum / self.spp,
             scene=self.scene.name,
@@ -188,16 +276,41 @@ class _RenderPlan:
             startup_seconds=startup,
             paths=self.width * self.height * self.spp,
             threads=threads,
+            integrator=self.integrator,
         )
 
 
-def _plan(scene, width, height, spp, sampler, method, pixel_filter, seed):
+def plan_passes(
+    scene: Scene | str | os.PathLike,
+    width: int,
+    height: int,
+    spp: int,
+    sampler: str,
+    method: str | None,
+    pixel_filter: str,
+    seed: int | None,
+    integrator: Literal["path", "bsdf"] = "path",
+) -> RenderPlan:
+    """Validate the arguments of :func:`render` and split its samples into passes of ~2e5 paths.
+
+    The positional order is that of :func:`render`'s keywords; raises
+    ValueError naming a bad argument.
+
+    Examples
+    --------
+    >>> from symsphere.render import plan_passes, render_passes
+    >>> plan = plan_passes("furnace", 4, 4, 3, "cosine", None, "box", 7, "bsdf")
+    >>> [image.shape for image in render_passes(plan, 0, plan.passes)]
+    [(4, 4, 3)]
+    """
     scene = get_scene(scene)
     width = _positive_int(width, "width")
     height = _positive_int(height, "height")
     spp = _positive_int(spp, "spp")
     if sampler not in SAMPLERS:
         raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"'integrator' must be one of {', '.join(INTEGRATORS)}; got {integrator!r}")
     if method is not None and sampler not in SYMMETRIC_SAMPLERS:
         raise ValueError(
             f"'method' applies only to the samplers {', '.join(SYMMETRIC_SAMPLERS)}; "
@@ -220,11 +333,11 @@ def _plan(scene, width, height, spp, sampler, method, pixel_filter, seed):
     a = scene.arrays(width, height)
     key = np.random.SeedSequence(seed).generate_state(1, dtype=np.uint64)[0]
     arguments = (
-        a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"], a["camera"],
-        a["background"], a["eps"], a["rr_depth"], a["max_depth"], _SAMPLER_CODES[sampler], code,
-        FILTERS.index(pixel_filter), key,
+        a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"], a["lights"],
+        a["light_pmf"], a["camera"], a["background"], a["eps"], a["rr_depth"], a["max_depth"],
+        _INTEGRATOR_CODES[integrator], _SAMPLER_CODES[sampler], code, FILTERS.index(pixel_filter), key,
     )  # fmt: skip
-    return _RenderPlan(
+    return RenderPlan(
         scene=scene,
         width=width,
         height=height,
@@ -235,11 +348,20 @@ def _plan(scene, width, height, spp, sampler, method, pixel_filter, seed):
         seed=seed,
         arguments=arguments,
         per_pass=max(1, min(spp, _PATHS_PER_PASS // (width * height))),
+        integrator=integrator,
     )
 
 
-def render_passes(plan, first_pass, stop_pass):
-    """The images (sums, not means) of passes ``first_pass .. stop_pass - 1``, each summed from zero."""
+def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.ndarray]:
+    """The images (sums, not means) of passes ``first_pass .. stop_pass - 1``, each summed from zero.
+
+    Examples
+    --------
+    >>> from symsphere.render import plan_passes, render_passes
+    >>> plan = plan_passes("furnace", 4, 4, 2, "cosine", None, "box", 7)
+    >>> len(render_passes(plan, 0, 1))
+    1
+    """
     images = []
     for index in range(first_pass, stop_pass):
         image = np.zeros((plan.height, plan.width, 3))
@@ -254,11 +376,20 @@ def _render_pass_into(plan, first, count, image):
         _k.render_pass(*plan.arguments, first, count, rows, image)
 
 
-def write_outputs(result: RenderResult, out, exposure=1.0) -> list[Path]:
+def write_outputs(result: RenderResult, out: str | os.PathLike, exposure: float = 1.0) -> list[Path]:
     """Write ``out`` (.png, tone-mapped) and, next to it, the HDR image as ``.pfm`` and ``.npy``.
 
     *out* may end in .png, .pfm or .npy; all three files are written with the
     same stem, each atomically.  Returns their paths (PNG, PFM, NPY).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from symsphere.render import render, write_outputs
+    >>> result = render("furnace", width=4, height=4, spp=2, sampler="cosine", seed=1)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     [p.name for p in write_outputs(result, pathlib.Path(folder) / "f.png")]
+    ['f.png', 'f.pfm', 'f.npy']
     """
     out = Path(out)
     if out.suffix.lower() not in (".png", ".pfm", ".npy"):
@@ -274,4 +405,3 @@ def _positive_int(value, name) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"'{name}' must be a positive integer, got {value!r}")
     return int(value)
-

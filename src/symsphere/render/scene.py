@@ -31,12 +31,17 @@ File format (TOML or JSON, the same structure; see ``docs/rendering.md``)::
     center = [0, 1, 0]
     radius = 1
     material = "white"
+    clip = { point = [0, 1.5, 0], normal = [0, 1, 0] }   # optional: keep only the part on the normal's side
 
     [[quads]]                              # parallelogram corner + s edge1 + t edge2, s, t in [0, 1]
     corner = [-5, 0, -5]
     edge1 = [10, 0, 0]
     edge2 = [0, 0, 10]
     material = "white"
+
+A sphere with ``clip`` is the sphere intersected with the closed half-space
+``{p : normal . (p - point) >= 0}`` (an open spherical cap, seen from both
+sides); next-event estimation samples such a sphere by area on the cap.
 
 Material parameters: ``diffuse``: albedo; ``translucent``: reflectance,
 transmittance (reflectance + transmittance <= 1 per channel); ``mirror``:
@@ -61,6 +66,7 @@ __all__ = [
     "MATERIAL_KINDS",
     "SCENES",
     "Camera",
+    "HalfSpace",
     "Material",
     "Quad",
     "Scene",
@@ -141,10 +147,36 @@ def dielectric(ior=1.5, tint=1.0) -> Material:
 
 
 @dataclass(frozen=True)
+class HalfSpace:
+    """The closed half-space ``{p : normal . (p - point) >= 0}`` (*normal* need not be unit).
+
+    Examples
+    --------
+    >>> from symsphere.render import HalfSpace
+    >>> HalfSpace((0, 81.6, 0), (0, -1, 0)).normal
+    (0, -1, 0)
+    """
+
+    point: tuple
+    normal: tuple
+
+
+@dataclass(frozen=True)
 class Sphere:
+    """A sphere; with *clip*, only its part inside that :class:`HalfSpace` (a spherical cap).
+
+    Examples
+    --------
+    >>> from symsphere.render import HalfSpace, Sphere
+    >>> cap = Sphere((0, 10, 0), 10, "lamp", clip=HalfSpace((0, 1, 0), (0, -1, 0)))
+    >>> cap.radius
+    10
+    """
+
     center: tuple
     radius: float
     material: str
+    clip: HalfSpace | None = None
 
 
 @dataclass(frozen=True)
@@ -212,21 +244,30 @@ class Scene:
             m = self.materials[name]
             materials[i] = [_KIND_CODES[m.kind], *m.color, *m.transmittance, m.ior, *m.emission]
         spheres = np.zeros((len(self.spheres), _k.SPHERE_COLUMNS))
+        areas = []
         for i, s in enumerate(self.spheres):
-            spheres[i] = [*s.center, s.radius, s.radius * s.radius]
+            axis, offset, cap_height = _clip_table(s)
+            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height]
+            areas.append(2 * math.pi * s.radius * cap_height)  # Archimedes: the area of a cap is 2 pi r h
         quads = np.zeros((len(self.quads), _k.QUAD_COLUMNS))
         for i, q in enumerate(self.quads):
             p0, e1, e2 = (np.array(v, dtype=np.float64) for v in (q.corner, q.edge1, q.edge2))
             normal_raw = np.cross(e1, e2)
             squared = float(normal_raw @ normal_raw)
             normal = normal_raw / math.sqrt(squared)
-            quads[i] = [*p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0)]
+            quads[i] = [*p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared)]
+            areas.append(math.sqrt(squared))
+        lights, light_pmf = _light_tables(
+            [materials[index[o.material], 8:11] for o in (*self.spheres, *self.quads)], areas
+        )
         return dict(
             spheres=np.ascontiguousarray(spheres.T),  # structure of arrays: the kernels vectorise over objects
             sphere_material=np.array([index[s.material] for s in self.spheres], dtype=np.int64),
             quads=np.ascontiguousarray(quads.T),
             quad_material=np.array([index[q.material] for q in self.quads], dtype=np.int64),
             materials=materials,
+            lights=lights,
+            light_pmf=light_pmf,
             camera=self.camera_array(width, height),
             background=np.array(self.background, dtype=np.float64),
             eps=float(self.ray_epsilon),
@@ -249,6 +290,39 @@ class Scene:
             [*cam.position, *forward, *(right * (height_at_1 * width / height)), *(up * height_at_1), cam.near],
             dtype=np.float64,
         )
+
+
+def _clip_table(sphere):
+    """Kernel rows of a sphere's clip: unit axis a into the kept side, offset d (keep a . p >= d), cap height.
+
+    The kept cap is {p on the sphere : a . (p - c) >= d - a . c}; its height
+    along a is ``r - max(d - a . c, -r)`` (2 r for an unclipped sphere, whose
+    axis is 0 and offset -inf, so that the intersection test keeps every point).
+    """
+    if sphere.clip is None:
+        return (0.0, 0.0, 0.0), -math.inf, 2.0 * sphere.radius
+    axis = _unit(sphere.clip.normal)
+    offset = float(axis @ np.array(sphere.clip.point, dtype=np.float64))
+    lowest = offset - float(axis @ np.array(sphere.center, dtype=np.float64))
+    return tuple(float(c) for c in axis), offset, sphere.radius - max(lowest, -sphere.radius)
+
+
+def _light_tables(emissions, areas):
+    """Emitters chosen by power: (2, L) rows object index, cumulative probability; and the pmf per object.
+
+    Power of an emitter = mean emitted radiance over RGB x area (x pi, x 2
+    sides: common factors).  Objects are numbered spheres first, then quads.
+    """
+    power = np.array([float(np.mean(e)) * a for e, a in zip(emissions, areas)], dtype=np.float64)
+    emitters = np.flatnonzero(power > 0)
+    pmf = np.zeros(len(power))
+    if emitters.size:
+        pmf[emitters] = power[emitters] / power[emitters].sum()
+    cdf = np.cumsum(pmf[emitters])
+    if cdf.size:
+        cdf[-1] = 1.0  # no rounding gap at the top: u < 1 always selects an emitter
+    lights = np.ascontiguousarray(np.stack([emitters.astype(np.float64), cdf]))
+    return lights, pmf
 
 
 # --- validation -----------------------------------------------------------------
@@ -279,7 +353,9 @@ def _normalise(scene: Scene) -> None:
         if not radius > 0:
             raise SceneError(f"{where}.radius must be positive, got {radius!r}")
         material = _material_name(sphere.material, materials, f"{where}.material")
-        spheres.append(Sphere(_vector(sphere.center, f"{where}.center"), radius, material))
+        center = _vector(sphere.center, f"{where}.center")
+        clip = _check_clip(sphere.clip, center, radius, f"{where}.clip")
+        spheres.append(Sphere(center, radius, material, clip))
     put(scene, "spheres", tuple(spheres))
     quads = []
     for i, quad in enumerate(_sequence(scene.quads, "quads")):
@@ -323,6 +399,22 @@ def _check_camera(cam: Camera) -> Camera:
     if not near >= 0:
         raise SceneError(f"camera.near must be >= 0, got {near!r}")
     return Camera(position, direction, fov, up, near)
+
+
+def _check_clip(clip, center, radius, where) -> HalfSpace | None:
+    if clip is None:
+        return None
+    if not isinstance(clip, HalfSpace):
+        raise SceneError(f"{where} must be a HalfSpace, got {type(clip).__name__}")
+    point = _vector(clip.point, f"{where}.point")
+    normal = _vector(clip.normal, f"{where}.normal")
+    if not float(np.dot(normal, normal)) > 0:
+        raise SceneError(f"{where}.normal must be non-zero")
+    axis = _unit(normal)
+    lowest = float(axis @ (np.array(point) - np.array(center)))  # the cap keeps a . (p - c) >= lowest
+    if not lowest < radius * (1 - 1e-12):
+        raise SceneError(f"{where} keeps nothing of the sphere (the plane is {lowest - radius:g} beyond it)")
+    return HalfSpace(point, normal)
 
 
 def _check_material(material, where) -> Material:
@@ -412,7 +504,8 @@ def _unit(v) -> np.ndarray:
 _TOP_KEYS = {"name", "camera", "settings", "materials", "spheres", "quads"}
 _CAMERA_KEYS = {"position", "direction", "look_at", "up", "fov", "near"}
 _SETTINGS_KEYS = {"background", "epsilon", "rr_depth", "max_depth"}
-_SPHERE_KEYS = {"center", "radius", "material"}
+_SPHERE_KEYS = {"center", "radius", "material", "clip"}
+_CLIP_KEYS = {"point", "normal"}
 _QUAD_KEYS = {"corner", "edge1", "edge2", "material"}
 
 
@@ -479,8 +572,12 @@ def _from_dict(data, source, default_name) -> Scene:
     materials = {name: _material_from_dict(value, f"materials.{name}") for name, value in materials_table.items()}
     spheres = []
     for i, value in enumerate(_list(table.get("spheres", []), "spheres")):
-        entry = _table(value, f"spheres[{i}]", _SPHERE_KEYS, required=_SPHERE_KEYS)
-        spheres.append(Sphere(entry["center"], entry["radius"], entry["material"]))
+        entry = _table(value, f"spheres[{i}]", _SPHERE_KEYS, required=_SPHERE_KEYS - {"clip"})
+        clip = None
+        if "clip" in entry:
+            clip_table = _table(entry["clip"], f"spheres[{i}].clip", _CLIP_KEYS, required=_CLIP_KEYS)
+            clip = HalfSpace(clip_table["point"], clip_table["normal"])
+        spheres.append(Sphere(entry["center"], entry["radius"], entry["material"], clip))
     quads = []
     for i, value in enumerate(_list(table.get("quads", []), "quads")):
         entry = _table(value, f"quads[{i}]", _QUAD_KEYS, required=_QUAD_KEYS)
@@ -558,6 +655,14 @@ def cornell() -> Scene:
         16.5  (73, 16.5, 78)         0       .999           glass (ior 1.5)
         600   (50, 681.6-.27, 81.6)  12      0              diffuse   light
 
+    The light is described as the part of that sphere below the ceiling
+    plane y = 81.6 (``clip``): a cap of height 0.27 and radius ~18, the only
+    part of it that can be seen from inside the room.  Every ray that starts
+    inside the room hits exactly what it hits in smallpt (tested); only the
+    rays that smallpt starts above the ceiling (the top ~0.5 % of the image,
+    see docs/rendering.md) can tell the difference.  Next-event estimation
+    samples the light by area on the cap, where it can be seen.
+
     Camera at (50, 52, 295.6) looking along (0, -0.042612, -1), the image
     plane at distance 1 is 0.5135 high (vertical fov 2 atan(0.5135 / 2) =
     28.82 degrees) and 0.5135 * width / height wide, rays start on the plane
@@ -584,7 +689,7 @@ def cornell() -> Scene:
         Sphere((50, -1e5 + 81.6, 81.6), 1e5, "white"),
         Sphere((27, 16.5, 47), 16.5, "mirror"),
         Sphere((73, 16.5, 78), 16.5, "glass"),
-        Sphere((50, 681.6 - 0.27, 81.6), 600, "light"),
+        Sphere((50, 681.6 - 0.27, 81.6), 600, "light", clip=HalfSpace((50, 81.6, 81.6), (0, -1, 0))),
     )
     camera = Camera((50, 52, 295.6), (0, -0.042612, -1), math.degrees(2 * math.atan(0.5135 / 2)), near=140.0)
     return Scene("cornell", camera, materials, spheres, epsilon=1e-4)

@@ -1,0 +1,560 @@
+"""symsphere.render._integrator: frame, samplers and their pdfs, MIS, emitter sampling, NEE, and the statistics.
+
+Statistical tests use fixed seeds (a run passes or fails reproducibly); each
+family's threshold is Sidak-corrected so that a correct renderer fails any
+test of the family with probability FAMILY_SIGNIFICANCE = 0.01 over the choice
+of seeds, and each compares against an independent reference: a closed form,
+or the other integrator.
+
+Furnace
+    Inside a closed diffuse sphere of albedo rho emitting Le, the radiance is
+    exactly Le / (1 - rho).  Pixels have independent random streams (and
+    independent scrambles), so they are the independent units: the stated
+    error is the standard deviation of the pixel means over sqrt(#pixels).
+    Each test asks for the mean within 4 standard errors (two-sided
+    p = 6.3e-5; 108 tests: family-wise 0.007).  Uniform-direction samplers
+    (every sampler but the three cosine ones) weight a bounce by
+    X = 2 rho cos(theta) with cos(theta) uniform, E[X^2] = 4 rho^2 / 3, which
+    exceeds 1 for rho > sqrt(3)/2 = 0.866: their variance in the closed diffuse
+    furnace is then infinite and no standard error means anything.  So the
+    closed diffuse furnace uses rho = 0.3, 0.6 and 0.85 for them (0.9 for the
+    cosine samplers); the translucent furnace (Lambertian reflection +
+    transmission, full-sphere sampling, background Le / (1 - rho)), where only
+    reflected paths continue (E[X^2 1{reflected}] = 2 rho^2 / 3), runs all
+    samplers at rho = 0.3, 0.6, 0.9.  Every (integrator, sampler) pair.
+
+Closed-form direct lighting (NEE and MIS)
+    A diffuse plane under a spherical light (irradiance pi L (r/D)^2 cos(beta),
+    ``integrands.sphere_light_irradiance``) and under a square light (Lambert's
+    polygon formula, ``integrands.lambert_irradiance``); the light is black, so
+    the plane's radiance is exactly (rho / pi) E.  The reference pixel value is
+    that closed form integrated over the pixel by 4 x 4 Gauss-Legendre
+    quadrature (the box filter).  Per 8 x 8 block, t = mean residual /
+    (its standard deviation / 8), 63 degrees of freedom; 2 lights x 4 samplers
+    x 6 blocks = 48 tests, Sidak-corrected.
+
+Unbiasedness against the other integrator
+    Every (integrator, sampler) pair renders a 32 x 24 Cornell box as R = 8
+    independent replicates of 48 spp; the reference of the ``path`` pairs is
+    8 replicates of 512 spp with ``bsdf`` and ``cosine``, that of the ``bsdf``
+    pairs 8 replicates of 256 spp with ``path`` and ``cosine`` (other seeds).
+    Per pixel, the replicate mean and its variance (sample variance / R); per
+    8 x 8 block and channel, the block mean and its variance (sum of the pixel
+    variances / 64^2: pixels are independent).  z = (block mean - reference
+    block mean) / sqrt(var + reference var), two-sided, 12 blocks x 3 channels
+    x 18 pairs = 648 tests, Sidak-corrected.  The translucent scene (two quad
+    lights, Lambertian transmission) does the same for 3 ``path`` samplers
+    against ``bsdf``/``cosine``.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from numba import njit
+from scipy import stats
+
+from symsphere import frames
+from symsphere._kernels import METHOD_CODES
+from symsphere.integrands import lambert_irradiance, sphere_light_irradiance
+from symsphere.maps import triangle_pdf
+from symsphere.render import (
+    INTEGRATORS,
+    SAMPLERS,
+    Camera,
+    HalfSpace,
+    Quad,
+    Scene,
+    Sphere,
+    cornell,
+    diffuse,
+    furnace,
+    render,
+    translucent_scene,
+)
+from symsphere.render import _integrator as K
+from symsphere.symmetry import fold, orbit
+from symsphere.wedge import WEDGE_MAPS
+
+FAMILY_SIGNIFICANCE = 0.01
+_PAIRS = [(integrator, sampler) for integrator in INTEGRATORS for sampler in SAMPLERS]
+_COSINE_SAMPLERS = ("cosine", "symmetric_cosine", "symmetric_cosine_sobol")
+
+
+def _sidak(tests, family=FAMILY_SIGNIFICANCE):
+    """Per-test significance so that `tests` independent tests fail with probability `family` together."""
+    return 1 - (1 - family) ** (1 / tests)
+
+
+# --- the frame ------------------------------------------------------------------
+
+
+@njit
+def _compiled_frame(normals):
+    out = np.empty((normals.shape[0], 3, 3))
+    for i in range(normals.shape[0]):
+        t, b = frames.frame_rows(normals[i, 0], normals[i, 1], normals[i, 2])
+        for j in range(3):
+            out[i, 0, j] = t[j]
+            out[i, 1, j] = b[j]
+            out[i, 2, j] = normals[i, j]
+    return out
+
+
+def test_the_kernels_frame_is_frames_frame():
+    """One formula (frames.frame_rows): compiled by numba, as the kernels use it, it equals frames.frame bit for bit."""
+    rng = np.random.default_rng(0)
+    normals = rng.normal(size=(200, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.vstack([normals, [[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0], [0.6, 0, -0.8]]])
+    compiled = _compiled_frame(normals)
+    for n, f in zip(normals, compiled):
+        np.testing.assert_array_equal(f, frames.frame(n))
+        np.testing.assert_allclose(f @ f.T, np.eye(3), atol=1e-15)
+
+
+# --- the samplers ----------------------------------------------------------------
+
+_ORBIT_SAMPLERS = [("symmetric", K.SYMMETRIC), ("symmetric_sobol", K.SYMMETRIC_SOBOL)]
+
+
+@pytest.mark.parametrize("full, n", [(False, 24), (True, 48)])
+@pytest.mark.parametrize("name, sampler", _ORBIT_SAMPLERS)
+@pytest.mark.parametrize("method", ["equal_area", "paper1"])
+def test_symmetric_groups_take_every_orbit_member_of_one_base(name, sampler, method, full, n):
+    code = METHOD_CODES[method]
+    groups = 3
+    for depth in (0, 1, 5):
+        out = K.pattern_directions(sampler, code, full, np.uint64(7), 1234, depth, groups * n)
+        bases = []
+        for g in range(groups):
+            block = out[g * n : (g + 1) * n, :3]
+            members, base = fold(block, domain="sphere")
+            # one base point for the whole group...
+            np.testing.assert_allclose(base, np.broadcast_to(base[0], base.shape), rtol=0, atol=1e-15)
+            # ...and every member of its orbit exactly once (hemisphere: the 24 upper ones)
+            assert sorted(members.tolist()) == list(range(n))
+            np.testing.assert_array_equal(block[np.argsort(members)], orbit(base[0], domain="sphere")[:n])
+            # weight = |cos| / (pi pdf), pdf = triangle pdf / n
+            pdf = triangle_pdf(base[0], method) / n
+            np.testing.assert_allclose(out[g * n : (g + 1) * n, 3], np.abs(block[:, 2]) / (np.pi * pdf), rtol=1e-12)
+            bases.append(base[0])
+        assert len({tuple(b) for b in bases}) == groups  # a fresh base point per group
+
+
+def test_symmetric_members_are_shuffled_between_vertices():
+    """Sample s must not keep member s mod 24 at every vertex (that would confine it to one triangle)."""
+    members = []
+    for depth in range(6):
+        out = K.pattern_directions(K.SYMMETRIC, 0, False, np.uint64(3), 99, depth, 24)
+        members.append(fold(out[:, :3], domain="sphere")[0])
+    assert len({tuple(m) for m in members}) > 1
+
+
+_ALL_CODES = [
+    K.UNIFORM, K.COSINE, K.ORBIT, K.SYMMETRIC, K.SYMMETRIC_SOBOL, K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL,
+]  # fmt: skip
+_COSINE_CODES = (K.COSINE, K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL)
+
+
+@pytest.mark.parametrize("full", [False, True])
+@pytest.mark.parametrize("sampler", _ALL_CODES)
+def test_sampled_directions_weights_and_pdfs(sampler, full):
+    """Weights |cos| / (pi pdf) and pdfs of every sampler against their closed forms (orbit: maps.triangle_pdf)."""
+    code = METHOD_CODES["paper1"]
+    out = K.pattern_directions(sampler, code, full, np.uint64(11), 5, 2, 480)
+    directions, weights, pdfs = out[:, :3], out[:, 3], out[:, 4]
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=0, atol=1e-14)
+    if not full:
+        assert np.all(directions[:, 2] >= 0)
+    else:
+        assert np.any(directions[:, 2] < 0)
+    z = np.abs(directions[:, 2])
+    if sampler in _COSINE_CODES:
+        expected_weight, expected_pdf = np.full_like(z, 2.0 if full else 1.0), z / ((2 if full else 1) * np.pi)
+    elif sampler == K.UNIFORM:
+        expected_weight, expected_pdf = (4.0 if full else 2.0) * z, np.full_like(z, 1 / ((4 if full else 2) * np.pi))
+    else:
+        _, base = fold(directions, domain="sphere")
+        expected_pdf = triangle_pdf(base, "paper1") / (48 if full else 24)
+        expected_weight = z / (np.pi * expected_pdf)
+    np.testing.assert_allclose(weights, expected_weight, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(pdfs, expected_pdf, rtol=1e-12, atol=1e-15)
+    # bsdf_pdf, which MIS evaluates at light-sampled directions, is the same density
+    np.testing.assert_allclose(K.bsdf_pdfs(sampler, code, full, directions), expected_pdf, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("full, n", [(False, 8), (True, 16)])
+@pytest.mark.parametrize("sampler", [K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL])
+def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, full, n):
+    """Groups of 8 (16) samples: the 8 z-keeping signed permutations (x {z, -z}) of one cosine wedge point."""
+    groups = 4
+    for depth in (0, 3):
+        out = K.pattern_directions(sampler, 0, full, np.uint64(5), 77, depth, groups * n)
+        bases = []
+        for g in range(groups):
+            block = out[g * n : (g + 1) * n, :3]
+            ax, ay = np.abs(block[:, 0]), np.abs(block[:, 1])
+            base = np.column_stack([np.maximum(ax, ay), np.minimum(ax, ay), np.abs(block[:, 2])])
+            np.testing.assert_array_equal(base, np.broadcast_to(base[0], base.shape))
+            images = base[0] @ WEDGE_MAPS  # (8, 3)
+            if full:
+                images = np.vstack([images, images * [1, 1, -1]])
+            assert sorted(map(tuple, block)) == sorted(map(tuple, images))  # every image once
+            bases.append(tuple(base[0]))
+        assert len(set(bases)) == groups
+
+
+def test_paper_map_weights_use_their_density():
+    out = K.pattern_directions(K.ORBIT, METHOD_CODES["paper2"], False, np.uint64(1), 0, 0, 240)
+    _, base = fold(out[:, :3], domain="sphere")
+    expected = np.abs(out[:, 2]) * 24 / (np.pi * triangle_pdf(base, "paper2"))
+    np.testing.assert_allclose(out[:, 3], expected, rtol=1e-12)
+
+
+def test_bsdf_pdfs_integrate_to_one():
+    """Monte Carlo over uniform directions: the integral of bsdf_pdf over its domain is 1 (equal-area orbit, classic)."""
+    rng = np.random.default_rng(4)
+    directions = rng.normal(size=(400_000, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    cases = [(s, full) for s in (K.UNIFORM, K.COSINE, K.ORBIT, K.SYMMETRIC_COSINE) for full in (False, True)]
+    critical = stats.norm.isf(_sidak(len(cases)) / 2)
+    for sampler, full in cases:
+        d = directions if full else np.column_stack([directions[:, 0], directions[:, 1], np.abs(directions[:, 2])])
+        values = K.bsdf_pdfs(sampler, METHOD_CODES["equal_area"], full, d) * (4 * np.pi if full else 2 * np.pi)
+        error = values.std(ddof=1) / math.sqrt(values.size)
+        assert abs(values.mean() - 1) < critical * max(error, 1e-12), (sampler, full, values.mean(), error)
+
+
+# --- MIS ---------------------------------------------------------------------------
+
+
+@njit
+def _heuristic(a, b):
+    return K.power_heuristic(a, b)
+
+
+def test_power_heuristic():
+    assert _heuristic(1.0, 1.0) == 0.5
+    assert _heuristic(3.0, 1.0) == pytest.approx(0.9)
+    rng = np.random.default_rng(1)
+    for a, b in rng.exponential(size=(100, 2)):
+        assert _heuristic(a, b) + _heuristic(b, a) == pytest.approx(1.0, abs=1e-15)
+        assert _heuristic(a, b) == pytest.approx(a * a / (a * a + b * b), rel=1e-14)
+    assert _heuristic(math.inf, 2.0) == 1.0 and _heuristic(2.0, math.inf) == 0.0  # the paper maps' vertex
+    assert _heuristic(0.0, 1.0) == 0.0 and _heuristic(1.0, 0.0) == 1.0
+
+
+# --- emitter sampling and the clipped sphere ------------------------------------------------
+
+
+def _tables(spheres=(), quads=()):
+    camera = Camera((0, 0, 10), (0, 0, -1), 40)
+    scene = Scene("t", camera, {"lamp": diffuse(0.0, emission=1.0)}, tuple(spheres), tuple(quads))
+    a = scene.arrays(4, 4)
+    return a["spheres"], a["quads"]
+
+
+def _cone(axis, cos_max, count, rng):
+    """Uniform directions in a cone (numpy, independent of the kernels) and their pdf."""
+    axis = np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis)
+    helper = np.array([1.0, 0, 0]) if abs(axis[0]) < 0.9 else np.array([0, 1.0, 0])
+    t = np.cross(axis, helper)
+    t /= np.linalg.norm(t)
+    b = np.cross(axis, t)
+    cos_t = 1 - rng.random(count) * (1 - cos_max)
+    phi = 2 * np.pi * rng.random(count)
+    sin_t = np.sqrt(1 - cos_t**2)
+    d = (sin_t * np.cos(phi))[:, None] * t + (sin_t * np.sin(phi))[:, None] * b + cos_t[:, None] * axis
+    return d, 1 / (2 * np.pi * (1 - cos_max))
+
+
+_CORNELL_LIGHT = Sphere((50, 681.6 - 0.27, 81.6), 600, "lamp", HalfSpace((50, 81.6, 81.6), (0, -1, 0)))
+_PDF_CASES = [
+    # (name, emitter, point, axis of a cone that holds it, cos of the cone's half-angle: 1 - ... ; -1: all directions)
+    ("cap from below its centre", _CORNELL_LIGHT, (50, 10, 81.6), (0, 1, 0), math.cos(math.atan(19 / 71.3))),
+    ("cap from the side", _CORNELL_LIGHT, (20, 40, 30), (30, 41.5, 51.6), math.cos(0.4)),
+    ("sphere from outside (cone)", Sphere((0, 0, 0), 1.0, "lamp"), (0.3, -0.5, 2.5), (-0.3, 0.5, -2.5), math.cos(0.45)),
+    ("sphere from inside (area)", Sphere((0, 0, 0), 1.0, "lamp"), (0.3, 0.2, -0.5), (0, 0, 1), -1.0),
+    ("clipped sphere from inside", Sphere((0, 0, 0), 1.0, "lamp", HalfSpace((0, 0.2, 0), (0.6, 0.8, 0))),
+     (0.1, -0.2, 0.1), (0, 0, 1), -1.0),
+    ("quad", Quad((-0.5, -0.5, 0), (1, 0, 0), (0, 1.5, 0), "lamp"), (0.2, 0.3, -1.5), (-0.2, -0.05, 1.5),
+     math.cos(0.6)),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("name, emitter, point, axis, cos_max", _PDF_CASES, ids=[c[0] for c in _PDF_CASES])
+def test_emitter_pdf_integrates_to_one_over_the_visible_emitter(name, emitter, point, axis, cos_max):
+    """E over directions uniform in a cone holding the emitter of [hit] emitter_pdf / q = 1 (each point seen once).
+
+    The directions and their density q are numpy's (independent of the
+    kernels); the hits are the kernel's intersection.  Sidak over the cases.
+    """
+    is_quad = isinstance(emitter, Quad)
+    spheres, quads = _tables(quads=(emitter,)) if is_quad else _tables(spheres=(emitter,))
+    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    count = 400_000
+    directions, q = _cone(axis, cos_max, count, rng)
+    origins = np.broadcast_to(np.asarray(point, dtype=np.float64), directions.shape).copy()
+    ts, hits = K.first_hits(origins, directions, spheres, quads, 1e-9)
+    hit = hits == 0
+    assert 0.05 < hit.mean() <= 1.0
+    if is_quad:
+        cosines = np.abs(directions[hit] @ np.array(quads[9:12, 0]))
+    else:
+        normals = (origins[hit] + ts[hit, None] * directions[hit] - spheres[:3, 0]) / spheres[3, 0]
+        cosines = np.abs(np.sum(normals * directions[hit], axis=1))
+    values = np.zeros(count)
+    values[hit] = K.emitter_pdfs(np.asarray(point, dtype=np.float64), 0, ts[hit], cosines, spheres, quads) / q
+    mean, error = values.mean(), values.std(ddof=1) / math.sqrt(count)
+    critical = stats.norm.isf(_sidak(len(_PDF_CASES)) / 2)
+    assert abs(mean - 1) < critical * error and error < 0.01, (mean, error)
+
+
+@pytest.mark.parametrize("name, emitter, point, axis, cos_max", _PDF_CASES, ids=[c[0] for c in _PDF_CASES])
+def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, point, axis, cos_max):
+    """sample_emitter: points on the (clipped) emitter, visible from p, and emitter_pdf gives their pdf."""
+    is_quad = isinstance(emitter, Quad)
+    spheres, quads = _tables(quads=(emitter,)) if is_quad else _tables(spheres=(emitter,))
+    p = np.asarray(point, dtype=np.float64)
+    out = K.emitter_samples(p, 0, np.random.default_rng(3).random((20_000, 2)), spheres, quads)
+    assert np.all(out[:, 5] == 1) and np.all(np.isfinite(out)) and np.all(out[:, 4] > 0)
+    w = out[:, :3]
+    np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-14)
+    ts, hits = K.first_hits(np.broadcast_to(p, w.shape).copy(), w, spheres, quads, 1e-9)
+    assert np.all(hits == 0)  # every sampled direction reaches the emitter
+    cone = out[0, 3] < 0
+    if cone:  # directions: the hit is the sampled point
+        assert np.all(out[:, 3] == -1)
+    else:  # points: the first hit is the sampled point
+        np.testing.assert_allclose(ts, out[:, 3], rtol=1e-9)
+    q = p + ts[:, None] * w
+    if is_quad:
+        cosines = np.abs(w @ quads[9:12, 0])
+    else:
+        normals = (q - spheres[:3, 0]) / spheres[3, 0]
+        np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-9)
+        cosines = np.abs(np.sum(normals * w, axis=1))
+        if emitter.clip is not None:
+            a, d = spheres[5:8, 0], spheres[8, 0]
+            assert np.all(q @ a >= d - 1e-9 * np.abs(d) - 1e-12)
+    np.testing.assert_allclose(K.emitter_pdfs(p, 0, ts, cosines, spheres, quads), out[:, 4], rtol=1e-6)
+
+
+def test_cap_and_cone_and_quad_samples_have_their_distributions():
+    """Kolmogorov-Smirnov: cap heights uniform (Archimedes), cone cosines uniform, quad points uniform; Sidak over 4."""
+    rng = np.random.default_rng(8)
+    uv = rng.random((4000, 2))
+    critical_p = _sidak(4)
+    # cornell's cap: the height y of the sampled point is uniform on [81.33, 81.6]
+    spheres, quads = _tables(spheres=(_CORNELL_LIGHT,))
+    p = np.array([40.0, 20.0, 70.0])
+    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    y = p[1] + out[:, 3] * out[:, 1]
+    assert y.max() <= 81.6 + 1e-9 and y.min() >= 81.33 - 1e-9
+    assert stats.kstest((y - 81.33) / 0.27, "uniform").pvalue > critical_p
+    # a sphere from outside: cos to the centre uniform on [cos theta_max, 1]
+    spheres, quads = _tables(spheres=(Sphere((0, 0, 0), 1.0, "lamp"),))
+    p = np.array([0.0, 0.0, 3.0])
+    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    cos_max = math.sqrt(1 - 1 / 9)
+    assert stats.kstest((-out[:, 2] - cos_max) / (1 - cos_max), "uniform").pvalue > critical_p
+    # a parallelogram: both coordinates uniform
+    quad = Quad((-0.5, -0.5, 0), (1, 0, 0), (0.5, 1.5, 0), "lamp")
+    spheres, quads = _tables(quads=(quad,))
+    p = np.array([0.1, 0.2, -1.0])
+    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    q = p + out[:, 3:4] * out[:, :3]
+    st = np.linalg.solve(np.array([[1, 0.5], [0, 1.5]]), (q[:, :2] - [-0.5, -0.5]).T).T
+    for column in st.T:
+        assert stats.kstest(column, "uniform").pvalue > critical_p
+
+
+def test_clipped_sphere_intersection_against_numpy():
+    """The kernel's nearest kept root equals a direct numpy solution of the quadratic with the half-space test."""
+    center, radius = np.array([0.2, -0.1, 0.3]), 1.3
+    point, normal = np.array([0.0, 0.3, 0.0]), np.array([0.6, 0.8, 0.0])
+    spheres, quads = _tables(spheres=(Sphere(tuple(center), radius, "lamp", HalfSpace(tuple(point), tuple(normal))),))
+    rng = np.random.default_rng(12)
+    origins = rng.uniform(-3, 3, size=(100_000, 3))  # outside and inside the sphere ...
+    directions = center + rng.uniform(-1.5, 1.5, size=(100_000, 3)) - origins  # ... aimed near it
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    eps = 1e-7
+    ts, hits = K.first_hits(origins, directions, spheres, quads, eps)
+    oc = origins - center
+    b = -np.sum(oc * directions, axis=1)
+    disc = b * b - np.sum(oc * oc, axis=1) + radius * radius
+    root = np.sqrt(np.maximum(disc, 0))
+    expected = np.full(len(origins), np.inf)
+    for t in (b + root, b - root):  # the nearer kept root wins: test the far one first
+        inside = ((origins + t[:, None] * directions - point) @ normal) >= 0
+        expected = np.where((disc >= 0) & (t > eps) & inside, t, expected)
+    np.testing.assert_array_equal(hits == 0, np.isfinite(expected))
+    np.testing.assert_allclose(ts[hits == 0], expected[hits == 0], rtol=1e-12)
+    assert 0.1 < np.mean(hits == 0) < 0.9  # both outcomes occur often
+
+
+# --- closed-form direct lighting: NEE with MIS ----------------------------------------------
+
+_RHO, _LE = 0.5, 3.0
+_GL = np.polynomial.legendre.leggauss(4)
+
+
+def _direct_scene(light):
+    materials = {"ground": diffuse(_RHO), "lamp": diffuse(0.0, emission=_LE)}
+    ground = Quad((-30, -30, 0), (60, 0, 0), (0, 60, 0), "ground")
+    camera = Camera((0, -4, 1.2), (0, 4.5, -1.2), 20, up=(0, 0, 1))
+    if light == "sphere":
+        return Scene("sphere light", camera, materials, (Sphere((0, 0, 2), 0.5, "lamp"),), (ground,))
+    return Scene("quad light", camera, materials, (), (ground, Quad((-0.5, -0.5, 2), (1, 0, 0), (0, 1, 0), "lamp")))
+
+
+def _direct_reference(light, width, height):
+    """Pixel means of (rho / pi) E(x) over the box filter, by 4 x 4 Gauss-Legendre quadrature."""
+    cam = _direct_scene(light).camera_array(width, height)
+    nodes, weights = (_GL[0] + 1) / 2, _GL[1] / 2
+    fx, fy = np.meshgrid(nodes, nodes, indexing="ij")
+    w = np.outer(weights, weights).ravel()
+    image = np.zeros((height, width))
+    for row in range(height):
+        for col in range(width):
+            sx = (col + fx.ravel()) / width - 0.5
+            sy = (height - 1 - row + fy.ravel()) / height - 0.5
+            d = cam[3:6] + sx[:, None] * cam[6:9] + sy[:, None] * cam[9:12]
+            x = cam[:3] - (cam[2] / d[:, 2])[:, None] * d  # the ground z = 0 (near = 0)
+            e = np.empty(len(x))
+            for k, point in enumerate(x):
+                if light == "sphere":
+                    to_center = np.array([0, 0, 2.0]) - point
+                    distance = np.linalg.norm(to_center)
+                    e[k] = sphere_light_irradiance(to_center / distance, distance, 0.5, _LE)
+                else:
+                    corners = np.array([[-0.5, -0.5, 2], [0.5, -0.5, 2], [0.5, 0.5, 2], [-0.5, 0.5, 2]]) - point
+                    e[k] = lambert_irradiance(corners, (0, 0, 1), _LE)
+            image[row, col] = np.sum(w * _RHO / np.pi * e)
+    return image
+
+
+_DIRECT_SAMPLERS = ("cosine", "uniform", "symmetric_sobol", "symmetric_cosine_sobol")
+
+
+@pytest.fixture(scope="module")
+def direct_references():
+    return {light: _direct_reference(light, 24, 16) for light in ("sphere", "quad")}
+
+
+@pytest.mark.parametrize("sampler", _DIRECT_SAMPLERS)
+@pytest.mark.parametrize("light", ["sphere", "quad"])
+def test_direct_lighting_matches_the_closed_form(light, sampler, direct_references):
+    """NEE + MIS on a diffuse plane under a sphere or a square light equals (rho / pi) E per pixel (t-test per block)."""
+    reference = direct_references[light]
+    seed = 100 * _DIRECT_SAMPLERS.index(sampler) + (light == "quad")
+    image = render(_direct_scene(light), width=24, height=16, spp=64, sampler=sampler, seed=seed).image
+    np.testing.assert_array_equal(image[..., 0], image[..., 2])  # grey
+    residual = (image[..., 0] - reference).reshape(2, 8, 3, 8).transpose(0, 2, 1, 3).reshape(6, 64)
+    t = residual.mean(axis=1) / (residual.std(axis=1, ddof=1) / 8)
+    critical = stats.t.isf(_sidak(2 * len(_DIRECT_SAMPLERS) * 6) / 2, df=63)
+    assert np.all(np.abs(t) < critical), (t, critical)
+    blocks = reference.reshape(2, 8, 3, 8).mean(axis=(1, 3)).ravel()
+    assert np.all(residual.std(axis=1, ddof=1) / 8 < 0.03 * blocks)  # the test has teeth: 3 % per block
+    assert reference.min() > 1e-4 and reference.max() < 0.5  # lit everywhere
+
+
+def test_nee_beats_bsdf_sampling_on_the_small_light():
+    """Same spp: the path integrator's error on the sphere-light plane is far below the BSDF integrator's."""
+    reference = _direct_reference("sphere", 12, 8)
+    errors = {}
+    for integrator in INTEGRATORS:
+        image = render(_direct_scene("sphere"), width=12, height=8, spp=32, sampler="cosine", seed=5, integrator=integrator)
+        errors[integrator] = np.sqrt(np.mean((image.image[..., 0] - reference) ** 2))
+    assert errors["path"] < 0.25 * errors["bsdf"], errors
+
+
+# --- furnace ------------------------------------------------------------------------
+
+_FURNACE_CASES = [
+    (integrator, sampler, rho, translucent)
+    for integrator, sampler in _PAIRS
+    for translucent in (False, True)
+    for rho in (0.3, 0.6, (0.9 if translucent or sampler in _COSINE_SAMPLERS else 0.85))
+]
+
+
+@pytest.mark.parametrize("integrator, sampler, rho, translucent", _FURNACE_CASES)
+def test_furnace_radiance_is_le_over_one_minus_rho(integrator, sampler, rho, translucent):
+    emission = 0.7
+    scene = furnace(albedo=rho, emission=emission, translucent=translucent)
+    seed = round(1000 * rho) + translucent + 7 * (integrator == "path")
+    result = render(scene, width=32, height=32, spp=48, sampler=sampler, seed=seed, integrator=integrator)
+    image = result.image
+    np.testing.assert_array_equal(image[..., 0], image[..., 1])  # grey scene, same paths for every channel
+    pixels = image[..., 0].ravel()
+    mean = pixels.mean()
+    standard_error = pixels.std(ddof=1) / math.sqrt(pixels.size)
+    expected = emission / (1 - rho)
+    assert abs(mean - expected) <= 4 * standard_error, (mean, expected, standard_error)
+    assert standard_error < 0.05 * expected  # the test has teeth
+
+
+# --- unbiasedness against the other integrator --------------------------------------
+
+_W, _H, _BLOCK = 32, 24, 8
+_REPLICATES = 8
+
+
+def _replicate_stats(scene, integrator, sampler, spp, seed0):
+    images = np.stack(
+        [
+            render(scene, width=_W, height=_H, spp=spp, sampler=sampler, seed=seed0 + r, integrator=integrator).image
+            for r in range(_REPLICATES)
+        ]
+    )
+    mean = images.mean(axis=0)
+    variance_of_mean = images.var(axis=0, ddof=1) / _REPLICATES
+    blocks = lambda a: a.reshape(_H // _BLOCK, _BLOCK, _W // _BLOCK, _BLOCK, 3)  # noqa: E731
+    block_mean = blocks(mean).mean(axis=(1, 3))
+    block_variance = blocks(variance_of_mean).sum(axis=(1, 3)) / _BLOCK**4
+    return block_mean, block_variance
+
+
+@pytest.fixture(scope="module")
+def references():
+    return {
+        "path": _replicate_stats("cornell", "bsdf", "cosine", 512, seed0=90_000),  # for the path pairs
+        "bsdf": _replicate_stats("cornell", "path", "cosine", 256, seed0=80_000),  # for the bsdf pairs
+    }
+
+
+_TRANSLUCENT_SAMPLERS = ("cosine", "symmetric", "symmetric_cosine_sobol")
+_Z_TESTS = (len(_PAIRS) + len(_TRANSLUCENT_SAMPLERS)) * (_H // _BLOCK) * (_W // _BLOCK) * 3
+
+
+def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.15):
+    z = (block_mean - ref_mean) / np.sqrt(block_variance + ref_variance)
+    critical = stats.norm.isf(_sidak(_Z_TESTS) / 2)  # about 4.3
+    assert np.all(np.abs(z) < critical), (np.abs(z).max(), critical, np.unravel_index(np.abs(z).argmax(), z.shape))
+    # the test has teeth: the blocks are well estimated where there is light (relative standard error)
+    lit = ref_mean > 0.05
+    assert np.all(np.sqrt(block_variance[lit]) < teeth * ref_mean[lit]), np.max(np.sqrt(block_variance[lit]) / ref_mean[lit])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator, sampler", _PAIRS)
+def test_every_pair_agrees_with_the_other_integrator(integrator, sampler, references):
+    seed0 = 1000 * (_PAIRS.index((integrator, sampler)) + 1)
+    block_mean, block_variance = _replicate_stats("cornell", integrator, sampler, 48, seed0)
+    _z_check(block_mean, block_variance, *references[integrator])
+
+
+@pytest.fixture(scope="module")
+def translucent_reference():
+    return _replicate_stats(translucent_scene(), "bsdf", "cosine", 384, seed0=70_000)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sampler", _TRANSLUCENT_SAMPLERS)
+def test_translucent_scene_path_agrees_with_bsdf(sampler, translucent_reference):
+    """Quad lights (area sampling, selection by power) and NEE through Lambertian transmission."""
+    seed0 = 60_000 + 100 * _TRANSLUCENT_SAMPLERS.index(sampler)
+    block_mean, block_variance = _replicate_stats(translucent_scene(), "path", sampler, 96, seed0)
+    _z_check(block_mean, block_variance, *translucent_reference, teeth=0.2)

@@ -1,0 +1,166 @@
+"""symsphere.render.renderer: ``render``, its arguments and results, determinism, passes and the ``render`` verb."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from symsphere.cli import main
+from symsphere.render import INTEGRATORS, SAMPLERS, cornell, load_pfm, plan_passes, render, render_passes
+from symsphere.render import _integrator as K
+
+GOOD_TOML = """
+[camera]
+position = [0, 1, 4]
+look_at = [0, 1, 0]
+fov = 40
+
+[materials.white]
+type = "diffuse"
+albedo = 0.7
+
+[[spheres]]
+center = [0, 1, 0]
+radius = 0.5
+material = "white"
+"""
+
+
+def test_cornell_renders_like_smallpt():
+    """Cheap sanity: the light is the brightest thing, the left wall red, the right wall blue."""
+    image = render("cornell", width=32, height=24, spp=48, seed=5).image
+    assert np.all(np.isfinite(image)) and image.min() >= 0
+    left, right = image[8:16, 1:4].mean(axis=(0, 1)), image[8:16, -4:-1].mean(axis=(0, 1))
+    assert left[0] > 1.5 * left[2] and right[2] > 1.5 * right[0]
+    row, col = np.unravel_index(np.argmax(image[..., 0]), image.shape[:2])
+    assert 2 <= row <= 4 and 12 <= col <= 20 and image[row, col, 0] > 6  # the light (radiance 12) in the ceiling
+
+
+# --- determinism -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+@pytest.mark.parametrize("sampler", ["symmetric_sobol", "equal_area", "symmetric_cosine_sobol"])
+def test_same_seed_same_image_for_any_thread_count(sampler, integrator):
+    arguments = dict(width=24, height=16, spp=30, sampler=sampler, integrator=integrator)
+    previous = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = render("cornell", seed=42, **arguments).image
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = render("cornell", seed=42, **arguments).image
+    finally:
+        numba.set_num_threads(previous)
+    np.testing.assert_array_equal(one, two)
+    other = render("cornell", seed=43, **arguments).image
+    assert not np.array_equal(one, other)
+
+
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+def test_the_image_does_not_depend_on_how_samples_are_split_into_passes(integrator):
+    plan = plan_passes("cornell", 16, 12, 48, "symmetric", None, "box", 9, integrator)
+    rows = np.arange(12, dtype=np.int64)
+
+    def run(splits):
+        accum = np.zeros((12, 16, 3))
+        first = 0
+        for count in splits:
+            K.render_pass(*plan.arguments, first, count, rows[::-1].copy(), accum)
+            first += count
+        return accum
+
+    a, b = run([48]), run([5, 19, 24])
+    np.testing.assert_allclose(a, b, rtol=1e-13)  # same samples; only the summation order differs
+    np.testing.assert_array_equal(render_passes(plan, 0, 1)[0], run([48]))
+
+
+def test_render_result_fields():
+    result = render("furnace", width=8, height=6, spp=24, sampler="symmetric_sobol", method="paper2", seed=1)
+    assert result.image.shape == (6, 8, 3) and result.image.dtype == np.float64
+    assert result.paths == 8 * 6 * 24 and result.paths_per_second > 0
+    assert (result.sampler, result.method, result.pixel_filter, result.seed) == ("symmetric_sobol", "paper2", "box", 1)
+    assert result.integrator == "path" and render("furnace", width=4, height=4, spp=1, seed=1, integrator="bsdf").integrator == "bsdf"
+    assert render("furnace", width=4, height=4, spp=1, sampler="cosine", seed=1).method is None
+    tent = render("cornell", width=8, height=6, spp=4, pixel_filter="tent", seed=1)
+    assert tent.pixel_filter == "tent" and np.all(np.isfinite(tent.image))
+
+
+@pytest.mark.parametrize(
+    "kwargs, named",
+    [
+        (dict(sampler="nope"), "sampler"),
+        (dict(sampler="cosine", method="paper1"), "method"),
+        (dict(method="nope"), "method"),
+        (dict(width=0), "width"),
+        (dict(spp=2.5), "spp"),
+        (dict(seed=-1), "seed"),
+        (dict(pixel_filter="gauss"), "pixel_filter"),
+        (dict(scene="nope"), "scene"),
+        (dict(threads=0), "threads"),
+        (dict(integrator="nee"), "integrator"),
+        (dict(sampler="symmetric_cosine", method="equal_area"), "method"),
+    ],
+)
+def test_render_rejects_bad_arguments(kwargs, named):
+    arguments = dict(scene="cornell", width=4, height=4, spp=1, seed=0) | kwargs
+    with pytest.raises(ValueError, match=named):
+        render(**arguments)
+
+
+# --- the render verb ----------------------------------------------------------------
+
+
+def test_render_verb_writes_png_pfm_npy(tmp_path, capsys):
+    out = tmp_path / "img.png"
+    arguments = ["render", "--scene", "cornell", "--width", "16", "--height", "12", "--spp", "24"]
+    status = main([*arguments, "--sampler", "symmetric_sobol", "--seed", "3", "--no-progress", "--out", str(out)])
+    assert status == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["img.npy", "img.pfm", "img.png"]
+    expected = render("cornell", width=16, height=12, spp=24, sampler="symmetric_sobol", seed=3).image
+    np.testing.assert_array_equal(np.load(tmp_path / "img.npy"), expected)
+    np.testing.assert_array_equal(load_pfm(tmp_path / "img.pfm"), expected.astype(np.float32))
+    assert (tmp_path / "img.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    closing = capsys.readouterr().out.strip().splitlines()
+    assert len(closing) == 1 and "Mpaths/s" in closing[0] and " s = " in closing[0] and str(out) in closing[0]
+
+
+@pytest.mark.parametrize(
+    "arguments, named",
+    [
+        (["--sampler", "nope"], "--sampler"),
+        (["--spp", "0"], "--spp"),
+        (["--seed", "-2"], "--seed"),
+        (["--out", "x.jpg"], "--out"),
+        (["--scene", "nope"], "scene"),
+        (["--sampler", "uniform", "--method", "paper1"], "method"),
+        (["--exposure", "0"], "--exposure"),
+    ],
+)
+def test_render_verb_rejects_bad_arguments(tmp_path, capsys, arguments, named):
+    base = ["render", "--width", "4", "--height", "4", "--spp", "1", "--no-progress"]
+    if "--out" not in arguments:
+        base += ["--out", str(tmp_path / "x.png")]
+    assert main([*base, *arguments]) == 2
+    err = capsys.readouterr().err
+    assert named in err
+    assert not any(p.suffix in (".png", ".pfm", ".npy") for p in tmp_path.iterdir())
+
+
+def test_render_verb_names_a_bad_scene_file(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text(GOOD_TOML.replace("radius = 0.5", "radius = -0.5", 1))
+    assert main(["render", "--scene", str(path), "--out", str(tmp_path / "x.png"), "--no-progress"]) == 2
+    assert f"scene file {str(path)!r}: spheres[0].radius must be positive" in capsys.readouterr().err
+    missing = tmp_path / "missing.toml"
+    assert main(["render", "--scene", str(missing), "--out", str(tmp_path / "x.png"), "--no-progress"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_samplers_listed():
+    assert set(SAMPLERS) == {
+        "symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine",
+        "symmetric_cosine", "symmetric_cosine_sobol",
+    }  # fmt: skip
+    assert INTEGRATORS == ("path", "bsdf")
+    assert math.isclose(2 * math.tan(math.radians(cornell().camera.fov) / 2), 0.5135, rel_tol=1e-15)
