@@ -582,7 +582,7 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
     tiles = [(f"reference: ours, {references['symsphere']['spp']} spp", ref["symsphere"][0].image)]
     if "mitsuba" in ref:
         tiles.append((f"reference: Mitsuba, {references['mitsuba']['spp']} spp", ref["mitsuba"][0].image))
-    for key in records:
+    for key in sorted(records, key=lambda k: records[k]["renderer"] != "mitsuba"):  # Mitsuba next to the references
         if key not in keep:
             continue
         image, spp, seconds, rel, flip = keep[key]
