@@ -605,6 +605,17 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
     figure.savefig(path, dpi=100)
 
 
+def _cpu_model():
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
 def equal_time(args):
     integrators, default_integrator = _integrator_choices()
     mitsuba_ok, mitsuba_reason = _mitsuba_status(args.no_mitsuba)
@@ -618,7 +629,7 @@ def equal_time(args):
     header = dict(
         command=" ".join(["python", "benchmarks/bench_render.py", *sys.argv[1:]]),
         date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        machine=f"{os.cpu_count()} CPUs, {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+        machine=f"{os.cpu_count()} CPUs, {_cpu_model()}, Python {platform.python_version()}, "
         f"numba {numba.__version__} ({args.threads} threads)",
         integrators=[i or "bsdf (render() has no integrator parameter)" for i in integrators],
         default_integrator=default_integrator,
