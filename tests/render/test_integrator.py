@@ -317,7 +317,7 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
     is_quad = isinstance(emitter, Quad)
     spheres, quads = _tables(quads=(emitter,)) if is_quad else _tables(spheres=(emitter,))
     p = np.asarray(point, dtype=np.float64)
-    out = K.emitter_samples(p, 0, np.random.default_rng(3).random((20_000, 2)), spheres, quads)
+    out = K.emitter_samples(p, 0, 3, 20_000, spheres, quads)
     assert np.all(out[:, 5] == 1) and np.all(np.isfinite(out)) and np.all(out[:, 4] > 0)
     w = out[:, :3]
     np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-14)
@@ -342,32 +342,74 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
 
 
 def test_cap_and_cone_and_quad_samples_have_their_distributions():
-    """Kolmogorov-Smirnov: cap heights uniform (Archimedes), cone cosines uniform, quad points uniform; Sidak over 4."""
-    rng = np.random.default_rng(8)
-    uv = rng.random((4000, 2))
-    critical_p = _sidak(4)
+    """Kolmogorov-Smirnov: cap heights and azimuths uniform (Archimedes), cone cosines uniform, quad points uniform.
+
+    Five tests, Sidak-corrected.
+    """
+    critical_p = _sidak(5)
     # cornell's cap: the height y of the sampled point is uniform on [81.33, 81.6]
     spheres, quads = _tables(spheres=(_CORNELL_LIGHT,))
     p = np.array([40.0, 20.0, 70.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 81, 4000, spheres, quads)
     y = p[1] + out[:, 3] * out[:, 1]
     assert y.max() <= 81.6 + 1e-9 and y.min() >= 81.33 - 1e-9
     assert stats.kstest((y - 81.33) / 0.27, "uniform").pvalue > critical_p
+    q = p + out[:, 3:4] * out[:, :3]
+    azimuth = np.arctan2(q[:, 2] - 81.6, q[:, 0] - 50)
+    assert stats.kstest((azimuth + np.pi) / (2 * np.pi), "uniform").pvalue > critical_p
     # a sphere from outside: cos to the centre uniform on [cos theta_max, 1]
     spheres, quads = _tables(spheres=(Sphere((0, 0, 0), 1.0, "lamp"),))
     p = np.array([0.0, 0.0, 3.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 82, 4000, spheres, quads)
     cos_max = math.sqrt(1 - 1 / 9)
     assert stats.kstest((-out[:, 2] - cos_max) / (1 - cos_max), "uniform").pvalue > critical_p
     # a parallelogram: both coordinates uniform
     quad = Quad((-0.5, -0.5, 0), (1, 0, 0), (0.5, 1.5, 0), "lamp")
     spheres, quads = _tables(quads=(quad,))
     p = np.array([0.1, 0.2, -1.0])
-    out = K.emitter_samples(p, 0, uv, spheres, quads)
+    out = K.emitter_samples(p, 0, 83, 4000, spheres, quads)
     q = p + out[:, 3:4] * out[:, :3]
     st = np.linalg.solve(np.array([[1, 0.5], [0, 1.5]]), (q[:, :2] - [-0.5, -0.5]).T).T
     for column in st.T:
         assert stats.kstest(column, "uniform").pvalue > critical_p
+
+
+def _triangle_solid_angle(a, b, c):
+    """Van Oosterom & Strackee (1983): tan(E/2) = |a . (b x c)| / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|)."""
+    la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
+    numerator = np.abs(np.sum(a * np.cross(b, c), axis=-1))
+    denominator = la * lb * lc + np.sum(a * b, axis=-1) * lc + np.sum(a * c, axis=-1) * lb + np.sum(b * c, axis=-1) * la
+    return 2 * np.arctan2(numerator, denominator)
+
+
+@pytest.mark.parametrize("point", [(0.2, 0.3, -0.8), (2.5, -0.4, 0.3), (0.1, 0.2, 0.05)])
+def test_rectangle_samples_are_uniform_in_solid_angle(point):
+    """Urena et al. 2013: a 4 x 4 grid of sub-rectangles receives samples in proportion to their solid angles.
+
+    Solid angles by Van Oosterom & Strackee (two triangles per cell, numpy);
+    chi-square with 15 degrees of freedom, 3 points of view, Sidak-corrected.
+    """
+    corner, e1, e2 = np.array([-0.5, -0.5, 0.0]), np.array([1.0, 0, 0]), np.array([0, 1.5, 0])
+    spheres, quads = _tables(quads=(Quad(tuple(corner), tuple(e1), tuple(e2), "lamp"),))
+    assert quads[25, 0] == 1.0  # recognised as a rectangle
+    p = np.asarray(point, dtype=np.float64)
+    count = 40_000
+    out = K.emitter_samples(p, 0, 17, count, spheres, quads)
+    assert np.all(out[:, 5] == 1)
+    q = p + out[:, 3:4] * out[:, :3]
+    np.testing.assert_allclose(q[:, 2], 0.0, atol=1e-12)  # on the rectangle's plane ...
+    s, t = (q[:, 0] + 0.5) / 1.0, (q[:, 1] + 0.5) / 1.5
+    assert s.min() >= -1e-12 and s.max() <= 1 + 1e-12 and t.min() >= -1e-12 and t.max() <= 1 + 1e-12  # ... inside
+    edges = np.linspace(0, 1, 5)
+    cells = np.array([[corner + a * e1 + b * e2 for a in edges] for b in edges]) - p  # (5, 5, 3), rows: t
+    omega = _triangle_solid_angle(cells[:-1, :-1], cells[:-1, 1:], cells[1:, 1:]) + _triangle_solid_angle(
+        cells[:-1, :-1], cells[1:, 1:], cells[1:, :-1]
+    )
+    np.testing.assert_allclose(out[:, 4], 1 / omega.sum(), rtol=1e-9)  # pdf = 1 / solid angle
+    counts = np.histogram2d(np.clip(t, 0, 1 - 1e-15), np.clip(s, 0, 1 - 1e-15), bins=[edges, edges])[0]
+    expected = count * omega / omega.sum()
+    statistic = np.sum((counts - expected) ** 2 / expected)
+    assert stats.chi2.sf(statistic, df=15) > _sidak(3), (statistic, counts, expected)
 
 
 def test_clipped_sphere_intersection_against_numpy():

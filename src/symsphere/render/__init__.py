@@ -1,11 +1,15 @@
 """symsphere.render: Monte Carlo and quasi-Monte Carlo solution of the rendering equation.
 
-A BSDF-sampling path tracer (numba, all cores) whose direction sampling at
-diffuse vertices is a parameter: the paper's symmetric scheme (orbits of 24
-directions on the hemisphere, 48 on the sphere for Lambertian transmission)
-with random or Owen-scrambled Sobol' base points, the i.i.d. orbit samplers
-of each map, and the classic uniform and cosine-weighted references.  Every
-sampler is unbiased and converges to the same image.
+A path tracer (numba, all cores) with two estimators -- ``integrator="path"``
+(next-event estimation and BSDF sampling combined by multiple importance
+sampling, the default) and ``integrator="bsdf"`` (BSDF sampling only,
+smallpt's) -- whose direction sampling at diffuse vertices is a parameter: the
+paper's symmetric scheme (orbits of 24 directions on the hemisphere, 48 on the
+sphere for Lambertian transmission) with random or Owen-scrambled Sobol' base
+points, the i.i.d. orbit samplers of each map, the classic uniform and
+cosine-weighted references, and the symmetric cosine-weighted samplers (the 8
+signed permutations that keep z).  Every (integrator, sampler) pair is
+unbiased and converges to the same image.
 
 >>> from symsphere.render import render, write_outputs
 >>> result = render("cornell", width=64, height=48, spp=24, seed=1)   # doctest: +SKIP

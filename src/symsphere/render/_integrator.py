@@ -94,11 +94,12 @@ PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
 
-# rows of the (10, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; 0 if
-# unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped)
-SPHERE_COLUMNS = 10
-# rows of the (17, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area
-QUAD_COLUMNS = 17
+# rows of the (11, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; 0 if
+# unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped), 1 / r
+SPHERE_COLUMNS = 11
+# rows of the (26, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area,
+# edge1 / |edge1|, edge2 / |edge2| (3 each), |edge1|, |edge2|, 1 if a rectangle (edges orthogonal) else 0
+QUAD_COLUMNS = 26
 MATERIAL_COLUMNS = 11  # kind, colour (3), transmittance (3), ior, emission (3)
 CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image plane at distance 1 (3 each), near
 # lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
@@ -111,11 +112,16 @@ _INV_2PI = 0.5 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if it hits it within this
+_MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
+_ONE_MINUS_EPSILON = 1.0 - 2.0**-53
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _ODD = np.uint64(0xD6E8FEB86659FD93)
 _ONE = np.uint64(1)
+_S32 = np.uint64(32)
+_M32 = np.uint64(0xFFFFFFFF)
+_TWO_M31 = 2.0**-31
 
 
 @register_jitable
@@ -291,8 +297,10 @@ def _film_offset(pixel_filter, state):
 
 
 @register_jitable(inline="always")
-def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
+def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch):
     """Nearest hit with t > eps: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
+
+    The first *plain* spheres are unclipped (:func:`plain_spheres`), the others clipped.
 
     *spheres* (SPHERE_COLUMNS, n) and *quads* (QUAD_COLUMNS, m) are stored
     column-wise (structure of arrays) and every candidate is tested without
@@ -302,14 +310,26 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
     branchy loop with ``t < t_best`` returns.  Sphere test as smallpt's:
     b = (c - o) . d, det = b^2 - |c - o|^2 + r^2, t = b -+ sqrt(det), in float64
     (the 1e5-radius walls need it).  A clipped sphere keeps a root only if
-    its point is in the half-space a . p >= d, i.e. ``(a . o - d) + t (a . d) >= 0``
-    (for an unclipped sphere a = 0, d = -inf: always); the nearer kept root wins.
+    its point is in the half-space a . p >= d, i.e. ``(a . o - d) + t (a . d) >= 0``;
+    the nearer kept root wins.  Clipped spheres have their own loop, so that
+    the common unclipped ones cost what they did before clipping existed
+    (smallpt's 8 unclipped spheres fill one AVX-512 vector).
     """
     t_best = np.inf
     hit = -1
     n = spheres.shape[1]
     if n > 0:
-        for i in range(n):  # (2D indexing, no row views: views would cost reference counting)
+        for i in range(plain):  # (2D indexing, no row views: views would cost reference counting)
+            px = spheres[0, i] - ox
+            py = spheres[1, i] - oy
+            pz = spheres[2, i] - oz
+            b = px * dx + py * dy + pz * dz
+            det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
+            root = math.sqrt(max(det, 0.0))
+            near = b - root
+            t = near if near > eps else b + root
+            scratch[i] = t if (det >= 0.0 and t > eps) else np.inf
+        for i in range(plain, n):  # clipped spheres: keep a root only if its point is in the half-space
             px = spheres[0, i] - ox
             py = spheres[1, i] - oy
             pz = spheres[2, i] - oz
@@ -354,6 +374,15 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch):
     return t_best, hit
 
 
+@register_jitable
+def plain_spheres(spheres):
+    """The number of unclipped spheres: the table holds them first (:meth:`Scene.arrays`)."""
+    n = 0
+    while n < spheres.shape[1] and spheres[8, n] == -np.inf:
+        n += 1
+    return n
+
+
 # --- emitters ------------------------------------------------------------------------
 
 
@@ -373,14 +402,93 @@ def _sphere_cone(px, py, pz, i, spheres):
 
 
 @register_jitable
-def sample_emitter(px, py, pz, obj, u, v, spheres, quads):
-    """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok).
+def _angle_between(ax, ay, az, bx, by, bz):
+    """The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 ``AngleBetween``)."""
+    if ax * bx + ay * by + az * bz < 0.0:
+        return _PI - 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((ax + bx) ** 2 + (ay + by) ** 2 + (az + bz) ** 2)))
+    return 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2 + (bz - az) ** 2)))
+
+
+@register_jitable
+def _unit_cross(ax, ay, az, bx, by, bz):
+    cx = ay * bz - az * by
+    cy = az * bx - ax * bz
+    cz = ax * by - ay * bx
+    inv = 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
+    return cx * inv, cy * inv, cz * inv
+
+
+@register_jitable
+def spherical_rectangle(px, py, pz, j, quads):
+    """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
+    Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
+
+    In the frame (x, y, z) of its edges, with z flipped to point away from
+    the rectangle (so z0 < 0), the corners are (x0 | x1, y0 | y1, z0).  The
+    planes through p and each edge have unit normals n0..n3; the spherical
+    rectangle's interior angles are g_i = angle(-n_i, n_(i+1)) and its solid
+    angle S = g0 + g1 + g2 + g3 - 2 pi.  Returns (S, x0, y0, z0, x1, y1,
+    zsign, b0 = n0.z, b1 = n2.z, k = 2 pi - g2 - g3); S = 0 when p is in the
+    rectangle's plane.
+    """
+    ex, ey, ez = quads[17, j], quads[18, j], quads[19, j]
+    fx, fy, fz = quads[20, j], quads[21, j], quads[22, j]
+    gx = ey * fz - ez * fy
+    gy = ez * fx - ex * fz
+    gz = ex * fy - ey * fx
+    dx = quads[0, j] - px
+    dy = quads[1, j] - py
+    dz = quads[2, j] - pz
+    x0 = dx * ex + dy * ey + dz * ez
+    y0 = dx * fx + dy * fy + dz * fz
+    z0 = dx * gx + dy * gy + dz * gz
+    zsign = 1.0
+    if z0 > 0.0:
+        zsign = -1.0
+        z0 = -z0
+    if not z0 < 0.0:
+        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 0.0
+    x1 = x0 + quads[23, j]
+    y1 = y0 + quads[24, j]
+    n0x, n0y, n0z = _unit_cross(x0, y0, z0, x1, y0, z0)
+    n1x, n1y, n1z = _unit_cross(x1, y0, z0, x1, y1, z0)
+    n2x, n2y, n2z = _unit_cross(x1, y1, z0, x0, y1, z0)
+    n3x, n3y, n3z = _unit_cross(x0, y1, z0, x0, y0, z0)
+    g0 = _angle_between(-n0x, -n0y, -n0z, n1x, n1y, n1z)
+    g1 = _angle_between(-n1x, -n1y, -n1z, n2x, n2y, n2z)
+    g2 = _angle_between(-n2x, -n2y, -n2z, n3x, n3y, n3z)
+    g3 = _angle_between(-n3x, -n3y, -n3z, n0x, n0y, n0z)
+    solid_angle = max(0.0, g0 + g1 + g2 + g3 - 2.0 * _PI)
+    return solid_angle, x0, y0, z0, x1, y1, zsign, n0z, n2z, 2.0 * _PI - g2 - g3
+
+
+@register_jitable
+def disk_point(state):
+    """A uniform point (x, y) of the unit disk and r^2 = x^2 + y^2 > 0: rejection from the square.
+
+    One 64-bit draw per trial, 32 bits per coordinate; accepted with
+    probability pi/4.  (x, y) / r is a uniform direction and r^2 is uniform
+    on (0, 1], independent of it, so one point gives a height and an azimuth
+    without a sine or a cosine (measured: cos + sin cost ~35 ns here).
+    """
+    while True:
+        state, bits = next_u64(state)
+        x = np.float64(bits >> _S32) * _TWO_M31 - 1.0
+        y = np.float64(bits & _M32) * _TWO_M31 - 1.0
+        r2 = x * x + y * y
+        if r2 <= 1.0 and r2 > 0.0:
+            return x, y, r2, state
+
+
+@register_jitable
+def sample_emitter(px, py, pz, obj, state, spheres, quads):
+    """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
     w is a unit direction, pdf its solid-angle density (without the emitter's
     selection probability).  distance is that of the sampled point, or -1 when
     a direction was sampled (cone): then any hit of *obj* along w is the
     sampled one.  ``ok`` is False for a degenerate sample (zero distance or a
-    grazing point), which contributes nothing.
+    grazing point), which contributes nothing.  *state* is the path's stream.
 
     - a full sphere seen from outside: uniform in the cone it subtends
       (pbrt-v4 ``Sphere::Sample(ctx, u)``, Mitsuba 3 ``Sphere::sample_direction``):
@@ -390,44 +498,83 @@ def sample_emitter(px, py, pz, obj, u, v, spheres, quads):
     - a full sphere seen from inside or on it, and a clipped sphere: by area on
       the cap of height h about the axis a (h = 2 r: the whole sphere), uniform
       in height by Archimedes' hat-box theorem: ``w = u h`` below the pole
-      c + r a, ring radius ``sqrt(w (2 r - w))``, azimuth ``2 pi v``; area
+      c + r a, ring radius ``sqrt(w (2 r - w))``, uniform azimuth; area
       ``2 pi r h``;
-    - a parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
+    - a rectangle (a parallelogram with orthogonal edges) seen under a solid
+      angle S >= 1e-3: uniformly in S (:func:`spherical_rectangle`; Urena et
+      al. 2013, section 4), pdf ``1 / S``;
+    - any other parallelogram: ``corner + u edge1 + v edge2``, area ``|edge1 x edge2|``.
 
-    Area densities become solid-angle ones as ``|q - p|^2 / (|cos_l| area)``,
-    cos_l between w and the emitter's normal at q.
+    For the sphere cases u and the azimuth come from one uniform disk point
+    (:func:`disk_point`): u = r^2, (cos, sin) = (x, y) / r, so that e.g. the
+    ring point is ``(x, y) sqrt(h (2 r - w))``.  Area densities become
+    solid-angle ones as ``|q - p|^2 / (|cos_l| area)``, cos_l between w and the
+    emitter's normal at q.
     """
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
         r = spheres[3, obj]
-        ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
+        inv_r = spheres[10, obj]
+        x, y, u, state = disk_point(state)
+        clipped = spheres[8, obj] != -np.inf
+        cone = False
+        ex, ey, ez, d2 = 0.0, 0.0, 0.0, 1.0
+        if not clipped:  # (a clipped sphere is never sampled by its cone: skip the test)
+            ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
         if cone:
             sin2 = spheres[4, obj] / d2
             cos_max = math.sqrt(max(0.0, 1.0 - sin2))
             one_minus_cos_max = sin2 / (1.0 + cos_max)
             w = u * one_minus_cos_max  # 1 - cos theta
-            sin_t = math.sqrt(max(0.0, w * (2.0 - w)))
-            phi = 2.0 * _PI * v
+            scale = math.sqrt(max(0.0, one_minus_cos_max * (2.0 - w)))  # sin theta / sqrt(u)
             inv = 1.0 / math.sqrt(d2)
-            wx, wy, wz = to_world(sin_t * math.cos(phi), sin_t * math.sin(phi), 1.0 - w, ex * inv, ey * inv, ez * inv)
-            return wx, wy, wz, -1.0, _INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0
-        if spheres[8, obj] == -np.inf:
-            ax, ay, az = 0.0, 0.0, 1.0
-        else:
+            wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
+            return wx, wy, wz, -1.0, _INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0, state
+        if clipped:
             ax, ay, az = spheres[5, obj], spheres[6, obj], spheres[7, obj]
+        else:
+            ax, ay, az = 0.0, 0.0, 1.0
         height = spheres[9, obj]
         w = u * height  # depth below the pole c + r a
-        ring = math.sqrt(max(0.0, w * (2.0 * r - w)))
-        phi = 2.0 * _PI * v
-        ox, oy, oz = to_world(ring * math.cos(phi), ring * math.sin(phi), r - w, ax, ay, az)  # q - c
+        scale = math.sqrt(max(0.0, height * (2.0 * r - w)))  # ring radius / sqrt(u)
+        ox, oy, oz = to_world(x * scale, y * scale, r - w, ax, ay, az)  # q - c
         qx = spheres[0, obj] + ox
         qy = spheres[1, obj] + oy
         qz = spheres[2, obj] + oz
-        inv_r = 1.0 / r
         nx, ny, nz = ox * inv_r, oy * inv_r, oz * inv_r
         area = 2.0 * _PI * r * height
     else:
         j = obj - n_spheres
+        state, b1 = next_u64(state)
+        state, b2 = next_u64(state)
+        u = u01(b1)
+        v = u01(b2)
+        if quads[25, j] != 0.0:
+            solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, k = spherical_rectangle(px, py, pz, j, quads)
+            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
+                au = u * solid_angle + k
+                fu = (math.cos(au) * b0 - b1_) / math.sin(au)
+                cu = math.copysign(1.0 / math.sqrt(fu * fu + b0 * b0), fu)
+                cu = min(max(cu, -_ONE_MINUS_EPSILON), _ONE_MINUS_EPSILON)
+                xu = min(max(-(cu * z0) / math.sqrt(max(0.0, 1.0 - cu * cu)), x0), x1)
+                dd = math.sqrt(xu * xu + z0 * z0)
+                h0 = y0 / math.sqrt(dd * dd + y0 * y0)
+                h1 = y1 / math.sqrt(dd * dd + y1 * y1)
+                hv = h0 + v * (h1 - h0)
+                yv = (hv * dd) / math.sqrt(1.0 - hv * hv) if hv * hv < 1.0 - 1e-12 else y1
+                yv = min(max(yv, y0), y1)
+                lz = z0 * zsign  # back to the frame of the edges
+                gx = quads[18, j] * quads[22, j] - quads[19, j] * quads[21, j]
+                gy = quads[19, j] * quads[20, j] - quads[17, j] * quads[22, j]
+                gz = quads[17, j] * quads[21, j] - quads[18, j] * quads[20, j]
+                wx = xu * quads[17, j] + yv * quads[20, j] + lz * gx
+                wy = xu * quads[18, j] + yv * quads[21, j] + lz * gy
+                wz = xu * quads[19, j] + yv * quads[22, j] + lz * gz
+                dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+                if not dist > 0.0:
+                    return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
+                inv = 1.0 / dist
+                return wx * inv, wy * inv, wz * inv, dist, 1.0 / solid_angle, True, state
         qx = quads[0, j] + u * quads[3, j] + v * quads[6, j]
         qy = quads[1, j] + u * quads[4, j] + v * quads[7, j]
         qz = quads[2, j] + u * quads[5, j] + v * quads[8, j]
@@ -439,15 +586,15 @@ def sample_emitter(px, py, pz, obj, u, v, spheres, quads):
     dist2 = dx * dx + dy * dy + dz * dz
     dist = math.sqrt(dist2)
     if not dist > 0.0:
-        return 0.0, 0.0, 1.0, 0.0, 0.0, False
+        return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
     inv = 1.0 / dist
     dx *= inv
     dy *= inv
     dz *= inv
     cos_l = abs(dx * nx + dy * ny + dz * nz)
     if not cos_l > 0.0:
-        return dx, dy, dz, dist, 0.0, False
-    return dx, dy, dz, dist, dist2 / (cos_l * area), True
+        return dx, dy, dz, dist, 0.0, False, state
+    return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
 @register_jitable
@@ -455,7 +602,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
     *cos_l* is |cos| between the ray and the emitter's normal at the hit.
-    The same case analysis as :func:`sample_emitter` (cone, cap, parallelogram).
+    The same case analysis as :func:`sample_emitter` (cone, cap, rectangle, parallelogram).
     """
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
@@ -466,7 +613,12 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
             return _INV_2PI * (1.0 + cos_max) / sin2
         area = 2.0 * _PI * spheres[3, obj] * spheres[9, obj]
     else:
-        area = quads[16, obj - n_spheres]
+        j = obj - n_spheres
+        if quads[25, j] != 0.0:
+            solid_angle = spherical_rectangle(px, py, pz, j, quads)[0]
+            if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:
+                return 1.0 / solid_angle
+        area = quads[16, j]
     if not cos_l > 0.0:
         return np.inf
     return t * t / (cos_l * area)
@@ -498,7 +650,7 @@ def power_heuristic(pdf, other):
 @register_jitable(inline="always")  # numba-IR inlining: no call, no reference counting of the arrays
 def radiance(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-    rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col, width, height, scratch,
+    rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col, width, height, scratch, plain,
 ):  # fmt: skip
     """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top."""
     state = path_state(key, s)
@@ -536,7 +688,7 @@ def radiance(
     px, py, pz = ox, oy, oz
     depth = 0
     while True:
-        t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, quads, eps, scratch)
+        t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch)
         if shadow:
             if hit == shadow_obj and (shadow_dist < 0.0 or abs(t - shadow_dist) <= _SHADOW_TOLERANCE * shadow_dist + eps):
                 lr += cr
@@ -556,7 +708,7 @@ def radiance(
         py = oy + t * dy
         pz = oz + t * dz
         if hit < n_spheres:
-            inv_r = 1.0 / spheres[3, hit]
+            inv_r = spheres[10, hit]  # 1 / r, stored
             nx = (px - spheres[0, hit]) * inv_r
             ny = (py - spheres[1, hit]) * inv_r
             nz = (pz - spheres[2, hit]) * inv_r
@@ -587,11 +739,12 @@ def radiance(
                     break  # black: absorbed, whatever the direction
             t_row, b_row = frame_rows(nx, ny, nz)
             if nee and depth + 1 < max_depth:  # next-event estimation: one emitter, one shadow ray
-                state, b1 = next_u64(state)
-                state, b2 = next_u64(state)
-                state, b3 = next_u64(state)
-                obj = np.int64(lights[0, choose_light(lights, u01(b1))])
-                wx, wy, wz, dist, p_light, ok = sample_emitter(px, py, pz, obj, u01(b2), u01(b3), spheres, quads)
+                choice = 0
+                if lights.shape[1] > 1:
+                    state, b1 = next_u64(state)
+                    choice = choose_light(lights, u01(b1))
+                obj = np.int64(lights[0, choice])
+                wx, wy, wz, dist, p_light, ok, state = sample_emitter(px, py, pz, obj, state, spheres, quads)
                 lz = wx * nx + wy * ny + wz * nz
                 if ok and (lz > 0.0 or (full and lz < 0.0)):
                     c = 1 if lz > 0.0 else 4  # reflectance on the incoming side, transmittance on the other
@@ -697,6 +850,7 @@ def render_pass(
     height = accum.shape[0]
     width = accum.shape[1]
     scratch_size = max(spheres.shape[1], quads.shape[1], 1)
+    plain = plain_spheres(spheres)
     for i in prange(rows.shape[0]):
         row = rows[i]
         scratch = np.empty(scratch_size)
@@ -707,7 +861,7 @@ def render_pass(
                 lr, lg, lb = radiance(
                     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
                     background, eps, rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col,
-                    width, height, scratch,
+                    width, height, scratch, plain,
                 )  # fmt: skip
                 sr += lr
                 sg += lg
@@ -757,20 +911,22 @@ def first_hits(origins, directions, spheres, quads, eps):
     ts = np.empty(count)
     hits = np.empty(count, dtype=np.int64)
     scratch = np.empty(max(spheres.shape[1], quads.shape[1], 1))
+    plain = plain_spheres(spheres)
     for i in range(count):
         ts[i], hits[i] = intersect(
             origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1], directions[i, 2],
-            spheres, quads, eps, scratch,
+            spheres, plain, quads, eps, scratch,
         )  # fmt: skip
     return ts, hits
 
 
 @njit(**_OPTIONS)
-def emitter_samples(point, obj, uv, spheres, quads):
-    """:func:`sample_emitter` from *point* for each row (u, v) of *uv*: columns wx, wy, wz, distance, pdf, ok."""
-    out = np.empty((uv.shape[0], 6))
-    for i in range(uv.shape[0]):
-        wx, wy, wz, dist, pdf, ok = sample_emitter(point[0], point[1], point[2], obj, uv[i, 0], uv[i, 1], spheres, quads)
+def emitter_samples(point, obj, seed, count, spheres, quads):
+    """*count* :func:`sample_emitter` draws from *point* (stream *seed*): columns wx, wy, wz, distance, pdf, ok."""
+    out = np.empty((count, 6))
+    state = np.uint64(seed)
+    for i in range(count):
+        wx, wy, wz, dist, pdf, ok, state = sample_emitter(point[0], point[1], point[2], obj, state, spheres, quads)
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = wx, wy, wz, dist, pdf, ok
     return out
 

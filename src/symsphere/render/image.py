@@ -12,9 +12,11 @@ Images are (height, width, 3) arrays of linear radiance, row 0 at the top.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from .._io import atomic_path
 
@@ -32,16 +34,30 @@ def _check_image(image, name="image") -> np.ndarray:
     return image
 
 
-def linear_to_srgb(c):
-    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1]."""
+def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1].
+
+    Examples
+    --------
+    >>> from symsphere.render import linear_to_srgb
+    >>> linear_to_srgb([0.0, 0.001, 1.0]).round(6)
+    array([0.     , 0.01292, 1.     ])
+    """
     c = np.asarray(c, dtype=np.float64)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
 
 
-def tonemap(image, exposure=1.0) -> np.ndarray:
+def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
     """8-bit sRGB of a linear HDR image: ``round(255 * srgb(clip(exposure * image, 0, 1)))``.
 
     NaN (never produced by the renderer) maps to 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.render import tonemap
+    >>> tonemap(np.full((1, 2, 3), 0.5))[0, 0]
+    array([188, 188, 188], dtype=uint8)
     """
     image = _check_image(image)
     if not (isinstance(exposure, (int, float)) and np.isfinite(exposure) and exposure > 0):
@@ -50,8 +66,17 @@ def tonemap(image, exposure=1.0) -> np.ndarray:
     return np.rint(255.0 * linear_to_srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
 
 
-def save_png(path, image, exposure=1.0) -> Path:
-    """Write the tone-mapped *image* (see :func:`tonemap`) as a PNG file, atomically."""
+def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
+    r"""Write the tone-mapped *image* (see :func:`tonemap`) as a PNG file, atomically.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import save_png
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     save_png(pathlib.Path(folder) / "x.png", np.zeros((2, 3, 3))).read_bytes()[:4]
+    b'\x89PNG'
+    """
     from matplotlib.image import imsave
 
     pixels = tonemap(image, exposure)
@@ -60,8 +85,17 @@ def save_png(path, image, exposure=1.0) -> Path:
     return Path(path)
 
 
-def save_pfm(path, image) -> Path:
-    """Write *image* as a little-endian RGB PFM (float32, bottom row first), atomically."""
+def save_pfm(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
+    r"""Write *image* as a little-endian RGB PFM (float32, bottom row first), atomically.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import save_pfm
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     save_pfm(pathlib.Path(folder) / "x.pfm", np.zeros((2, 3, 3))).read_bytes()[:12]
+    b'PF\n3 2\n-1.0\n'
+    """
     image = _check_image(image)
     height, width = image.shape[:2]
     data = np.ascontiguousarray(image[::-1], dtype="<f4")
@@ -72,8 +106,17 @@ def save_pfm(path, image) -> Path:
     return Path(path)
 
 
-def load_pfm(path) -> np.ndarray:
-    """Read a PFM file (``PF`` colour or ``Pf`` grey, either endianness) as (height, width, 3 or 1) float32."""
+def load_pfm(path: str | os.PathLike) -> np.ndarray:
+    """Read a PFM file (``PF`` colour or ``Pf`` grey, either endianness) as (height, width, 3 or 1) float32.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import load_pfm, save_pfm
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     load_pfm(save_pfm(pathlib.Path(folder) / "x.pfm", np.full((2, 3, 3), 0.25))).shape
+    (2, 3, 3)
+    """
     with open(path, "rb") as handle:
         raw = handle.read()
     tokens, position = [], 0
@@ -105,8 +148,17 @@ def load_pfm(path) -> np.ndarray:
     return data.astype(np.float32).reshape(height, width, channels)[::-1].copy()
 
 
-def save_npy(path, image) -> Path:
-    """Write *image* with ``numpy.save``, atomically."""
+def save_npy(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
+    """Write *image* with ``numpy.save``, atomically.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import save_npy
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     np.load(save_npy(pathlib.Path(folder) / "x.npy", np.ones((1, 1, 3)))).tolist()
+    [[[1.0, 1.0, 1.0]]]
+    """
     image = _check_image(image)
     with atomic_path(path) as temporary:
         with open(temporary, "wb") as handle:
@@ -114,8 +166,17 @@ def save_npy(path, image) -> Path:
     return Path(path)
 
 
-def save_image(path, image, exposure=1.0) -> Path:
-    """Write *image* in the format of the suffix of *path*: .png (tone-mapped), .pfm or .npy."""
+def save_image(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
+    """Write *image* in the format of the suffix of *path*: .png (tone-mapped), .pfm or .npy.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import save_image
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     save_image(pathlib.Path(folder) / "x.npy", np.zeros((1, 1, 3))).suffix
+    '.npy'
+    """
     suffix = Path(path).suffix.lower()
     if suffix == ".png":
         return save_png(path, image, exposure)

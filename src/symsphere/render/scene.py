@@ -59,6 +59,7 @@ from pathlib import Path
 from typing import Mapping
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _integrator as _k
 
@@ -97,7 +98,17 @@ _BLACK = (0.0, 0.0, 0.0)
 
 
 class SceneError(ValueError):
-    """A scene (from Python or a file) is invalid; the message names the field."""
+    """A scene (from Python or a file) is invalid; the message names the field.
+
+    Examples
+    --------
+    >>> from symsphere.render import Camera, Scene, SceneError, Sphere, diffuse
+    >>> try:
+    ...     Scene("s", Camera((0, 0, 5), (0, 0, -1), 40), {"m": diffuse(0.5)}, (Sphere((0, 0, 0), -1, "m"),))
+    ... except SceneError as error:
+    ...     print(error)
+    scene 's': spheres[0].radius must be positive, got -1.0
+    """
 
 
 # --- the data -----------------------------------------------------------------
@@ -105,13 +116,25 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class Material:
-    """A surface material.
+    """A surface material (made with :func:`diffuse`, :func:`translucent`, :func:`mirror`, :func:`dielectric`).
 
-    kind : 'diffuse' | 'translucent' | 'mirror' | 'dielectric'
-    color : albedo (diffuse), reflectance (translucent, mirror) or tint (dielectric)
-    transmittance : translucent only
-    ior : dielectric only (inside / outside)
-    emission : emitted radiance (two-sided), any kind
+    Attributes
+    ----------
+    kind : {'diffuse', 'translucent', 'mirror', 'dielectric'}
+    color : tuple of 3 floats
+        Albedo (diffuse), reflectance (translucent, mirror) or tint (dielectric).
+    transmittance : tuple of 3 floats
+        Translucent only.
+    ior : float
+        Dielectric only (inside / outside).
+    emission : tuple of 3 floats
+        Emitted radiance (two-sided), any kind.
+
+    Examples
+    --------
+    >>> from symsphere.render import Material
+    >>> Material("diffuse", (0.5, 0.5, 0.5)).kind
+    'diffuse'
     """
 
     kind: str
@@ -121,13 +144,27 @@ class Material:
     emission: tuple = (0.0, 0.0, 0.0)
 
 
-def diffuse(albedo, emission=0.0) -> Material:
-    """Lambertian reflection with *albedo* (a number or RGB), optionally emitting."""
+def diffuse(albedo: npt.ArrayLike, emission: npt.ArrayLike = 0.0) -> Material:
+    """Lambertian reflection with *albedo* (a number or RGB), optionally emitting.
+
+    Examples
+    --------
+    >>> from symsphere.render import diffuse
+    >>> diffuse(0.5, emission=[1, 2, 3]).emission
+    (1.0, 2.0, 3.0)
+    """
     return Material("diffuse", _rgb(albedo, "albedo"), emission=_rgb(emission, "emission"))
 
 
-def translucent(reflectance, transmittance, emission=0.0) -> Material:
-    """Lambertian reflection and transmission (sampled over the whole sphere)."""
+def translucent(reflectance: npt.ArrayLike, transmittance: npt.ArrayLike, emission: npt.ArrayLike = 0.0) -> Material:
+    """Lambertian reflection and transmission (sampled over the whole sphere).
+
+    Examples
+    --------
+    >>> from symsphere.render import translucent
+    >>> translucent(0.2, [0.5, 0.4, 0.3]).transmittance
+    (0.5, 0.4, 0.3)
+    """
     return Material(
         "translucent",
         _rgb(reflectance, "reflectance"),
@@ -136,13 +173,27 @@ def translucent(reflectance, transmittance, emission=0.0) -> Material:
     )
 
 
-def mirror(reflectance=1.0) -> Material:
-    """A perfect mirror."""
+def mirror(reflectance: npt.ArrayLike = 1.0) -> Material:
+    """A perfect mirror.
+
+    Examples
+    --------
+    >>> from symsphere.render import mirror
+    >>> mirror(0.9).color
+    (0.9, 0.9, 0.9)
+    """
     return Material("mirror", _rgb(reflectance, "reflectance"))
 
 
-def dielectric(ior=1.5, tint=1.0) -> Material:
-    """A smooth dielectric interface (exact Fresnel) with index of refraction *ior* inside."""
+def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
+    """A smooth dielectric interface (exact Fresnel) with index of refraction *ior* inside.
+
+    Examples
+    --------
+    >>> from symsphere.render import dielectric
+    >>> dielectric(1.33).ior
+    1.33
+    """
     return Material("dielectric", _rgb(tint, "tint"), ior=ior)
 
 
@@ -181,7 +232,14 @@ class Sphere:
 
 @dataclass(frozen=True)
 class Quad:
-    """The parallelogram ``corner + s * edge1 + t * edge2``, s, t in [0, 1]; normal along edge1 x edge2."""
+    """The parallelogram ``corner + s * edge1 + t * edge2``, s, t in [0, 1]; normal along edge1 x edge2.
+
+    Examples
+    --------
+    >>> from symsphere.render import Quad
+    >>> Quad((0, 0, 0), (1, 0, 0), (0, 1, 0), "lamp").edge2
+    (0, 1, 0)
+    """
 
     corner: tuple
     edge1: tuple
@@ -193,10 +251,22 @@ class Quad:
 class Camera:
     """A pinhole camera.
 
-    position, direction : eye and viewing direction (any length)
-    up : the image's up direction (need not be orthogonal to *direction*)
-    fov : vertical field of view, degrees
-    near : rays start on the plane at this distance along *direction* (smallpt's 140)
+    Attributes
+    ----------
+    position, direction : tuple of 3 floats
+        Eye and viewing direction (any length).
+    fov : float
+        Vertical field of view, degrees.
+    up : tuple of 3 floats
+        The image's up direction (need not be orthogonal to *direction*).
+    near : float
+        Rays start on the plane at this distance along *direction* (smallpt's 140).
+
+    Examples
+    --------
+    >>> from symsphere.render import Camera
+    >>> Camera((0, 1, 5), (0, 0, -1), 40).up
+    (0.0, 1.0, 0.0)
     """
 
     position: tuple
@@ -208,7 +278,18 @@ class Camera:
 
 @dataclass(frozen=True)
 class Scene:
-    """A scene: camera, named materials, spheres, quads and settings (validated on creation)."""
+    """A scene: camera, named materials, spheres, quads and settings (validated on creation).
+
+    Raises :class:`SceneError` naming the first invalid field.
+
+    Examples
+    --------
+    >>> from symsphere.render import Camera, Scene, Sphere, diffuse, render
+    >>> lamp = {"lamp": diffuse(0.0, emission=1.0)}
+    >>> scene = Scene("ball", Camera((0, 0, 4), (0, 0, -1), 40), lamp, (Sphere((0, 0, 0), 1, "lamp"),))
+    >>> float(render(scene, width=8, height=6, spp=2, seed=0).image[3, 4, 0])   # the centre sees the lamp
+    1.0
+    """
 
     name: str
     camera: Camera
@@ -236,18 +317,24 @@ class Scene:
         return 1e-6 * max(1.0, math.sqrt(sum(c * c for c in self.camera.position)))
 
     def arrays(self, width: int, height: int) -> dict:
-        """The scene packed for the kernels (float64 / int64 arrays), for an image of width x height."""
+        """The scene packed for the kernels (float64 / int64 arrays), for an image of width x height.
+
+        Objects are numbered as the kernels see them: the unclipped spheres
+        in scene order, then the clipped ones, then the quads.
+        """
         names = list(self.materials)
         index = {name: i for i, name in enumerate(names)}
         materials = np.zeros((len(names), _k.MATERIAL_COLUMNS))
         for i, name in enumerate(names):
             m = self.materials[name]
             materials[i] = [_KIND_CODES[m.kind], *m.color, *m.transmittance, m.ior, *m.emission]
-        spheres = np.zeros((len(self.spheres), _k.SPHERE_COLUMNS))
+        # unclipped spheres first (the kernels test them in their own loop), each group in scene order
+        ordered = [s for s in self.spheres if s.clip is None] + [s for s in self.spheres if s.clip is not None]
+        spheres = np.zeros((len(ordered), _k.SPHERE_COLUMNS))
         areas = []
-        for i, s in enumerate(self.spheres):
+        for i, s in enumerate(ordered):
             axis, offset, cap_height = _clip_table(s)
-            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height]
+            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height, 1.0 / s.radius]
             areas.append(2 * math.pi * s.radius * cap_height)  # Archimedes: the area of a cap is 2 pi r h
         quads = np.zeros((len(self.quads), _k.QUAD_COLUMNS))
         for i, q in enumerate(self.quads):
@@ -255,14 +342,19 @@ class Scene:
             normal_raw = np.cross(e1, e2)
             squared = float(normal_raw @ normal_raw)
             normal = normal_raw / math.sqrt(squared)
-            quads[i] = [*p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared)]
+            l1, l2 = math.sqrt(float(e1 @ e1)), math.sqrt(float(e2 @ e2))
+            rectangle = abs(float(e1 @ e2)) <= 1e-12 * l1 * l2  # sampled by solid angle (Urena et al. 2013)
+            quads[i] = [
+                *p0, *e1, *e2, *normal, *(normal_raw / squared), float(normal @ p0), math.sqrt(squared),
+                *(e1 / l1), *(e2 / l2), l1, l2, float(rectangle),
+            ]  # fmt: skip
             areas.append(math.sqrt(squared))
         lights, light_pmf = _light_tables(
-            [materials[index[o.material], 8:11] for o in (*self.spheres, *self.quads)], areas
+            [materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas
         )
         return dict(
             spheres=np.ascontiguousarray(spheres.T),  # structure of arrays: the kernels vectorise over objects
-            sphere_material=np.array([index[s.material] for s in self.spheres], dtype=np.int64),
+            sphere_material=np.array([index[s.material] for s in ordered], dtype=np.int64),
             quads=np.ascontiguousarray(quads.T),
             quad_material=np.array([index[q.material] for q in self.quads], dtype=np.int64),
             materials=materials,
@@ -509,8 +601,8 @@ _CLIP_KEYS = {"point", "normal"}
 _QUAD_KEYS = {"corner", "edge1", "edge2", "material"}
 
 
-def load_scene(path) -> Scene:
-    """Read a scene from a ``.toml`` or ``.json`` file (format: module docstring, docs/rendering.md).
+def load_scene(path: str | os.PathLike) -> Scene:
+    r"""Read a scene from a ``.toml`` or ``.json`` file (format: module docstring, docs/rendering.md).
 
     Raises
     ------
@@ -519,6 +611,19 @@ def load_scene(path) -> Scene:
     ValueError
         If the file is not valid TOML/JSON or not a valid scene; the message
         is ``scene file '<path>': <field> ...``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from symsphere.render import load_scene
+    >>> text = 'camera = {position = [0, 0, 4], look_at = [0, 0, 0], fov = 40}\n'
+    >>> text += 'materials.lamp = {type = "diffuse", albedo = 0, emission = 1}\n'
+    >>> text += 'spheres = [{center = [0, 0, 0], radius = 1, material = "lamp"}]\n'
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "ball.toml"
+    ...     _ = path.write_text(text)
+    ...     load_scene(path).name
+    'ball'
     """
     path = Path(path)
     where = f"scene file {str(path)!r}"
@@ -535,8 +640,21 @@ def load_scene(path) -> Scene:
     return scene_from_dict(data, source=str(path), default_name=path.stem)
 
 
-def scene_from_dict(data, *, source=None, default_name="scene") -> Scene:
-    """A :class:`Scene` from the parsed structure of a scene file."""
+def scene_from_dict(data: Mapping, *, source: str | None = None, default_name: str = "scene") -> Scene:
+    """A :class:`Scene` from the parsed structure of a scene file.
+
+    Examples
+    --------
+    >>> from symsphere.render import scene_from_dict
+    >>> scene = scene_from_dict({
+    ...     "camera": {"position": [0, 0, 4], "direction": [0, 0, -1], "fov": 40},
+    ...     "materials": {"lamp": {"type": "diffuse", "albedo": 0, "emission": 1}},
+    ...     "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "lamp",
+    ...                  "clip": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
+    ... })
+    >>> scene.spheres[0].clip.normal
+    (0.0, 0.0, 1.0)
+    """
     where = f"scene file {source!r}" if source else "scene"
     try:
         return _from_dict(data, source, default_name)
@@ -643,6 +761,13 @@ def _join(words):
 def cornell() -> Scene:
     """Kevin Beason's smallpt Cornell box, exactly as published (smallpt.cpp, 2008).
 
+    Examples
+    --------
+    >>> from symsphere.render import cornell
+    >>> scene = cornell()
+    >>> len(scene.spheres), scene.spheres[8].clip.normal
+    (9, (0.0, -1.0, 0.0))
+
     Nine spheres (radius, centre, emission, colour, material)::
 
         1e5   ( 1e5+1, 40.8, 81.6)   0       (.75,.25,.25)  diffuse   left
@@ -695,13 +820,20 @@ def cornell() -> Scene:
     return Scene("cornell", camera, materials, spheres, epsilon=1e-4)
 
 
-def furnace(albedo=0.5, emission=1.0, translucent=False) -> Scene:
+def furnace(albedo: float = 0.5, emission: float = 1.0, translucent: bool = False) -> Scene:
     """The inside of a closed unit sphere of albedo rho emitting Le: radiance is exactly Le / (1 - rho).
 
     With ``translucent=True`` the sphere is a Lambertian reflector *and*
     transmitter (reflectance = transmittance = rho / 2, sampled over the
     whole sphere) and the background radiance is Le / (1 - rho): the field
     is again uniform, Le / (1 - rho) everywhere.
+
+    Examples
+    --------
+    >>> from symsphere.render import furnace, render
+    >>> image = render(furnace(albedo=0.5, emission=1.0), width=8, height=8, spp=16, sampler="cosine", seed=1).image
+    >>> bool(abs(image.mean() - 2.0) < 0.1)   # Le / (1 - rho) = 2
+    True
     """
     rho = float(albedo)
     if not 0 <= rho < 1:
@@ -725,6 +857,12 @@ def translucent_scene() -> Scene:
     sheet and the ball is mostly light transmitted through them (Lambertian
     transmission, sampled over the whole sphere: the paper's transparent-object
     case).  A weak panel overhead lights their fronts.
+
+    Examples
+    --------
+    >>> from symsphere.render import translucent_scene
+    >>> translucent_scene().materials["ball"].kind
+    'translucent'
     """
     materials = {
         "floor": diffuse(0.5),
@@ -750,8 +888,15 @@ SCENES = {"cornell": cornell, "furnace": furnace, "translucent": translucent_sce
 """Built-in scenes by name: functions returning a :class:`Scene`."""
 
 
-def get_scene(scene) -> Scene:
-    """A :class:`Scene`, the built-in scene of that name, or the scene in that ``.toml``/``.json`` file."""
+def get_scene(scene: Scene | str | os.PathLike) -> Scene:
+    """A :class:`Scene`, the built-in scene of that name, or the scene in that ``.toml``/``.json`` file.
+
+    Examples
+    --------
+    >>> from symsphere.render import get_scene
+    >>> get_scene("cornell").name
+    'cornell'
+    """
     if isinstance(scene, Scene):
         return scene
     if isinstance(scene, os.PathLike) or (isinstance(scene, str) and scene not in SCENES):
