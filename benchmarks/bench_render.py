@@ -6,6 +6,9 @@ Usage (from the repository root, package installed)::
     python benchmarks/bench_render.py speed --spp 96 --repeats 5
     python benchmarks/bench_render.py convergence              # RMSE vs spp, efficiency, images -> docs/
     python benchmarks/bench_render.py validation               # furnace and z-test tables (as the tests)
+    python benchmarks/bench_render.py equal-time               # every strategy vs Mitsuba 3 at equal spp and time
+    python benchmarks/bench_render.py equal-time --budgets 0.2 0.4 --equal-spp 8 --reference-spp 256 \\
+        --mitsuba-reference-spp 128 --width 64 --height 48 --seeds 1 --no-images   # a quick check
 
 ``speed``
     Every sampler renders ``cornell`` at 256 x 192 with ``--spp`` samples per
@@ -27,12 +30,41 @@ Usage (from the repository root, package installed)::
     ``docs/images/render_cornell_<sampler>.png`` (all at the same spp),
     ``docs/images/render_translucent_<sampler>.png`` and prints Markdown tables for
     docs/rendering.md.
+``equal-time``
+    Every strategy -- each sampler in ``SAMPLERS`` x ``integrator`` in
+    {"path", "bsdf"} (when ``render`` takes an ``integrator``; else today's
+    BSDF-sampling estimator) -- and Mitsuba 3's ``path`` integrator
+    (``llvm_ad_rgb``, the same threads) on ``cornell`` and on ``gap`` (a room
+    lit through a gap, indirect light dominating; benchmarks/_mitsuba_scenes.py,
+    which also builds the Mitsuba scenes), at ``--width`` x ``--height``.  Each
+    renderer is compared with a converged reference of its own (ours:
+    ``--reference-spp`` with the cosine sampler and the default integrator;
+    Mitsuba: ``--mitsuba-reference-spp`` of ``path``; each the mean of two
+    independent halves, whose difference estimates the reference's own error,
+    which is subtracted from relMSE).  Metrics: relMSE = mean over pixels and
+    channels of (x - ref)^2 / (ref^2 + 0.01), and LDR FLIP (flip-evaluator) of
+    the tone-mapped sRGB images (``symsphere.render.tonemap``, exposure 1)
+    against the reference's, both the mean over ``--seeds`` seeds; efficiency
+    1 / (relMSE x seconds).  First every strategy renders ``--equal-spp``
+    (interleaved, all seeds): the equal-spp table and each strategy's paths/s;
+    then, for each budget of ``--budgets`` seconds, every strategy renders the
+    spp that its measured paths/s fit into the budget (the actual seconds are
+    reported).  Our time is ``RenderResult.seconds`` (compilation excluded);
+    Mitsuba's is the wall time of ``mi.render`` up to the image in numpy,
+    after a warm-up render with the same spp (its JIT compilation excluded;
+    Mitsuba renders of more than 64 spp are split into passes).  Writes
+    ``docs/images/equal_time_<scene>.png`` (the images at the largest budget,
+    seed 1) and a JSON file in ``benchmarks/results/`` with every number and
+    the Markdown tables, which are also printed.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
+import inspect
 import json
+import math
 import os
 import platform
 import statistics
@@ -45,7 +77,10 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from symsphere.render import SAMPLERS, render, save_png
+from symsphere.render import SAMPLERS, render, save_png, tonemap
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/: _machine, _mitsuba_scenes, bench_sample
+from _machine import cpu_snapshot, others_cpu  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -227,6 +262,467 @@ def validation(args):
         print(f"| `{sampler}` | {np.abs(z).max():.2f} | {z.mean():+.2f} | {np.sqrt((z**2).mean()):.2f} |")
 
 
+# --- equal-time ------------------------------------------------------------------------------------
+
+MITSUBA_PASS_SPP = 64  # Mitsuba renders of more spp are split into passes (its wavefront memory grows with spp)
+
+
+def _integrator_choices():
+    """(integrators to compare, the default): ("path", "bsdf") if ``render`` takes an integrator, else (None,)."""
+    parameters = inspect.signature(render).parameters
+    if "integrator" not in parameters:
+        return (None,), None
+    import symsphere.render
+
+    default = parameters["integrator"].default
+    available = getattr(symsphere.render, "INTEGRATORS", ("path", "bsdf"))
+    return tuple(sorted((i for i in ("path", "bsdf") if i in available), key=lambda name: name != default)), default
+
+
+def _rel_mse(image, reference):
+    return float(np.mean((image - reference) ** 2 / (reference**2 + 0.01)))
+
+
+class _Reference:
+    """A converged image from two independent halves; its own relMSE (to subtract) from their difference."""
+
+    def __init__(self, half_a, half_b):
+        self.image = 0.5 * (half_a + half_b)
+        # Var(reference) per pixel ~ ((a - b) / 2)^2: what the reference adds to a measured relMSE.
+        self.own_rel_mse = float(np.mean(((half_a - half_b) / 2) ** 2 / (self.image**2 + 0.01)))
+        self.ldr = tonemap(self.image).astype(np.float32) / 255
+
+    def metrics(self, image):
+        import flip_evaluator
+
+        ldr = tonemap(image).astype(np.float32) / 255
+        flip = flip_evaluator.evaluate(self.ldr, ldr, "LDR", applyMagma=False)[1]
+        return _rel_mse(image, self.image) - self.own_rel_mse, float(flip)
+
+
+class _Ours:
+    renderer = "symsphere"
+
+    def __init__(self, scene, sampler, integrator, width, height, threads):
+        self.scene, self.sampler, self.integrator = scene, sampler, integrator
+        self.width, self.height, self.threads = width, height, threads
+        self.label = f"`{sampler}`" + (f" · {integrator}" if integrator else " · bsdf")
+        self.key = f"{sampler}/{integrator or 'bsdf'}"
+
+    def render(self, spp, seed):
+        extra = {} if self.integrator is None else {"integrator": self.integrator}
+        result = render(self.scene, width=self.width, height=self.height, spp=spp, sampler=self.sampler, seed=seed,
+                        threads=self.threads, **extra)  # fmt: skip
+        return result.image, result.seconds
+
+    def warm_up(self, spp):
+        """Compile the kernel or load it from numba's cache (render() times only after that anyway)."""
+        extra = {} if self.integrator is None else {"integrator": self.integrator}
+        render(self.scene, width=8, height=8, spp=1, sampler=self.sampler, seed=0, threads=self.threads, **extra)
+
+
+class _Mitsuba:
+    """Mitsuba 3's ``path`` integrator on the converted scene (benchmarks/_mitsuba_scenes.py)."""
+
+    renderer = "mitsuba"
+    label = "Mitsuba 3 `path`"
+    key = "mitsuba/path"
+
+    def __init__(self, scene, width, height, threads):
+        import drjit as dr
+        import mitsuba as mi
+
+        from _mitsuba_scenes import mitsuba_dict
+
+        mi.set_variant("llvm_ad_rgb")
+        dr.set_thread_count(threads)
+        self.dr, self.mi = dr, mi
+        with tempfile.TemporaryDirectory(prefix="symsphere-mitsuba-") as workdir:
+            start = time.perf_counter()
+            self.scene = mi.load_dict(mitsuba_dict(scene, width, height, 1, workdir=workdir))
+            self.load_seconds = time.perf_counter() - start
+        self.warm = {}  # pass spp -> seconds of the first (compiling) render
+        self.version = f"mitsuba {mi.__version__}, drjit {dr.__version__}, llvm_ad_rgb, {dr.thread_count()} threads"
+
+    def _pass(self, spp, seed):
+        start = time.perf_counter()
+        image = np.array(self.mi.render(self.scene, spp=spp, seed=self.dr.opaque(self.mi.UInt32, seed)), dtype=np.float64)
+        return image, time.perf_counter() - start
+
+    @staticmethod
+    def _split(spp):
+        passes = -(-spp // MITSUBA_PASS_SPP)
+        return [spp // passes + (1 if k < spp % passes else 0) for k in range(passes)]
+
+    def warm_up(self, spp):
+        """Compile the kernels of every pass size *spp* needs (a render with an unused seed, not timed)."""
+        for size in set(self._split(spp)):
+            if size not in self.warm:
+                self.warm[size] = self._pass(size, 2**31 - size)[1]
+
+    def render(self, spp, seed):
+        self.warm_up(spp)
+        image, seconds = 0.0, 0.0
+        sizes = self._split(spp)
+        for k, size in enumerate(sizes):
+            part, elapsed = self._pass(size, seed * 1009 + k)
+            image = image + part * size
+            seconds += elapsed
+        return image / spp, seconds
+
+
+def _mitsuba_status(no_mitsuba):
+    if no_mitsuba:
+        return False, "--no-mitsuba"
+    try:
+        from bench_sample import probe_mitsuba  # sets DRJIT_LIBLLVM_PATH, tries the variant in a subprocess
+    except ImportError as error:
+        return False, f"benchmarks/bench_sample.py cannot be imported: {error}"
+    return probe_mitsuba()
+
+
+def _reference(strategy, spp, seed):
+    half = max(1, spp // 2)
+    strategy.warm_up(half)
+    a, seconds_a = strategy.render(half, seed)
+    b, seconds_b = strategy.render(half, seed + 1)
+    return _Reference(a, b), seconds_a + seconds_b
+
+
+def _rotated(items, round_):
+    k = round_ % len(items)
+    return items[k:] + items[:k]
+
+
+def _fmt(value, digits=3):
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "–"
+    return f"{value:.{digits}g}" if abs(value) < 1e4 else f"{value:.3g}"
+
+
+def _scene_for(name):
+    from _mitsuba_scenes import gap_room
+
+    from symsphere.render import get_scene
+
+    return gap_room() if name == "gap" else get_scene(name)
+
+
+def _equal_time_scene(name, args, integrators, default_integrator, mitsuba_ok, mitsuba_reason, images_dir):
+    width, height, threads = args.width, args.height, args.threads
+    scene = _scene_for(name)
+    pixels = width * height
+    samplers = args.samplers or list(SAMPLERS)
+    ours = [_Ours(scene, s, i, width, height, threads) for s in samplers for i in integrators]
+    strategies = list(ours)
+    mitsuba, note = None, mitsuba_reason
+    if mitsuba_ok:
+        try:
+            mitsuba = _Mitsuba(scene, width, height, threads)
+            strategies.append(mitsuba)
+            note = f"{mitsuba.version}; scene loaded in {mitsuba.load_seconds:.2f} s"
+        except Exception as error:  # a scene Mitsuba cannot express (translucent), or a loading failure
+            note = f"skipped: {type(error).__name__}: {error}"
+    print(f"\n## {name} {width}x{height}: {len(strategies)} strategies; Mitsuba: {note}", file=sys.stderr)
+    for strategy in ours:
+        strategy.warm_up(1)
+
+    # References, one per renderer.
+    reference_ours = _Ours(scene, "cosine", default_integrator, width, height, threads)
+    print(f"{name}: reference (ours): cosine, {args.reference_spp} spp ...", file=sys.stderr)
+    ref = {"symsphere": _reference(reference_ours, args.reference_spp, 900_001)}
+    if mitsuba is not None:
+        print(f"{name}: reference (Mitsuba path): {args.mitsuba_reference_spp} spp ...", file=sys.stderr)
+        ref["mitsuba"] = _reference(mitsuba, args.mitsuba_reference_spp, 900_001)
+    references = {
+        r: dict(spp=(args.reference_spp if r == "symsphere" else args.mitsuba_reference_spp), seconds=sec,
+                own_rel_mse=reference.own_rel_mse)
+        for r, (reference, sec) in ref.items()
+    }  # fmt: skip
+    if mitsuba is not None:  # are the two scenes the same? (their references' relMSE, minus both references' noise)
+        a, b = ref["symsphere"][0], ref["mitsuba"][0]
+        cross = float(np.mean((a.image - b.image) ** 2 / (a.image**2 + 0.01)))
+        references["ours_vs_mitsuba_rel_mse"] = cross  # includes both references' noise (~ the two own_rel_mse)
+        references["mean_radiance"] = dict(symsphere=a.image.mean(axis=(0, 1)).tolist(),
+                                           mitsuba=b.image.mean(axis=(0, 1)).tolist())  # fmt: skip
+        ratio = a.image.mean() / b.image.mean()
+        references["mean_radiance_ratio"] = float(ratio)
+        if abs(ratio - 1) > 0.03:
+            print(f"WARNING {name}: the mean radiance of our reference is {ratio:.3f} x Mitsuba's: "
+                  "the two renderers do not render the same scene", file=sys.stderr)  # fmt: skip
+
+    seeds = list(range(1, args.seeds + 1))
+    records = {s.key: dict(label=s.label, renderer=s.renderer, equal_spp=[], budgets={}) for s in strategies}
+    for strategy in strategies:
+        strategy.warm_up(args.equal_spp)
+    load_before, cpu_before, wall_start = os.getloadavg(), cpu_snapshot(), time.perf_counter()
+    # Equal spp (also each strategy's paths/s), interleaved.
+    for round_, seed in enumerate(seeds):
+        for strategy in _rotated(strategies, round_):
+            image, seconds = strategy.render(args.equal_spp, seed)
+            rel, flip = ref[strategy.renderer][0].metrics(image)
+            records[strategy.key]["equal_spp"].append(dict(seed=seed, spp=args.equal_spp, seconds=seconds, rel_mse=rel, flip=flip))
+        print(f"{name}: equal spp, seed {seed} done", file=sys.stderr)
+    for strategy in strategies:
+        runs = records[strategy.key]["equal_spp"]
+        records[strategy.key]["calibration_paths_per_second"] = statistics.median(
+            pixels * r["spp"] / r["seconds"] for r in runs
+        )
+    # Equal time: the spp each strategy's paths/s fits into the budget.
+    for strategy in strategies:
+        pps = records[strategy.key]["calibration_paths_per_second"]
+        for budget in args.budgets:
+            spp = max(1, round(budget * pps / pixels))
+            records[strategy.key]["budgets"][str(budget)] = dict(spp=spp, runs=[])
+            strategy.warm_up(spp)
+    keep = {}
+    for round_, seed in enumerate(seeds):
+        for budget in args.budgets:
+            for strategy in _rotated(strategies, round_):
+                entry = records[strategy.key]["budgets"][str(budget)]
+                image, seconds = strategy.render(entry["spp"], 100 * seed + args.budgets.index(budget))
+                rel, flip = ref[strategy.renderer][0].metrics(image)
+                entry["runs"].append(dict(seed=seed, seconds=seconds, rel_mse=rel, flip=flip))
+                if seed == seeds[0] and budget == args.budgets[-1]:
+                    keep[strategy.key] = (image, entry["spp"], seconds, rel, flip)
+            print(f"{name}: equal time {budget} s, seed {seed} done", file=sys.stderr)
+    wall = time.perf_counter() - wall_start
+    machine = dict(load_before=load_before[0], load_after=os.getloadavg()[0],
+                   others_cpu=others_cpu(cpu_before, cpu_snapshot(), wall))  # fmt: skip
+
+    # Summaries.
+    for record in records.values():
+        runs = record["equal_spp"]
+        record["equal_spp_summary"] = _summary(runs, pixels * runs[0]["spp"])
+        for entry in record["budgets"].values():
+            entry.update(_summary(entry["runs"], pixels * entry["spp"]))
+        all_runs = [(pixels * r["spp"], r["seconds"]) for r in runs] + [
+            (pixels * e["spp"], r["seconds"]) for e in record["budgets"].values() for r in e["runs"]
+        ]
+        record["paths_per_second"] = statistics.median(p / s for p, s in all_runs)
+    result = dict(scene=name, width=width, height=height, mitsuba=note, references=references, strategies=records,
+                  machine=machine, seconds=wall)  # fmt: skip
+    result["markdown"] = _equal_time_tables(result, args)
+    print(result["markdown"])
+    if not args.no_images:
+        path = images_dir / f"equal_time_{name}.png"
+        _contact_sheet(path, name, ref, keep, records, args.budgets[-1], width, height, references)
+        result["image"] = str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
+    return result
+
+
+def _summary(runs, paths):
+    rel = statistics.fmean(r["rel_mse"] for r in runs)
+    seconds = statistics.fmean(r["seconds"] for r in runs)
+    spread = statistics.stdev(r["rel_mse"] for r in runs) / math.sqrt(len(runs)) if len(runs) > 1 else None
+    return dict(
+        rel_mse=rel,
+        rel_mse_se=spread,
+        flip=statistics.fmean(r["flip"] for r in runs),
+        seconds=seconds,
+        paths_per_second=paths / seconds,
+        efficiency=1.0 / (rel * seconds) if rel > 0 else math.inf,
+    )
+
+
+def _equal_time_tables(result, args):
+    records = result["strategies"]
+    mitsuba = records.get("mitsuba/path")
+    budgets = [str(b) for b in args.budgets]
+    last = budgets[-1]
+    lines = [
+        f"**{result['scene']}** {result['width']}x{result['height']}; Mitsuba: {result['mitsuba']}.  "
+        f"Load average {result['machine']['load_before']:.2f} before, {result['machine']['load_after']:.2f} after"
+        + (f"; other processes used {result['machine']['others_cpu']['share_of_all_cpus']:.0%} of the CPUs"
+           if result["machine"]["others_cpu"] else "") + ".",
+        "",
+        f"Equal spp ({args.equal_spp}), mean of {args.seeds} seeds:",
+        "",
+        "| strategy | Mpaths/s | seconds | relMSE | FLIP | efficiency 1/(relMSE·s) | × Mitsuba |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]  # fmt: skip
+    for record in records.values():
+        summary = record["equal_spp_summary"]
+        ratio = summary["efficiency"] / mitsuba["equal_spp_summary"]["efficiency"] if mitsuba else None
+        lines.append(
+            f"| {record['label']} | {record['paths_per_second'] / 1e6:.2f} | {summary['seconds']:.3f} "
+            f"| {_fmt(summary['rel_mse'])} | {summary['flip']:.4f} | {_fmt(summary['efficiency'])} | {_fmt(ratio, 2)} |"
+        )
+    lines += [
+        "",
+        f"Equal time (budgets {', '.join(budgets)} s; spp from each strategy's measured paths/s; mean of {args.seeds} "
+        f"seeds): relMSE and FLIP at each budget, spp and actual seconds at {last} s, efficiency at {last} s:",
+        "",
+        "| strategy | " + " | ".join(f"relMSE {b} s" for b in budgets) + " | " + " | ".join(f"FLIP {b} s" for b in budgets)
+        + f" | spp / s at {last} s | efficiency | × Mitsuba |",
+        "|---|" + "---:|" * (2 * len(budgets) + 3),
+    ]  # fmt: skip
+    for record in records.values():
+        entries = [record["budgets"][b] for b in budgets]
+        ratio = entries[-1]["efficiency"] / mitsuba["budgets"][last]["efficiency"] if mitsuba else None
+        lines.append(
+            f"| {record['label']} | " + " | ".join(_fmt(e["rel_mse"]) for e in entries) + " | "
+            + " | ".join(f"{e['flip']:.4f}" for e in entries)
+            + f" | {entries[-1]['spp']} / {entries[-1]['seconds']:.2f} | {_fmt(entries[-1]['efficiency'])} | {_fmt(ratio, 2)} |"
+        )  # fmt: skip
+    refs = result["references"]
+    lines += ["", "References: " + "; ".join(
+        f"{r} {refs[r]['spp']} spp in {refs[r]['seconds']:.1f} s (own relMSE {refs[r]['own_rel_mse']:.2g}, subtracted)"
+        for r in ("symsphere", "mitsuba") if r in refs
+    ) + (f"; ours vs Mitsuba's reference: relMSE {refs['ours_vs_mitsuba_rel_mse']:.3g} (both references' noise "
+         f"included), mean radiance ratio {refs['mean_radiance_ratio']:.4f}" if "ours_vs_mitsuba_rel_mse" in refs
+         else "") + "."]  # fmt: skip
+    return "\n".join(lines)
+
+
+def _contact_sheet(path, name, ref, keep, records, budget, width, height, references):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    tiles = [(f"reference: ours, {references['symsphere']['spp']} spp", ref["symsphere"][0].image)]
+    if "mitsuba" in ref:
+        tiles.append((f"reference: Mitsuba, {references['mitsuba']['spp']} spp", ref["mitsuba"][0].image))
+    for key in sorted(records, key=lambda k: records[k]["renderer"] != "mitsuba"):  # Mitsuba next to the references
+        if key not in keep:
+            continue
+        image, spp, seconds, rel, flip = keep[key]
+        label = records[key]["label"].replace("`", "")
+        tiles.append((f"{label}\n{spp} spp, {seconds:.2f} s, relMSE {rel:.3g}, FLIP {flip:.3f}", image))
+    columns = min(5, len(tiles))
+    rows = -(-len(tiles) // columns)
+    scale = 2.6 / width * 100
+    figure = Figure(figsize=(columns * width * scale / 100, rows * (height * scale / 100 + 0.42)), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(rows, columns, squeeze=False)
+    for ax in axes.ravel():
+        ax.axis("off")
+    for ax, (title, image) in zip(axes.ravel(), tiles):
+        ax.imshow(tonemap(image), interpolation="nearest")
+        ax.set_title(title, fontsize=6.5)
+    figure.suptitle(f"{name}: every strategy at an equal time of {budget} s (seed 1), next to the references",
+                    fontsize=9)  # fmt: skip
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=100)
+
+
+def _cpu_model():
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def equal_time(args):
+    integrators, default_integrator = _integrator_choices()
+    mitsuba_ok, mitsuba_reason = _mitsuba_status(args.no_mitsuba)
+    print(f"integrators: {integrators} (default {default_integrator}); samplers: {args.samplers or SAMPLERS}; "
+          f"Mitsuba: {mitsuba_reason if mitsuba_ok else 'skipped: ' + mitsuba_reason}", file=sys.stderr)  # fmt: skip
+    if not mitsuba_ok:
+        mitsuba_reason = f"skipped: {mitsuba_reason}"
+    if args.threads > numba.config.NUMBA_NUM_THREADS:
+        raise SystemExit(f"--threads {args.threads} > numba's {numba.config.NUMBA_NUM_THREADS}")
+    images_dir = Path(args.images_dir)
+    header = dict(
+        command=" ".join(["python", "benchmarks/bench_render.py", *sys.argv[1:]]),
+        date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        machine=f"{os.cpu_count()} CPUs, {_cpu_model()}, Python {platform.python_version()}, "
+        f"numba {numba.__version__} ({args.threads} threads)",
+        integrators=[i or "bsdf (render() has no integrator parameter)" for i in integrators],
+        default_integrator=default_integrator,
+        samplers=list(args.samplers or SAMPLERS),
+        relmse="mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), minus the reference's own (from its halves)",
+        flip="LDR FLIP (flip-evaluator) of tonemap(image) (exposure 1, clip, sRGB, 8 bits) against tonemap(reference)",
+        timing="ours: RenderResult.seconds (after compilation); Mitsuba: wall time of mi.render + conversion to numpy, "
+        "after a warm-up render of the same pass size (JIT compilation excluded)",
+        budgets=args.budgets,
+        equal_spp=args.equal_spp,
+        seeds=args.seeds,
+        git=subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=ROOT).stdout.strip(),
+    )  # fmt: skip
+    print(f"{header['machine']}; load average {os.getloadavg()[0]:.2f}\n")
+    results = dict(header, scenes=[])
+    out = Path(args.json) if args.json else ROOT / "benchmarks" / "results" / (
+        f"{datetime.date.today().isoformat()}-bench_render-equal_time.json")  # fmt: skip
+    for name in args.scenes:
+        results["scenes"].append(
+            _equal_time_scene(name, args, integrators, default_integrator, mitsuba_ok, mitsuba_reason, images_dir)
+        )
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(results, indent=1))  # after every scene: a partial run leaves its numbers
+    _equal_time_answer(results)
+    _equal_time_targets(results)
+    out.write_text(json.dumps(results, indent=1))
+    print(f"\nwrote {out}", file=sys.stderr)
+
+
+def _equal_time_answer(results):
+    """Each symmetric sampler against i.i.d. cosine sampling, with the default (NEE) integrator when there is one."""
+    integrator = results["default_integrator"] or "bsdf"
+    base_key = f"cosine/{integrator}"
+    budgets = [str(b) for b in results["budgets"]]
+    lines = [
+        f"Symmetric samplers against `cosine`, integrator `{integrator}`: relMSE ratio at {results['equal_spp']} spp "
+        "(below 1: the symmetric sampler is better; ± from the seed-to-seed spread) and efficiency ratio at each "
+        "budget (above 1: better at equal time):",
+        "",
+        "| scene | sampler | relMSE / cosine's, equal spp | " + " | ".join(f"efficiency × cosine's, {b} s" for b in budgets)
+        + " |",
+        "|---|---|---:|" + "---:|" * len(budgets),
+    ]  # fmt: skip
+    for scene in results["scenes"]:
+        records = scene["strategies"]
+        if base_key not in records:
+            continue
+        base = records[base_key]
+        for key, record in records.items():
+            sampler = key.split("/")[0]
+            if not key.endswith(f"/{integrator}") or not sampler.startswith("symmetric"):
+                continue
+            a, b = record["equal_spp_summary"], base["equal_spp_summary"]
+            ratio = a["rel_mse"] / b["rel_mse"]
+            error = ""
+            if a["rel_mse_se"] is not None and b["rel_mse_se"] is not None:
+                error = f" ± {ratio * math.hypot(a['rel_mse_se'] / a['rel_mse'], b['rel_mse_se'] / b['rel_mse']):.2f}"
+            efficiency = [record["budgets"][x]["efficiency"] / base["budgets"][x]["efficiency"] for x in budgets]
+            lines.append(f"| {scene['scene']} | `{sampler}` | {ratio:.2f}{error} | "
+                         + " | ".join(f"{e:.2f}" for e in efficiency) + " |")  # fmt: skip
+    text = "\n".join(lines)
+    results["answer_markdown"] = text
+    print("\n" + text)
+
+
+def _equal_time_targets(results):
+    """The issue's targets on cornell: best efficiency >= 2x Mitsuba path; our paths/s with NEE >= 2.5x Mitsuba's."""
+    lines = []
+    for scene in results["scenes"]:
+        records = scene["strategies"]
+        mitsuba = records.get("mitsuba/path")
+        if mitsuba is None:
+            lines.append(f"{scene['scene']}: no Mitsuba run, targets not evaluated")
+            continue
+        last = str(results["budgets"][-1])
+        ours = {k: r for k, r in records.items() if r["renderer"] == "symsphere"}
+        best_key = max(ours, key=lambda k: ours[k]["budgets"][last]["efficiency"])
+        eff_ratio = ours[best_key]["budgets"][last]["efficiency"] / mitsuba["budgets"][last]["efficiency"]
+        nee = {k: r for k, r in ours.items() if k.endswith("/path")}
+        speed = {k: r["paths_per_second"] / mitsuba["paths_per_second"] for k, r in nee.items()}
+        scene["targets"] = dict(best_strategy=best_key, efficiency_ratio=eff_ratio, efficiency_target=2.0,
+                                paths_per_second_ratio_nee=speed, paths_per_second_target=2.5)  # fmt: skip
+        lines.append(
+            f"{scene['scene']}: best strategy at {last} s {best_key}: efficiency {eff_ratio:.2f}x Mitsuba path "
+            f"(target >= 2: {'met' if eff_ratio >= 2 else 'NOT met'}); paths/s with NEE vs Mitsuba: "
+            + (", ".join(f"{k.split('/')[0]} {v:.2f}x" for k, v in speed.items()) + 
+               f" (target >= 2.5: {'met' if speed and min(speed.values()) >= 2.5 else 'NOT met by all'})"
+               if speed else "no NEE integrator in this render() (target not evaluable)")
+        )  # fmt: skip
+    results["targets"] = lines
+    print("\n" + "\n".join(f"- {line}" for line in lines))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     verbs = parser.add_subparsers(dest="verb", required=True)
@@ -249,6 +745,22 @@ def main():
     c.set_defaults(run=convergence)
     v = verbs.add_parser("validation")
     v.set_defaults(run=validation)
+    e = verbs.add_parser("equal-time")
+    e.add_argument("--scenes", nargs="+", default=["cornell", "gap"], help="built-in scenes or 'gap'")
+    e.add_argument("--width", type=int, default=256)
+    e.add_argument("--height", type=int, default=192)
+    e.add_argument("--samplers", nargs="+", choices=SAMPLERS, help="default: all of SAMPLERS")
+    e.add_argument("--budgets", nargs="+", type=float, default=[1.0, 2.0], help="seconds per render")
+    e.add_argument("--equal-spp", type=int, default=24)
+    e.add_argument("--seeds", type=int, default=3)
+    e.add_argument("--reference-spp", type=int, default=1024, help="ours: cosine, the default integrator")
+    e.add_argument("--mitsuba-reference-spp", type=int, default=512)
+    e.add_argument("--threads", type=int, default=numba.config.NUMBA_NUM_THREADS, help="ours and Mitsuba's")
+    e.add_argument("--no-mitsuba", action="store_true")
+    e.add_argument("--no-images", action="store_true")
+    e.add_argument("--images-dir", default=str(ROOT / "docs" / "images"))
+    e.add_argument("--json", help="default: benchmarks/results/<date>-bench_render-equal_time.json")
+    e.set_defaults(run=equal_time)
     args = parser.parse_args()
     args.run(args)
 
