@@ -39,6 +39,7 @@ bench: $(STAMP)
 	fi
 	$(BIN)/python benchmarks/bench_sample.py
 	$(BIN)/python benchmarks/first_sample.py
+	$(BIN)/python benchmarks/bench_render.py equal-time
 
 # make docs: Sphinx + numpydoc API reference and the Markdown pages (docs/conf.py).  -E re-reads
 # every page, so that a warning in an unchanged page still fails the next build too.

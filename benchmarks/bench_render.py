@@ -77,7 +77,17 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from symsphere.render import SAMPLERS, render, save_png, tonemap
+from symsphere.render import SAMPLERS, save_png, tonemap
+from symsphere.render import render as _render
+
+# The integrator of the speed, convergence and validation subcommands (their --integrator); equal-time
+# compares both and passes it itself.
+_INTEGRATOR = {"integrator": "bsdf"}
+
+
+def render(*args, **kwargs):
+    """symsphere.render.render with the subcommand's integrator unless one is given."""
+    return _render(*args, **{**_INTEGRATOR, **kwargs})
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/: _machine, _mitsuba_scenes, bench_sample
 from _machine import cpu_snapshot, others_cpu  # noqa: E402
@@ -217,7 +227,7 @@ def convergence(args):
 
 
 def validation(args):
-    """The numbers behind tests/test_render_stats.py, as Markdown tables (same scenes, sizes and seeds)."""
+    """The numbers behind tests/render/, as Markdown tables (same scenes, sizes and seeds)."""
     import math
 
     from scipy import stats
@@ -269,7 +279,7 @@ MITSUBA_PASS_SPP = 64  # Mitsuba renders of more spp are split into passes (its 
 
 def _integrator_choices():
     """(integrators to compare, the default): ("path", "bsdf") if ``render`` takes an integrator, else (None,)."""
-    parameters = inspect.signature(render).parameters
+    parameters = inspect.signature(_render).parameters
     if "integrator" not in parameters:
         return (None,), None
     import symsphere.render
@@ -731,6 +741,8 @@ def main():
     p.add_argument("--height", type=int, default=192)
     p.add_argument("--spp", type=int, default=48)
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--integrator", choices=("path", "bsdf"), default="bsdf",
+                   help="bsdf (default) reproduces the tables of docs/rendering.md made before NEE")
     p.set_defaults(run=speed)
     c = verbs.add_parser("convergence")
     c.add_argument("--width", type=int, default=128)
@@ -739,11 +751,14 @@ def main():
     c.add_argument("--levels", type=int, default=6, help="spp = 24 * 2^k, k < levels")
     c.add_argument("--replicates", type=int, default=3)
     c.add_argument("--image-spp", type=int, default=96, help="spp of the side-by-side images")
+    c.add_argument("--integrator", choices=("path", "bsdf"), default="bsdf",
+                   help="bsdf (default) reproduces the tables and images of docs/rendering.md made before NEE")
     c.add_argument(
         "--replot", action="store_true", help="redraw the figure and tables from docs/images/render_convergence.json"
     )
     c.set_defaults(run=convergence)
     v = verbs.add_parser("validation")
+    v.add_argument("--integrator", choices=("path", "bsdf"), default="bsdf")
     v.set_defaults(run=validation)
     e = verbs.add_parser("equal-time")
     e.add_argument("--scenes", nargs="+", default=["cornell", "gap"], help="built-in scenes or 'gap'")
@@ -762,6 +777,8 @@ def main():
     e.add_argument("--json", help="default: benchmarks/results/<date>-bench_render-equal_time.json")
     e.set_defaults(run=equal_time)
     args = parser.parse_args()
+    if getattr(args, "integrator", None):
+        _INTEGRATOR["integrator"] = args.integrator
     args.run(args)
 
 
