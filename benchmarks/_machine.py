@@ -1,10 +1,23 @@
-"""How busy the machine was while a benchmark timed: shared by the benchmark scripts."""
+"""Which machine a benchmark ran on, and how busy it was while it timed: shared by the benchmark scripts."""
 
 from __future__ import annotations
 
 import os
+import platform
 
-__all__ = ["cpu_snapshot", "others_cpu"]
+__all__ = ["cpu_name", "cpu_snapshot", "others_cpu"]
+
+
+def cpu_name():
+    """The CPU model (from /proc/cpuinfo on Linux), else what the platform module knows."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
 
 
 def cpu_snapshot():

@@ -90,7 +90,7 @@ def render(*args, **kwargs):
     return _render(*args, **{**_INTEGRATOR, **kwargs})
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/: _machine, _mitsuba_scenes, bench_sample
-from _machine import cpu_snapshot, others_cpu  # noqa: E402
+from _machine import cpu_name, cpu_snapshot, others_cpu  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -615,17 +615,6 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
     figure.savefig(path, dpi=100)
 
 
-def _cpu_model():
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
 def equal_time(args):
     integrators, default_integrator = _integrator_choices()
     mitsuba_ok, mitsuba_reason = _mitsuba_status(args.no_mitsuba)
@@ -639,7 +628,7 @@ def equal_time(args):
     header = dict(
         command=" ".join(["python", "benchmarks/bench_render.py", *sys.argv[1:]]),
         date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        machine=f"{os.cpu_count()} CPUs, {_cpu_model()}, Python {platform.python_version()}, "
+        machine=f"{os.cpu_count()} CPUs, {cpu_name()}, Python {platform.python_version()}, "
         f"numba {numba.__version__} ({args.threads} threads)",
         integrators=[i or "bsdf (render() has no integrator parameter)" for i in integrators],
         default_integrator=default_integrator,

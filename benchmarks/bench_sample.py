@@ -58,7 +58,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import symsphere
-from _machine import cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
+from _machine import cpu_name, cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
 from symsphere import sample_hemisphere, sample_sphere
 
 FILL_VALUE = 0.5
@@ -675,7 +675,7 @@ def main(argv=None):
             "numba_threading_layer": numba.threading_layer(),
             "python": platform.python_version(),
             "machine": platform.machine(),
-            "cpu": _cpu_name(),
+            "cpu": cpu_name(),
             "cpus": os.cpu_count(),
             "loadavg_before": load_before,
             "loadavg_after": load_after,
@@ -731,17 +731,6 @@ def main(argv=None):
         }
         with open(args.json, "w", encoding="utf-8") as handle:
             json.dump(payload, handle, indent=1)
-
-
-def _cpu_name():
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 if __name__ == "__main__":
