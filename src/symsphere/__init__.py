@@ -10,9 +10,13 @@ densities; the default map, ``'equal_area'``, is exactly uniform.
 
 The names below are the package's everyday interface; each is documented in
 its module (:mod:`symsphere.sampling`, :mod:`symsphere.integrate`,
-:mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`).
-:mod:`symsphere.stats`, :mod:`symsphere.peers` and :mod:`symsphere.integrands`
-are imported on first use.
+:mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`,
+:mod:`symsphere.square_warps`).
+:mod:`symsphere.stats`, :mod:`symsphere.peers`, :mod:`symsphere.integrands`,
+:mod:`symsphere.render`, :mod:`symsphere.study` and the other submodules of
+``dir(symsphere)`` are imported on first use (``ss.render.render(...)`` works
+without an import of its own); ``import symsphere`` itself stays cheap and
+changes nothing in the process.
 
 Examples
 --------
@@ -38,11 +42,22 @@ from .integrate import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
 from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
+from .square_warps import (
+    hemisphere_to_square,
+    sphere_to_square,
+    square_to_hemisphere,
+    square_to_hemisphere_pdf,
+    square_to_sphere,
+    square_to_sphere_pdf,
+)
 from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
-__version__ = "0.1.0"
+__version__ = "0.2.0.dev0"
 
-_SUBMODULES = ("bins", "distributed", "harmonics", "integrands", "peers", "stats", "wedge")
+_SUBMODULES = (
+    "bins", "distributed", "frames", "harmonics", "integrands", "io", "peers", "quality", "render",
+    "spherical_triangles", "stats", "study", "warps", "wedge",
+)  # fmt: skip
 
 
 if TYPE_CHECKING:
@@ -58,6 +73,11 @@ def __getattr__(name: str) -> ModuleType:
         return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
+
+def __dir__() -> list[str]:
+    # The lazy submodules too, so that tab completion finds them before their first use.
+    return sorted(set(globals()) | set(_SUBMODULES))
+
 __all__ = [
     "HEMISPHERE_MAPS",
     "METHODS",
@@ -72,6 +92,7 @@ __all__ = [
     "fold",
     "IntegrationResult",
     "hemisphere_pdf",
+    "hemisphere_to_square",
     "integrate",
     "iter_hemisphere",
     "iter_sphere",
@@ -79,6 +100,11 @@ __all__ = [
     "sample_hemisphere",
     "sample_sphere",
     "sphere_pdf",
+    "sphere_to_square",
+    "square_to_hemisphere",
+    "square_to_hemisphere_pdf",
+    "square_to_sphere",
+    "square_to_sphere_pdf",
     "square_to_triangle",
     "triangle_pdf",
     "triangle_to_square",

@@ -10,6 +10,9 @@ Dask task, and :mod:`symsphere._integration` one block per partial sum.
 
 from __future__ import annotations
 
+import os
+import sys
+import warnings
 from typing import Any
 
 import numpy as np
@@ -23,7 +26,9 @@ from .maps import get_map
 from .points import BasePoints
 from .symmetry import orbit
 
-__all__ = ["prepare", "fill_range", "reference_orbits"]
+__all__ = ["prepare", "fill_range", "fill_rows", "reference_orbits", "warn_at_caller"]
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
 
 
 def prepare(
@@ -34,12 +39,25 @@ def prepare(
     points: PointsLike,
     rng: RNGLike,
     dtype: DTypeLike,
+    *,
+    any_size: bool = False,
+    name: str = "n",
 ) -> tuple[int, np.dtype[np.floating[Any]], MapMethod, BasePoints, Float64Array | None]:
-    """Validate; return (n, dtype, method, base point source, frame or None)."""
-    n = check_count(n, "n", multiple=count)
+    """Validate; return (n, dtype, method, base point source, frame or None).
+
+    With *any_size*, *n* need not be a multiple of *count*: the source then has
+    ``ceil(n / count)`` points, the last orbit to be cut short by :func:`fill_rows`.
+    A warning of the point set (scipy's Sobol' balance warning) is attributed to the
+    user's line that called into symsphere, not to a line of the package.
+    """
+    n = check_count(n, name, multiple=1 if any_size else count)
     dtype = check_dtype(dtype)
     get_map(method)
-    source = BasePoints(points, rng, n // count, per_point=count)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        source = BasePoints(points, rng, -(-n // count), per_point=count)
+    for warning in caught:
+        warn_at_caller(str(warning.message), warning.category)
     basis = None if normal is None else frames.frame(normal)
     return n, dtype, method, source, basis
 
@@ -52,6 +70,34 @@ def fill_range(
         assert source.seed_words is not None  # random sources always have the stream's seed
         return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
     return fill_orbits(source.take(start, stop), method, count, basis, out)
+
+
+def fill_rows(
+    source: BasePoints, start: int, method: MapMethod, count: int, basis: Float64Array | None, out: FloatArray
+) -> FloatArray:
+    """Fill *out* (any number of rows) with the orbits of base points ``start, start + 1, ...``.
+
+    Whole orbits are written in place (:func:`fill_range`); if ``len(out)`` is not a
+    multiple of *count*, the last orbit is made in a scratch block of *count* rows and
+    its first rows copied: every row is still the image of a uniform base point under
+    one of the maps, so still uniform.
+    """
+    whole, rest = divmod(len(out), count)
+    if whole:
+        fill_range(source, start, start + whole, method, count, basis, out[: whole * count])
+    if rest:
+        scratch = np.empty((count, 3), dtype=out.dtype)
+        fill_range(source, start + whole, start + whole + 1, method, count, basis, scratch)
+        out[whole * count :] = scratch[:rest]
+    return out
+
+
+def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
+    """``warnings.warn`` with the stack level of the first frame outside this package."""
+    level, frame = 2, sys._getframe(1)  # stacklevel 2: our caller
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR + os.sep):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(message, category, stacklevel=level)
 
 
 def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:

@@ -5,6 +5,14 @@ replaced by its orbit under the 48 signed permutations of Table 2 (the
 hemisphere: 24, Table 1).  Rows ``48 i ... 48 i + 47`` of the output are the
 orbit of base point ``i``, in table order.  If the map is uniform on T0, every
 row is uniform on the sphere; the rows of one orbit are not independent.
+
+Any size: :func:`sample_sphere` and :func:`sample_hemisphere` take any positive
+``n``, as ``numpy.random.Generator.random`` does.  The first ``n // 48``
+(``n // 24``) orbits are whole; the last ``n % 48`` rows are the first rows of
+one more orbit, in table order.  Each of those rows is the image of a uniform
+base point under one fixed symmetry, so it is uniform too (the cut orbit is
+just not symmetric about 0).  For random base points the whole orbits are the
+rows of ``sample_sphere(48 * (n // 48))`` with the same seed.
 """
 
 from __future__ import annotations
@@ -40,13 +48,15 @@ def sample_sphere(
     Parameters
     ----------
     n : int
-        Number of directions, a positive multiple of 48.
+        Number of directions, any positive integer.  Multiples of 48 are whole
+        orbits; otherwise the last orbit is cut short (see the module docstring:
+        every row is still uniform).
     method : {'equal_area', 'paper1', 'paper2'}
         Map from the unit square onto T0.  Only ``'equal_area'`` gives uniform
         directions; the paper's maps have density :func:`sphere_pdf`.
     points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
-        The ``n/48`` base points of the unit square (``'stratified'`` needs
-        ``n/48`` to be a square; ``'sobol'`` warns unless it is a power of 2).
+        The ``ceil(n/48)`` base points of the unit square (``'stratified'`` needs
+        their number to be a square; ``'sobol'`` warns unless it is a power of 2).
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
         Seeds the points (or their scrambling).  The same seed gives the same output.
     dtype : {numpy.float64, numpy.float32}
@@ -56,7 +66,7 @@ def sample_sphere(
     Returns
     -------
     ndarray, shape (n, 3)
-        Row ``48 i + k`` is ``orbit(base_i)[k]``.
+        Row ``48 i + k`` is ``orbit(base_i)[k]`` (for the last, cut orbit too).
 
     Examples
     --------
@@ -69,6 +79,9 @@ def sample_sphere(
     True
     >>> bool(np.allclose(d[:48].mean(axis=0), 0.0))   # an orbit is symmetric about 0
     True
+    >>> e = sample_sphere(100, rng=1)                  # any n: 2 whole orbits and 4 rows of a third
+    >>> e.shape, bool(np.array_equal(e[:96], d))
+    ((100, 3), True)
     """
     return _sample(n, 48, None, method, points, rng, dtype, out)
 
@@ -88,7 +101,8 @@ def sample_hemisphere(
     Parameters
     ----------
     n : int
-        Number of directions, a positive multiple of 24.
+        Number of directions, any positive integer; multiples of 24 are whole
+        orbits, otherwise the last orbit is cut short (every row is still uniform).
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (normalised; default (0, 0, 1)).  The
         hemisphere about (0, 0, 1) is carried onto it by the frame of
@@ -108,6 +122,8 @@ def sample_hemisphere(
     >>> d = sample_hemisphere(48, normal=[1.0, 0.0, 0.0], rng=2)
     >>> bool(np.all(d[:, 0] >= 0))
     True
+    >>> sample_hemisphere(7, rng=2).shape              # any n
+    (7, 3)
     """
     normal = check_normal(normal)
     return _sample(n, 24, normal, method, points, rng, dtype, out)
@@ -278,12 +294,12 @@ def _sample(
     dtype: DTypeLike,
     out: FloatArray | None,
 ) -> FloatArray:
-    n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype)
+    n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype, any_size=True)
     if out is not None:
         check_out(out, (n, 3), dtype)
     else:
         out = np.empty((n, 3), dtype=dtype)
-    return _blocks.fill_range(source, 0, n // count, method, count, basis, out)
+    return _blocks.fill_rows(source, 0, method, count, basis, out)
 
 
 def _iterate(
