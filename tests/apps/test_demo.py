@@ -91,7 +91,7 @@ def _run_demo_capturing_figure_titles(monkeypatch, out, n):
 
 def _scatter_directions(report, titles):
     """(directions the report says the scatter plots show, directions each scatter plot's title says)."""
-    stated = re.search(r"(\d+) whole orbits \((\d+) directions\)", report)
+    stated = re.search(r"(\d+) whole orbits? \((\d+) directions\)", report)
     shown = [int(m.group(1)) for t in titles if (m := re.search(r": (\d+) directions$", t))]
     return int(stated.group(2)), shown
 
@@ -116,12 +116,20 @@ def test_run_demo_writes_its_report_atomically(tmp_path, monkeypatch):
     assert _leftovers(tmp_path) == ["demo"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known bug, not fixed in the move to apps/: for n < 48 * 64 the report still says 64 whole orbits "
-    "(3072 directions) while the scatter plots show all n directions",
-)
 def test_figure_and_report_agree_on_the_scatter_directions_for_small_n(tmp_path, monkeypatch):
+    # issue 13, defect 5: for n < 48 * 64 the report said 64 whole orbits (3072 directions) while the
+    # scatter plots showed all n directions.
     report, titles = _run_demo_capturing_figure_titles(monkeypatch, tmp_path / "demo", 48)
-    stated, shown = _scatter_directions(report.read_text(encoding="utf-8"), titles)
-    assert shown == [stated] * 3
+    text = report.read_text(encoding="utf-8")
+    stated, shown = _scatter_directions(text, titles)
+    assert shown == [stated] * 3 == [48] * 3
+    assert "1 whole orbit (48 directions)" in text and "render.png" in text
+
+
+def test_demo_names_all_its_files_in_help_and_closing_line(tmp_path, capsys):
+    # issue 13, defect 5: render.png was mentioned neither in --help nor in the closing line.
+    assert main(["demo", "--help"]) == 0
+    assert "render.png" in capsys.readouterr().out
+    assert main(["demo", "--out", str(tmp_path / "d"), "--n", "480", "--no-progress"]) == 0
+    closing = capsys.readouterr().out
+    assert all(name in closing for name in DEMO_FILES)

@@ -18,8 +18,10 @@ output file is ever left behind.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -39,6 +41,7 @@ __all__ = ["main", "build_parser"]
 _DOMAINS = ("sphere", "hemisphere")
 _DTYPES = ("float64", "float32")
 _DEMO_DEFAULT_N = 48 * 2**14
+_DISTRIBUTED_EXTRA = "symsphere[distributed]"
 
 
 class _UsageError(Exception):
@@ -67,6 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="symsphere",
         description="Exactly uniform, 48-fold symmetric sampling of the sphere and hemisphere.",
+        epilog="'symsphere VERB --help' lists each verb's options and their choices.",
     )
     parser.add_argument("--version", action="version", version=f"symsphere {__version__}")
     verbs = parser.add_subparsers(dest="verb", metavar="{sample,integrate,study,render,demo}")
@@ -80,7 +84,10 @@ def build_parser() -> argparse.ArgumentParser:
             "point of the fundamental triangle.  The file appears only when complete."
         ),
     )
-    sample.add_argument("--n", type=int, required=True, help="number of directions: a multiple of 48 (hemisphere: 24)")
+    sample.add_argument(
+        "--n", type=int, required=True,
+        help="number of directions: a multiple of 48 (hemisphere: 24); symsphere.sample_sphere takes any n",
+    )  # fmt: skip
     sample.add_argument("--domain", choices=_DOMAINS, default="sphere", help="default: %(default)s")
     sample.add_argument(
         "--method",
@@ -130,28 +137,38 @@ def build_parser() -> argparse.ArgumentParser:
             "work runs on a Dask cluster and gives the identical result."
         ),
     )
-    integrate.add_argument("--integrand", required=True, help="a name from symsphere.integrands.INTEGRANDS")
+    integrate.add_argument(
+        "--integrand", required=True, metavar="NAME",
+        help=f"one of: {', '.join(sorted(INTEGRANDS))} (symsphere.integrands.INTEGRANDS; docs/integrands.md)",
+    )  # fmt: skip
     integrate.add_argument("--n", type=int, required=True, help="evaluations: a multiple of 48 (hemisphere: 24)")
-    integrate.add_argument("--method", choices=METHODS, default="equal_area", help="default: %(default)s")
+    integrate.add_argument(
+        "--method", choices=METHODS, default="equal_area",
+        help="map onto the triangle; every map is unbiased (weighted by 1/pdf) (default: %(default)s)",
+    )  # fmt: skip
     integrate.add_argument("--points", choices=POINT_SETS, default="random", help="default: %(default)s")
-    integrate.add_argument("--replicates", type=int, default=None, help="for stratified and QMC points (default 8)")
+    integrate.add_argument(
+        "--replicates", type=int, default=None,
+        help="independent randomisations of stratified and QMC points; the error bar needs 2 or more (default 8)",
+    )  # fmt: skip
     integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
     _add_cluster_options(integrate)
     integrate.set_defaults(handler=_run_integrate)
 
     demo = verbs.add_parser(
         "demo",
-        help="chi-square tests of the three maps, written up as report.md and figure.png",
+        help="chi-square tests of the three maps, written up as report.md, figure.png and render.png",
         description=(
-            "Sample the sphere and the hemisphere with every map, run chi-square tests against "
-            "the uniform density (and the paper's maps against their own density), and write "
-            "report.md and figure.png into DIR.  An existing DIR is replaced only if it holds "
-            "nothing but an earlier demo's output."
+            f"Sample the sphere and the hemisphere with every map ({', '.join(METHODS)}), run chi-square "
+            "tests against the uniform density (and the paper's maps against their own density), render "
+            "a small Cornell box with the symmetric scheme, and write report.md, figure.png and render.png "
+            "into DIR.  An existing DIR is replaced only if it holds nothing but an earlier demo's output."
         ),
     )
     demo.add_argument("--out", default="symsphere-demo", metavar="DIR", help="output directory (default: %(default)s)")
     demo.add_argument(
-        "--n", type=int, default=_DEMO_DEFAULT_N, help="directions per sample, a multiple of 48 (default: %(default)s)"
+        "--n", type=int, default=_DEMO_DEFAULT_N,
+        help="directions per sample, a multiple of 48; 4800 runs in seconds (default: %(default)s)",
     )
     demo.add_argument("--seed", type=int, default=0, help="default: %(default)s")
     demo.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
@@ -167,8 +184,8 @@ def build_parser() -> argparse.ArgumentParser:
             "it (.pfm and .npy, same stem).  Every file appears only when complete."
         ),
     )
-    render.add_argument("--scene", default="cornell", help="cornell, furnace, translucent or a .toml/.json file "
-                        "(default: %(default)s)")  # fmt: skip
+    render.add_argument("--scene", default="cornell", help="cornell, furnace, translucent or a .toml/.json file; "
+                        "furnace prints its mean radiance against the exact value (default: %(default)s)")  # fmt: skip
     render.add_argument("--width", type=int, default=256, help="default: %(default)s")
     render.add_argument("--height", type=int, default=192, help="default: %(default)s")
     render.add_argument(
@@ -193,7 +210,10 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     render.add_argument("--filter", choices=("box", "tent"), default="box", help="pixel filter (default: %(default)s)")
     render.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
-    render.add_argument("--exposure", type=float, default=1.0, help="PNG only: scale before tone mapping (default: 1)")
+    render.add_argument(
+        "--exposure", type=float, default=None,
+        help="PNG only: scale before tone mapping (default: 1; furnace: 0.5 / exact radiance, a mid-grey)",
+    )  # fmt: skip
     render.add_argument("--threads", type=int, default=None, help="numba threads (default: all cores)")
     render.add_argument("--out", default="render.png", metavar="FILE.png", help="default: %(default)s")
     render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
@@ -215,11 +235,13 @@ def _render_samplers():
 def _add_cluster_options(verb):
     cluster = verb.add_mutually_exclusive_group()
     cluster.add_argument(
-        "--workers", type=int, default=None, metavar="N", help="run on a local Dask cluster of N worker processes"
-    )
+        "--workers", type=int, default=None, metavar="N",
+        help=f"run on a local Dask cluster of N worker processes (needs {_DISTRIBUTED_EXTRA})",
+    )  # fmt: skip
     cluster.add_argument(
-        "--scheduler", default=None, metavar="ADDRESS", help="run on the Dask cluster at ADDRESS (tcp://host:8786)"
-    )
+        "--scheduler", default=None, metavar="ADDRESS",
+        help=f"run on the Dask cluster at ADDRESS (tcp://host:8786; needs {_DISTRIBUTED_EXTRA})",
+    )  # fmt: skip
     verb.add_argument(
         "--timeout", type=float, default=10.0, help="seconds to wait for the scheduler (default: %(default)s)"
     )
@@ -229,7 +251,15 @@ def _cluster_client(args):
     """A Dask client for --workers / --scheduler, or None to run in this process."""
     if args.workers is None and args.scheduler is None:
         return None
-    from .. import distributed  # function-level: dask is slow to import and optional
+    option = "--workers" if args.scheduler is None else "--scheduler"
+    try:
+        from .. import distributed  # function-level: dask is slow to import and optional
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] not in ("dask", "distributed"):
+            raise
+        raise _UsageError(
+            f"{option} needs Dask, which is not installed; install it with: pip install '{_DISTRIBUTED_EXTRA}'"
+        ) from None
 
     if args.scheduler is not None:
         return distributed.connect(args.scheduler, timeout=args.timeout)
@@ -283,7 +313,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     prog = f"symsphere {args.verb}"
     try:
-        return args.handler(args)
+        return _with_notes(args.handler, args, prog)
     except (_UsageError, ValueError, TypeError) as exc:
         # The library's validators name the argument; a traceback would add nothing.
         print(f"{prog}: error: {exc}", file=sys.stderr)
@@ -296,11 +326,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+def _with_notes(handler, args, prog) -> int:
+    """Run a verb; a library warning (scipy's Sobol' balance note) becomes one line on stderr."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        status = handler(args)
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        hint = _NOTE_HINTS.get(message.split(" require")[0], "")
+        print(f"{prog}: note: {message}{hint}", file=sys.stderr)
+    return status
+
+
+_NOTE_HINTS = {
+    "The balance properties of Sobol' points": " (here n is the number of base points: N/48, hemisphere N/24, "
+    "and per replicate for integrate); for Sobol's best error choose N so that it is, e.g. --n 49152 = 48 * 1024",
+}
+
+
 def _run_sample(args) -> int:
     from tqdm.auto import tqdm  # function-level: ~60 ms, only for the verbs that show progress
 
     if args.normal is not None and args.domain != "hemisphere":
-        raise _UsageError("--normal is only valid with --domain hemisphere")
+        raise _UsageError("--normal is only valid with --domain hemisphere; add --domain hemisphere or drop --normal")
     check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
     seed = args.seed
     if seed is None:
@@ -381,17 +428,33 @@ def _run_integrate(args) -> int:
     error = result.integral - integrand.exact
     low, high = result.confidence_interval
     print(f"{integrand.name} over the {integrand.domain}: {integrand.description}")
-    print(f"  estimate  {result.integral:.12g} ± {result.standard_error:.3g} (standard error, {result.n_units} {result.unit}s)")
-    print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
+    if math.isnan(result.standard_error):
+        print(f"  estimate  {result.integral:.12g}  (no error bar: {_no_error_bar(result)})")
+    else:
+        print(
+            f"  estimate  {result.integral:.12g} ± {result.standard_error:.3g} "
+            f"(standard error, {result.n_units} {result.unit}s)"
+        )
+        print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
     print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
     print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
     return 0
 
 
+def _no_error_bar(result) -> str:
+    """Why a result has no standard error, and what to pass for one."""
+    if result.unit == "replicate":
+        return "one replicate of the point set has no spread to measure; use --replicates 2 or more (default 8)"
+    return f"one {result.unit} has no spread to measure; use a larger --n"
+
+
 def _run_demo(args) -> int:
     start = time.perf_counter()
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
-    print(f"report: {report}  (figure: {report.with_name('figure.png')}; {time.perf_counter() - start:.1f} s)")
+    print(
+        f"report: {report}  (figures: {report.with_name('figure.png')}, {report.with_name('render.png')}; "
+        f"{time.perf_counter() - start:.1f} s)"
+    )
     return 0
 
 
@@ -405,6 +468,9 @@ def _run_render(args) -> int:
         raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
     if args.seed is not None:
         check_seed(args.seed, "--seed")
+    furnace_exact = _furnace_radiance() if args.scene == "furnace" else None
+    if args.exposure is None:  # the furnace's uniform radiance 2 would clip to pure white
+        args.exposure = 1.0 if furnace_exact is None else 0.5 / furnace_exact
     if not args.exposure > 0:  # checked by save_png too, but only after the render: fail first
         raise _UsageError(f"--exposure must be positive, got {args.exposure}")
     scene_file = Path(args.scene)
@@ -439,14 +505,35 @@ def _run_render(args) -> int:
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror, args.out) from exc
     method = f" ({result.method})" if result.method else ""
+    if client is None:
+        where = f"on {result.threads} threads (+{result.startup_seconds:.2f} s compile/load)"
+    else:
+        where = f"in all, on a Dask cluster of {result.threads} workers (wall time, compilation included)"
     print(
         f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp, {result.integrator} integrator, "
         f"{result.sampler} sampler{method}, "
         f"seed {result.seed}: {result.paths} paths in {result.seconds:.2f} s = "
-        f"{result.paths_per_second / 1e6:.2f} Mpaths/s on {result.threads} threads "
-        f"(+{result.startup_seconds:.2f} s compile/load); wrote {', '.join(str(p) for p in paths)}"
+        f"{result.paths_per_second / 1e6:.2f} Mpaths/s {where}; wrote {', '.join(str(p) for p in paths)}"
     )
+    if furnace_exact is not None:
+        mean = float(result.image.mean())
+        spread = float(result.image.mean(axis=2).std(ddof=1) / math.sqrt(result.width * result.height))
+        print(
+            f"furnace: mean radiance {mean:.6g} ± {spread:.2g} (standard error over pixels), exact {furnace_exact:g} "
+            f"= emission / (1 - albedo); relative error {mean / furnace_exact - 1:+.2e}; PNG at exposure "
+            f"{args.exposure:g} (exact = mid-grey)"
+        )
     return 0
+
+
+def _furnace_radiance() -> float:
+    """The exact radiance of the built-in furnace scene: emission / (1 - albedo), from its defaults."""
+    import inspect
+
+    from ..render import furnace
+
+    defaults = inspect.signature(furnace).parameters
+    return float(defaults["emission"].default) / (1 - float(defaults["albedo"].default))
 
 
 def _describe_os_error(exc: OSError) -> str:

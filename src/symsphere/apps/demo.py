@@ -4,7 +4,8 @@
 :data:`symsphere.METHODS` and tests the samples, and their folds into the
 fundamental triangle T0 = {z >= x >= y >= 0}, against the uniform density;
 the paper's maps are also tested against their own densities.  The results
-go to ``report.md`` and ``figure.png``.
+go to ``report.md`` and ``figure.png``; ``render.png`` is a small render of
+smallpt's Cornell box with the scheme, described at the end of the report.
 
 Why one direction per orbit is tested
 -------------------------------------
@@ -60,15 +61,15 @@ class _Test:
 def run_demo(
     out_dir: str | os.PathLike = "symsphere-demo", n: int = 48 * 2**14, seed: int = 0, progress: bool = True
 ) -> Path:
-    """Test every map for uniformity and write ``report.md`` and ``figure.png``.
+    """Test every map for uniformity and write ``report.md``, ``figure.png`` and ``render.png``.
 
     Parameters
     ----------
     out_dir : str or os.PathLike, optional
         Directory to write.  It is built next to its final place and renamed
         into it only when complete.  An existing *out_dir* is replaced if it
-        is empty or holds only an earlier demo's files (``report.md``,
-        ``figure.png``); otherwise ``FileExistsError`` is raised before any
+        is empty or holds only an earlier demo's files (:data:`DEMO_FILES`);
+        otherwise ``FileExistsError`` is raised before any
         work, so that a mistyped path cannot delete anything.
     n : int, optional
         Directions per sample (sphere and hemisphere, per map), a positive
@@ -139,7 +140,9 @@ def run_demo(
 
         _write_figure(build_dir / "figure.png", tests, results, scatter)
         render_lines = _render(build_dir / "render.png", seed)
-        (build_dir / "report.md").write_text(_report(tests, results, n, seed) + render_lines, encoding="utf-8")
+        shown = len(next(iter(scatter.values())))  # what the scatter plots show: n < 3072 shows all n
+        report = _report(tests, results, n, seed, shown) + render_lines
+        (build_dir / "report.md").write_text(report, encoding="utf-8")
     return Path(out_dir) / "report.md"
 
 
@@ -184,7 +187,7 @@ def _join(words):
     return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
-def _report(tests, results, n, seed):
+def _report(tests, results, n, seed, shown):
     threshold = results[0].threshold
     lines = [
         "# symsphere demo: are the maps uniform?",
@@ -217,7 +220,7 @@ def _report(tests, results, n, seed):
         "",
         "`figure.png`: top row, observed/expected counts of the folded samples in (φ, cos θ) bins of T0 "
         "(1 is uniform; white: outside T0, or a sliver with expected count below 5); bottom row, "
-        f"{_SCATTER_ORBITS} whole orbits ({48 * _SCATTER_ORBITS} directions) of each map in a Mollweide "
+        f"{shown // 48} whole orbit{'s' if shown != 48 else ''} ({shown} directions) of each map in a Mollweide "
         "projection (longitude φ, latitude 90° − θ).",
         "",
     ]

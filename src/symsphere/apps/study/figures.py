@@ -124,8 +124,9 @@ def _convergence_figure(path, results, integrand, by_label):
         for power, text in ((0.5, "n^-1/2"), (1.0, "n^-1"), (1.5, "n^-3/2")):
             guide = top * (n_all / n_all[0]) ** (-power)
             axes.loglog(n_all, guide, color="0.3", linewidth=0.6, linestyle=(0, (1, 3)))
-            axes.annotate(text, (n_all[-1], guide[-1]), fontsize=7, color="0.3", xytext=(2, 0),
-                          textcoords="offset points", va="center")
+            # Inside the axes, left of the guide's last point: to its right it was clipped at the figure's edge.
+            axes.annotate(text, (n_all[-1], guide[-1]), fontsize=7, color="0.3", xytext=(-2, 2),
+                          textcoords="offset points", ha="right", va="bottom")
         axes.set_xlabel("n (evaluations of f)")
         axes.grid(True, which="major", linewidth=0.3)
         axes.legend(fontsize=6.5, ncol=2 if axes is left else 1, loc="lower left")
