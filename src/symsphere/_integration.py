@@ -93,11 +93,43 @@ class IntegrationResult:
 
     def __str__(self) -> str:
         low, high = self.confidence_interval
+        source = f"from {self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
+        source += f"({self.domain}, {self.method}, {self.points})"
+        if np.all(np.isnan(self.standard_error)):  # say why, and what to pass instead (issue 13)
+            return f"integral = {self.integral} {source}; {self._no_error_bar()}"
         return (
             f"integral = {self.integral} ± {self.standard_error} (standard error; "
-            f"{self.confidence_level:.0%} interval [{low}, {high}]) from {self.n_evaluations} evaluations, "
-            f"{self.n_units} independent {self.unit}s ({self.domain}, {self.method}, {self.points})"
+            f"{self.confidence_level:.0%} interval [{low}, {high}]) {source}"
         )
+
+    def _no_error_bar(self) -> str:
+        if self.unit == "run":
+            why = "a QMCEngine is one deterministic run; pass points='sobol' (or 'halton') for scrambled replicates"
+        elif self.unit == "replicate":
+            why = "one replicate has no spread to measure; pass replicates >= 2 (default 8)"
+        else:
+            why = "one orbit has no spread to measure; pass a larger n"
+        return f"no error bar: {why}"
+
+    def _repr_html_(self) -> str:
+        """A small table for Jupyter (one column per component of a vector integrand)."""
+        from html import escape
+
+        def cells(value: Any, fmt: str = ".10g") -> str:
+            return "".join(f"<td>{v:{fmt}}</td>" for v in np.atleast_1d(value))
+
+        low, high = self.confidence_interval
+        rows = [("integral", cells(self.integral))]
+        if np.all(np.isnan(self.standard_error)):
+            rows.append(("standard error", f"<td colspan=99>{escape(self._no_error_bar())}</td>"))
+        else:
+            rows += [("standard error", cells(self.standard_error, ".3g")),
+                     (f"{self.confidence_level:.0%} interval", "".join(
+                         f"<td>[{a:.10g}, {b:.10g}]</td>" for a, b in zip(np.atleast_1d(low), np.atleast_1d(high))))]  # fmt: skip
+        body = "".join(f"<tr><th style='text-align:left'>{k}</th>{v}</tr>" for k, v in rows)
+        caption = (f"{self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
+                   f"({self.domain}, {self.method}, {escape(self.points)})")  # fmt: skip
+        return f"<table><caption>{caption}</caption>{body}</table>"
 
 
 @dataclass(frozen=True)

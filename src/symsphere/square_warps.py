@@ -2,17 +2,23 @@
 
 :func:`square_to_sphere` is a bijection of the unit square onto the sphere
 built from the 48 triangles of the scheme (:func:`square_to_hemisphere`: 24,
-onto the hemisphere about +z).  The first coordinate chooses the triangle and
-the point inside it::
+onto the hemisphere about +z).  The first coordinate chooses a strip of the
+square, and so a triangle, and the point inside it::
 
-    t = 48 u,   k = min(floor(t), 47),   u' = t - k
-    d = orbit(square_to_triangle((u', v), method))[k]      # = p @ SPHERE_MAPS[k]
+    t = 48 u,   j = min(floor(t), 47),   u' = t - j  if j is even,  1 - (t - j)  if j is odd
+    d = orbit(square_to_triangle((u', v), method))[k_j]      # = p @ SPHERE_MAPS[k_j]
 
-so the strip ``k/48 <= u < (k+1)/48`` of the square goes onto the k-th triangle
-of the paper's Table 2, by the chosen map of :mod:`symsphere.maps` stretched 48
-times along u.  The inverse folds a direction into T0 (:func:`symsphere.fold`:
-the triangle k and the base point) and inverts the map:
-``u = (k + u') / 48``.  Each function pair is a triple as in Mitsuba's
+so the strip ``j/48 <= u < (j+1)/48`` of the square goes onto triangle
+``k_j`` of the paper's Table 2, by the chosen map of :mod:`symsphere.maps`
+stretched 48 times along u (mirrored in every other strip).  The order
+``k_0, k_1, ...`` (:func:`strip_order`) walks around the six axes: the 8
+triangles about (0, 0, 1) first (``k_0 = 0``, so the first strip is
+``square_to_triangle`` itself), then the fan about the next axis, and so on
+(the hemisphere: the 8 about +z, then 4 about each of the four horizontal
+axes).  Consecutive strips of one fan share the edge between them, so the warp
+is continuous across it.  The inverse folds a direction into T0
+(:func:`symsphere.fold`: the triangle k and the base point), inverts the map
+and puts u' back into k's strip.  Each function triple is as in Mitsuba's
 ``warp.h`` (``square_to_X``, ``square_to_X_pdf``, ``X_to_square``).
 
 What it preserves
@@ -25,18 +31,20 @@ What it preserves
 - Strata: a rectangle ``[a, b) x [c, d)`` of the square with ``48 a`` and
   ``48 b`` in the same integer interval is one cell of one triangle.  A jittered
   grid of ``N x M`` strata with N a multiple of 48 (24) gives every triangle the
-  same ``N/48 x M`` cells, each of area ``4 pi / (N M)``; 48 points whose u lie
-  one in each strip, at the same ``u'`` and v, are exactly one orbit of the
-  scheme.  Low-discrepancy sets keep their property along v and in
-  ``u' = 48 u mod 1`` within each strip.
-- Not continuity: neighbouring strips are not always neighbouring triangles, so the
-  warp is discontinuous at some strip boundaries (as any 48-piece map of one
-  square is); use :mod:`symsphere.warps` (Clarberg's octahedral map) where
-  continuity matters, e.g. for a smooth integrand with Sobol' points.
+  same ``N/48 x M`` cells, each of area ``4 pi / (N M)`` for ``'equal_area'``.
+  The 48 points ``u = (j + t_j) / 48`` with ``t_j = u'`` for even j and
+  ``1 - u'`` for odd j, all at the same v, are exactly one orbit of the scheme.
+  Low-discrepancy sets keep their structure along v and, strip by strip, in u'.
+- Continuity, within each fan: the warp is continuous in u across the
+  boundaries between strips of one fan (the two strips meet on the shared edge,
+  point for point) and jumps at the 5 boundaries between fans (hemisphere: 4),
+  as a cube map jumps between faces; v = 0 is the fan's axis.  Where full
+  continuity matters, e.g. a smooth integrand with Sobol' points, Clarberg's
+  octahedral map (:mod:`symsphere.warps`) is continuous everywhere.
 
 The strips' boundaries, where two triangles meet, are sets of measure zero:
-there ``sphere_to_square(square_to_sphere(uv))`` may return the other strip's
-end (same direction).  Everywhere else the two are exact inverses up to
+there ``sphere_to_square(square_to_sphere(uv))`` may return the point of the
+neighbouring strip (same direction).  Everywhere else the two are exact inverses up to
 rounding.  All computation is in float64; results take the floating dtype of
 the input; ``u, v`` in {0, 1} give no NaN.
 """
@@ -46,10 +54,10 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ._typing import FloatArray, MapMethod
-from ._validation import check_directions, check_uv
+from ._typing import Domain, FloatArray, MapMethod
+from ._validation import check_choice, check_directions, check_uv
 from .maps import get_map
-from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold
+from .symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold
 
 __all__ = [
     "square_to_sphere",
@@ -58,6 +66,7 @@ __all__ = [
     "square_to_hemisphere",
     "square_to_hemisphere_pdf",
     "hemisphere_to_square",
+    "strip_order",
 ]
 
 
@@ -67,8 +76,9 @@ def square_to_sphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> Flo
     Parameters
     ----------
     uv : array_like, shape (..., 2)
-        Points of [0, 1]^2.  ``floor(48 u)`` chooses the triangle (table order
-        of :data:`symsphere.SPHERE_MAPS`), ``(48 u mod 1, v)`` the point in it.
+        Points of [0, 1]^2.  ``j = floor(48 u)`` chooses the triangle
+        ``strip_order('sphere')[j]`` (an index into :data:`symsphere.SPHERE_MAPS`),
+        ``48 u - j`` (``1 - (48 u - j)`` for odd j) and v the point in it.
     method : {'equal_area', 'paper1', 'paper2'}
         The map of the square onto T0 (:mod:`symsphere.maps`); only
         ``'equal_area'`` makes the warp uniform.
@@ -82,11 +92,13 @@ def square_to_sphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> Flo
     --------
     >>> import numpy as np
     >>> from symsphere import orbit, square_to_sphere, square_to_triangle
-    >>> square_to_sphere([[0.0, 0.0], [1.0, 1.0]])       # the pole; the last triangle's far vertex
+    >>> square_to_sphere([[0.0, 0.0], [1.0, 1.0]])       # the pole; a vertex of the last triangle
     array([[ 0.        ,  0.        ,  1.        ],
-           [ 0.57735027, -0.57735027, -0.57735027]])
-    >>> k, u, v = 13, 0.25, 0.75                          # u' = 0.25 in triangle 13
-    >>> bool(np.allclose(square_to_sphere([(k + u) / 48, v]), orbit(square_to_triangle([u, v]))[k]))
+           [ 0.70710678,  0.        , -0.70710678]])
+    >>> from symsphere.square_warps import strip_order
+    >>> j, u, v = 12, 0.25, 0.75                          # u' = 0.25 in strip 12 (even: not mirrored)
+    >>> k = strip_order("sphere")[j]
+    >>> bool(np.allclose(square_to_sphere([(j + u) / 48, v]), orbit(square_to_triangle([u, v]))[k]))
     True
     """
     return _forward(uv, method, SPHERE_MAPS)
@@ -130,9 +142,10 @@ def sphere_to_square(d: npt.ArrayLike, method: MapMethod = "equal_area") -> Floa
     Returns
     -------
     ndarray, shape (..., 2)
-        Points of [0, 1]^2: ``u = (k + u') / 48`` with ``k, base = fold(d)`` and
-        ``(u', v) = triangle_to_square(base, method)``.  On a boundary between
-        triangles the lowest k is taken (the rule of :func:`symsphere.fold`).
+        Points of [0, 1]^2: with ``k, base = fold(d)`` and
+        ``(u', v) = triangle_to_square(base, method)``, ``u = (j + u') / 48``
+        where strip j holds triangle k (``1 - u'`` for odd j).  On a boundary
+        between triangles the lowest k is taken (the rule of :func:`symsphere.fold`).
 
     Examples
     --------
@@ -151,8 +164,9 @@ def square_to_hemisphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") ->
     Parameters
     ----------
     uv : array_like, shape (..., 2)
-        Points of [0, 1]^2.  ``floor(24 u)`` chooses the triangle (table order
-        of :data:`symsphere.HEMISPHERE_MAPS`), ``(24 u mod 1, v)`` the point in it.
+        Points of [0, 1]^2.  ``j = floor(24 u)`` chooses the triangle
+        ``strip_order('hemisphere')[j]`` (an index into :data:`symsphere.HEMISPHERE_MAPS`),
+        ``24 u - j`` (``1 - (24 u - j)`` for odd j) and v the point in it.
     method : {'equal_area', 'paper1', 'paper2'}
 
     Returns
@@ -208,7 +222,7 @@ def hemisphere_to_square(d: npt.ArrayLike, method: MapMethod = "equal_area") -> 
     Returns
     -------
     ndarray, shape (..., 2)
-        Points of [0, 1]^2, ``u = (k + u') / 24``.
+        Points of [0, 1]^2, ``u = (j + u') / 24`` as in :func:`sphere_to_square`.
 
     Raises
     ------
@@ -226,19 +240,78 @@ def hemisphere_to_square(d: npt.ArrayLike, method: MapMethod = "equal_area") -> 
     return _inverse(d, method, "hemisphere")
 
 
+def strip_order(domain: Domain = "sphere") -> npt.NDArray[np.int64]:
+    """Which triangle each strip of the square goes onto: the order of the warp's strips.
+
+    Parameters
+    ----------
+    domain : {'sphere', 'hemisphere'}
+
+    Returns
+    -------
+    ndarray of int64, shape (48,) or (24,)
+        ``strip_order(domain)[j]`` is the table index (:data:`symsphere.SPHERE_MAPS`,
+        :data:`symsphere.HEMISPHERE_MAPS`) of strip j; odd strips are mirrored in u'.
+        Found from the maps: the triangles are grouped by the image of T0's vertex
+        (0, 0, 1) (the fan about one axis), and each fan is walked so that strip j
+        leaves over the edge by which strip j + 1 enters (T0's edge x = y after an
+        unmirrored strip, y = 0 after a mirrored one).
+
+    Examples
+    --------
+    >>> from symsphere.square_warps import strip_order
+    >>> strip_order("sphere")[:8]            # the fan of 8 triangles about (0, 0, 1)
+    array([0, 4, 5, 1, 2, 6, 7, 3])
+    >>> sorted(strip_order("hemisphere")) == list(range(24))
+    True
+    """
+    order = _SPHERE_ORDER if check_choice(domain, "domain", DOMAINS) == "sphere" else _HEMISPHERE_ORDER
+    return order.copy()
+
+
 # --- private ------------------------------------------------------------------
+
+
+def _walk_fans(maps: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
+    """The strip order of :func:`strip_order`: each fan of triangles about one axis, edge to shared edge."""
+    # A point inside T0's edge y = 0 and one inside its edge x = y: two images agree iff the edge is shared.
+    edges = (np.array([0.3, 0.0, np.sqrt(0.91)]), np.array([0.3, 0.3, np.sqrt(0.82)]))
+    fans: dict[tuple[float, ...], list[int]] = {}
+    for k in range(len(maps)):
+        fans.setdefault(tuple(np.array([0.0, 0.0, 1.0]) @ maps[k]), []).append(k)
+    order: list[int] = []
+    for fan in sorted(fans.values(), key=min):
+        for start in fan:  # the first start whose walk covers the fan (a half fan on the hemisphere: an end)
+            walk = [start]
+            while len(walk) < len(fan):
+                edge = edges[(len(order) + len(walk)) % 2]  # leaves an even strip over x = y, an odd one over y = 0
+                shared = [k for k in fan if k not in walk and np.array_equal(edge @ maps[k], edge @ maps[walk[-1]])]
+                if not shared:
+                    break
+                walk.append(shared[0])
+            if len(walk) == len(fan):
+                order += walk
+                break
+        else:  # pragma: no cover - the tables make every fan walkable
+            raise AssertionError(f"no walk through the fan {fan}")
+    return np.array(order, dtype=np.int64)
+
+
+_SPHERE_ORDER = _walk_fans(SPHERE_MAPS)
+_HEMISPHERE_ORDER = _walk_fans(HEMISPHERE_MAPS)
 
 
 def _forward(uv: npt.ArrayLike, method: MapMethod, maps: npt.NDArray[np.float64]) -> FloatArray:
     uv = check_uv(uv)
     triangle_map = get_map(method)
     count = len(maps)
+    order = _SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER
     uv64 = uv.astype(np.float64)
     t = uv64[..., 0] * count
-    k = np.minimum(np.floor(t), count - 1).astype(np.int64)
-    local = np.stack([t - k, uv64[..., 1]], axis=-1)
-    base = triangle_map.forward(local)
-    d = np.einsum("...i,...ij->...j", base, maps[k])
+    j = np.minimum(np.floor(t), count - 1).astype(np.int64)
+    local_u = np.where(j % 2 == 1, 1.0 - (t - j), t - j)
+    base = triangle_map.forward(np.stack([local_u, uv64[..., 1]], axis=-1))
+    d = np.einsum("...i,...ij->...j", base, maps[order[j]])
     return d.astype(uv.dtype, copy=False)
 
 
@@ -262,5 +335,7 @@ def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
         raise ValueError("'d' must lie in the hemisphere z >= 0 (rotate other poles with symsphere.frames.to_local)")
     k, base = fold(d64)
     local = triangle_map.inverse(base)
-    u = (k + np.clip(local[..., 0], 0.0, 1.0)) / count
+    j = np.argsort(_SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER)[k]  # the strip of triangle k
+    local_u = np.clip(local[..., 0], 0.0, 1.0)
+    u = (j + np.where(j % 2 == 1, 1.0 - local_u, local_u)) / count
     return np.stack([u, local[..., 1]], axis=-1).astype(d.dtype, copy=False)

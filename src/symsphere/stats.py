@@ -143,6 +143,22 @@ class Chi2Result:
         ]
         return "\n".join(lines)
 
+    def _repr_html_(self) -> str:
+        """A small table for Jupyter: the verdict, the statistic, the p-value against its threshold."""
+        from html import escape
+
+        n_phi, n_cos = self.observed.shape
+        rows = [
+            ("result", "PASSED" if self.passed else "FAILED"),
+            ("samples", f"{self.n_samples} in {n_phi} &times; {n_cos} bins (&phi; &times; cos &theta;)"),
+            ("&chi;&sup2; / dof", f"{self.statistic:.6g} / {self.dof}"),
+            ("p-value", f"{self.p_value:.4g} (passes if &ge; {self.threshold:.4g})"),
+            ("observed / expected", "{:.3g} &ndash; {:.3g} per bin".format(*self.ratio_range)),
+            ("pdf integral", f"{self.integral:.10f}"),
+        ]
+        body = "".join(f"<tr><th style='text-align:left'>{k}</th><td style='text-align:left'>{v}</td></tr>" for k, v in rows)
+        return f"<table><caption>&chi;&sup2; test on the {escape(self.domain)}: {escape(self.message)}</caption>{body}</table>"
+
 
 def chi2_test(
     samples: npt.ArrayLike,

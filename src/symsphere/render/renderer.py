@@ -133,6 +133,18 @@ class RenderResult:
         """Camera paths per second of wall time (``paths / seconds``)."""
         return self.paths / self.seconds if self.seconds > 0 else math.inf
 
+    def _repr_png_(self) -> bytes:
+        """The image as PNG bytes (tone-mapped sRGB at exposure 1, as ``save_png``): Jupyter shows it."""
+        import io
+
+        from matplotlib.image import imsave  # function-level: only when a notebook displays the result
+
+        from .image import tonemap
+
+        buffer = io.BytesIO()
+        imsave(buffer, tonemap(self.image), format="png")
+        return buffer.getvalue()
+
 
 def render(
     scene: Scene | str | os.PathLike = "cornell",
