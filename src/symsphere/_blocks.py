@@ -26,9 +26,11 @@ from .maps import get_map
 from .points import BasePoints
 from .symmetry import orbit
 
-__all__ = ["prepare", "fill_range", "fill_rows", "reference_orbits", "warn_at_caller"]
+__all__ = ["CUT_ORBIT_KEY", "prepare", "fill_range", "fill_rows", "reference_orbits", "warn_at_caller"]
 
 _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+CUT_ORBIT_KEY = 2
+"""Spawn-key namespace of the cut orbit's member choice (points.py uses 0 and 1 under the same root)."""
 
 
 def prepare(
@@ -77,18 +79,23 @@ def fill_rows(
 ) -> FloatArray:
     """Fill *out* (any number of rows) with the orbits of base points ``start, start + 1, ...``.
 
-    Whole orbits are written in place (:func:`fill_range`); if ``len(out)`` is not a
+    Whole orbits are written in place (:func:`fill_range`).  If ``len(out)`` is not a
     multiple of *count*, the last orbit is made in a scratch block of *count* rows and
-    its first rows copied: every row is still the image of a uniform base point under
-    one of the maps, so still uniform.
+    ``len(out) % count`` of its members are copied, chosen at random without replacement
+    (a permutation seeded by the source's root entropy and the orbit's index, namespace
+    ``CUT_ORBIT_KEY``): row k of a whole orbit always lies in triangle k, so the first
+    rows in table order would favour the first triangles; random members make every row
+    of the cut orbit uniform (for a uniform map), and the mean of f over any n rows unbiased.
     """
     whole, rest = divmod(len(out), count)
     if whole:
         fill_range(source, start, start + whole, method, count, basis, out[: whole * count])
     if rest:
+        cut = start + whole
         scratch = np.empty((count, 3), dtype=out.dtype)
-        fill_range(source, start + whole, start + whole + 1, method, count, basis, scratch)
-        out[whole * count :] = scratch[:rest]
+        fill_range(source, cut, cut + 1, method, count, basis, scratch)
+        members = np.random.default_rng(np.random.SeedSequence(source.root_entropy, spawn_key=(CUT_ORBIT_KEY, cut)))
+        out[whole * count :] = scratch[members.permutation(count)[:rest]]
     return out
 
 

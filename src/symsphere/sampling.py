@@ -3,16 +3,20 @@
 ``n / 48`` base points are drawn in T0 by a map from the unit square; each is
 replaced by its orbit under the 48 signed permutations of Table 2 (the
 hemisphere: 24, Table 1).  Rows ``48 i ... 48 i + 47`` of the output are the
-orbit of base point ``i``, in table order.  If the map is uniform on T0, every
-row is uniform on the sphere; the rows of one orbit are not independent.
+orbit of base point ``i``, in table order, so row ``48 i + k`` lies in
+triangle k.  If the map is uniform on T0, each whole orbit is uniform as a set
+(a row chosen at random from it is uniform on the sphere, and the mean of f over
+it is unbiased); the rows of one orbit are not independent.
 
 Any size: :func:`sample_sphere` and :func:`sample_hemisphere` take any positive
 ``n``, as ``numpy.random.Generator.random`` does.  The first ``n // 48``
-(``n // 24``) orbits are whole; the last ``n % 48`` rows are the first rows of
-one more orbit, in table order.  Each of those rows is the image of a uniform
-base point under one fixed symmetry, so it is uniform too (the cut orbit is
-just not symmetric about 0).  For random base points the whole orbits are the
-rows of ``sample_sphere(48 * (n // 48))`` with the same seed.
+(``n // 24``) orbits are whole; the last ``n % 48`` rows are members of one
+more orbit, chosen at random without replacement (from the same seed).  Each
+of those rows is the image of a uniform base point under a symmetry chosen
+uniformly, so it is uniform on the sphere, and the mean of f over all n rows is
+an unbiased estimate of its mean over the sphere.  For random base points the
+whole orbits are the rows of ``sample_sphere(48 * (n // 48))`` with the same
+seed; multiples of 48 take exactly the path they always took.
 """
 
 from __future__ import annotations
@@ -49,8 +53,8 @@ def sample_sphere(
     ----------
     n : int
         Number of directions, any positive integer.  Multiples of 48 are whole
-        orbits; otherwise the last orbit is cut short (see the module docstring:
-        every row is still uniform).
+        orbits; otherwise the last orbit is cut short to ``n % 48`` of its members,
+        chosen at random (see the module docstring: each of them is uniform).
     method : {'equal_area', 'paper1', 'paper2'}
         Map from the unit square onto T0.  Only ``'equal_area'`` gives uniform
         directions; the paper's maps have density :func:`sphere_pdf`.
@@ -66,7 +70,8 @@ def sample_sphere(
     Returns
     -------
     ndarray, shape (n, 3)
-        Row ``48 i + k`` is ``orbit(base_i)[k]`` (for the last, cut orbit too).
+        Row ``48 i + k`` is ``orbit(base_i)[k]``; the rows of a cut last orbit are
+        distinct members of ``orbit(base_i)`` in random order.
 
     Examples
     --------
@@ -79,7 +84,7 @@ def sample_sphere(
     True
     >>> bool(np.allclose(d[:48].mean(axis=0), 0.0))   # an orbit is symmetric about 0
     True
-    >>> e = sample_sphere(100, rng=1)                  # any n: 2 whole orbits and 4 rows of a third
+    >>> e = sample_sphere(100, rng=1)                  # any n: 2 whole orbits and 4 members of a third
     >>> e.shape, bool(np.array_equal(e[:96], d))
     ((100, 3), True)
     """
@@ -102,7 +107,7 @@ def sample_hemisphere(
     ----------
     n : int
         Number of directions, any positive integer; multiples of 24 are whole
-        orbits, otherwise the last orbit is cut short (every row is still uniform).
+        orbits, otherwise the last orbit is cut short to random members (each uniform).
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (normalised; default (0, 0, 1)).  The
         hemisphere about (0, 0, 1) is carried onto it by the frame of
