@@ -252,14 +252,16 @@ def _cluster_client(args):
     if args.workers is None and args.scheduler is None:
         return None
     option = "--workers" if args.scheduler is None else "--scheduler"
-    try:
-        from .. import distributed  # function-level: dask is slow to import and optional
-    except ModuleNotFoundError as exc:
-        if (exc.name or "").split(".")[0] not in ("dask", "distributed"):
-            raise
+    try:  # the optional extra: say so, not with a traceback from deep inside symsphere.distributed
+        import importlib
+
+        for name in ("dask", "distributed"):
+            importlib.import_module(name)  # function-level: dask is slow to import and optional
+    except ModuleNotFoundError:
         raise _UsageError(
             f"{option} needs Dask, which is not installed; install it with: pip install '{_DISTRIBUTED_EXTRA}'"
         ) from None
+    from .. import distributed
 
     if args.scheduler is not None:
         return distributed.connect(args.scheduler, timeout=args.timeout)
