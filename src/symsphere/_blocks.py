@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import sys
 import warnings
+from types import FrameType
 from typing import Any
 
 import numpy as np
@@ -102,8 +103,10 @@ def fill_rows(
 def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
     """``warnings.warn`` with the stack level of the first frame outside this package."""
     level, frame = 2, sys._getframe(1)  # stacklevel 2: our caller
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR + os.sep):
-        level, frame = level + 1, frame.f_back
+    inside = _PACKAGE_DIR + os.sep
+    caller: FrameType | None = frame
+    while caller is not None and os.path.abspath(caller.f_code.co_filename).startswith(inside):
+        level, caller = level + 1, caller.f_back
     warnings.warn(message, category, stacklevel=level)
 
 

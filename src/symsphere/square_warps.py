@@ -311,7 +311,7 @@ def _forward(uv: npt.ArrayLike, method: MapMethod, maps: npt.NDArray[np.float64]
     j = np.minimum(np.floor(t), count - 1).astype(np.int64)
     local_u = np.where(j % 2 == 1, 1.0 - (t - j), t - j)
     base = triangle_map.forward(np.stack([local_u, uv64[..., 1]], axis=-1))
-    d = np.einsum("...i,...ij->...j", base, maps[order[j]])
+    d: FloatArray = np.einsum("...i,...ij->...j", base, maps[order[j]])
     return d.astype(uv.dtype, copy=False)
 
 
@@ -320,7 +320,7 @@ def _pdf(d: npt.ArrayLike, method: MapMethod, count: int) -> FloatArray:
     triangle_map = get_map(method)
     d64 = d.astype(np.float64)
     _, base = fold(d64)
-    density = triangle_map.pdf(base) / count
+    density = triangle_map.pdf(base.astype(np.float64, copy=False)) / count
     if count == 24:
         density = np.where(d64[..., 2] >= 0, density, 0.0)
     return np.asarray(density).astype(d.dtype, copy=False)
@@ -334,7 +334,7 @@ def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
     if count == 24 and np.any(d64[..., 2] < 0):
         raise ValueError("'d' must lie in the hemisphere z >= 0 (rotate other poles with symsphere.frames.to_local)")
     k, base = fold(d64)
-    local = triangle_map.inverse(base)
+    local = triangle_map.inverse(base.astype(np.float64, copy=False))
     j = np.argsort(_SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER)[k]  # the strip of triangle k
     local_u = np.clip(local[..., 0], 0.0, 1.0)
     u = (j + np.where(j % 2 == 1, 1.0 - local_u, local_u)) / count
