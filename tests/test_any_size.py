@@ -1,6 +1,6 @@
 """Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n (issue 13).
 
-Whole orbits first, the last orbit cut short to random members.  The statistical test uses significance 0.01 with a Sidak
+Whole orbits first, the last orbit cut short (from a random member on).  The statistical test uses significance 0.01 with a Sidak
 correction over the CHI2_TESTS tests of this file (one per row of a cut orbit: 47 on the sphere, 23 on
 the hemisphere); the reference density is ``uniform_pdf``, a constant, independent of the maps.
 """
@@ -86,7 +86,7 @@ def test_sobol_warning_is_attributed_to_the_caller():
 @pytest.mark.statistical
 @pytest.mark.parametrize("count", [48, 24])
 def test_every_row_of_a_cut_orbit_is_uniform(count):
-    # n = count - 1: no whole orbit, one orbit cut to count - 1 random members.  CALLS independent runs
+    # n = count - 1: no whole orbit, one orbit cut to count - 1 members from a random offset.  CALLS independent runs
     # give, for each row, CALLS independent directions; each row is tested on its own.  (Row k of a whole
     # orbit lies in triangle k: the cut orbit's rows are uniform only because its members are random.)
     sampler, domain = (sample_sphere, "sphere") if count == 48 else (sample_hemisphere, "hemisphere")

@@ -11,9 +11,9 @@ it is unbiased); the rows of one orbit are not independent.
 Any size: :func:`sample_sphere` and :func:`sample_hemisphere` take any positive
 ``n``, as ``numpy.random.Generator.random`` does.  The first ``n // 48``
 (``n // 24``) orbits are whole; the last ``n % 48`` rows are members of one
-more orbit, chosen at random without replacement (from the same seed).  Each
-of those rows is the image of a uniform base point under a symmetry chosen
-uniformly, so it is uniform on the sphere, and the mean of f over all n rows is
+more orbit: members ``s, s + 1, ...`` (mod 48) in table order from an offset s
+drawn uniformly from the seed, independently of the base point.  Each of those
+rows is the image of a uniform base point under a symmetry chosen uniformly, so it is uniform on the sphere, and the mean of f over all n rows is
 an unbiased estimate of its mean over the sphere.  For random base points the
 whole orbits are the rows of ``sample_sphere(48 * (n // 48))`` with the same
 seed; multiples of 48 take exactly the path they always took.
@@ -54,7 +54,7 @@ def sample_sphere(
     n : int
         Number of directions, any positive integer.  Multiples of 48 are whole
         orbits; otherwise the last orbit is cut short to ``n % 48`` of its members,
-        chosen at random (see the module docstring: each of them is uniform).
+        from a random offset (see the module docstring: each of them is uniform).
     method : {'equal_area', 'paper1', 'paper2'}
         Map from the unit square onto T0.  Only ``'equal_area'`` gives uniform
         directions; the paper's maps have density :func:`sphere_pdf`.
@@ -71,7 +71,7 @@ def sample_sphere(
     -------
     ndarray, shape (n, 3)
         Row ``48 i + k`` is ``orbit(base_i)[k]``; the rows of a cut last orbit are
-        distinct members of ``orbit(base_i)`` in random order.
+        members ``(s + j) % 48`` of ``orbit(base_i)``, s random.
 
     Examples
     --------
@@ -300,10 +300,9 @@ def _sample(
     out: FloatArray | None,
 ) -> FloatArray:
     n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype, any_size=True)
-    if out is not None:
-        check_out(out, (n, 3), dtype)
-    else:
-        out = np.empty((n, 3), dtype=dtype)
+    if out is None:
+        return _blocks.sample_rows(source, n, method, count, basis, dtype)
+    check_out(out, (n, 3), dtype)
     return _blocks.fill_rows(source, 0, method, count, basis, out)
 
 

@@ -1,0 +1,75 @@
+"""Any size costs what the nearest multiple of 48 costs: sample_sphere(n) for n = 48 m + r against 48 m.
+
+For each size, the calls for n and for the multiple m * 48 are interleaved (a, b, a, b, ...) and the
+minimum of each is kept, so that a busy machine's noise hits both alike; the ratio
+``time(n) / time(48 m)`` is printed for fresh output and for ``out=``.  Target: every ratio <= 1.10.
+
+    python benchmarks/bench_any_size.py [--repeats 400] [--json results/....json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+import symsphere
+
+MULTIPLES = (48 * 2, 48 * 100, 48 * 1024, 48 * 2**16)
+OFFSETS = (1, 24, 47, -1)
+
+
+def interleaved(call_a, call_b, repeats):
+    best_a = best_b = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call_a()
+        middle = time.perf_counter()
+        call_b()
+        end = time.perf_counter()
+        best_a, best_b = min(best_a, middle - start), min(best_b, end - middle)
+    return best_a, best_b
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer for the largest)")
+    parser.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
+    args = parser.parse_args()
+    print(f"symsphere {symsphere.__version__}, numpy {np.__version__}, {platform.processor() or platform.machine()}")
+    print(f"minimum over interleaved calls; ratio = time(n) / time(multiple of 48); target <= 1.10\n")
+    print(f"| multiple | n | fresh: µs (multiple) | fresh: µs (n) | ratio | out=: µs (multiple) | out=: µs (n) | ratio |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    rows = []
+    for multiple in MULTIPLES:
+        repeats = max(10, args.repeats // (1 + multiple // 50_000))
+        for offset in OFFSETS:
+            n = multiple + offset
+            symsphere.sample_sphere(n, rng=1)  # compile / warm up
+            fresh = interleaved(lambda: symsphere.sample_sphere(multiple, rng=1), lambda: symsphere.sample_sphere(n, rng=1), repeats)
+            out_a, out_b = np.empty((multiple, 3)), np.empty((n, 3))
+            given = interleaved(
+                lambda: symsphere.sample_sphere(multiple, rng=1, out=out_a),
+                lambda: symsphere.sample_sphere(n, rng=1, out=out_b),
+                repeats,
+            )
+            row = dict(multiple=multiple, n=n, fresh=fresh, out=given)
+            rows.append(row)
+            print(
+                f"| {multiple} | {n} | {fresh[0] * 1e6:.0f} | {fresh[1] * 1e6:.0f} | {fresh[1] / fresh[0]:.3f} "
+                f"| {given[0] * 1e6:.0f} | {given[1] * 1e6:.0f} | {given[1] / given[0]:.3f} |",
+                flush=True,
+            )
+    worst = max(max(r["fresh"][1] / r["fresh"][0], r["out"][1] / r["out"][0]) for r in rows)
+    print(f"\nworst ratio {worst:.3f}")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
