@@ -268,7 +268,9 @@ def _run_discrepancy(results, cells, bar):
         for r in range(config.discrepancy_repetitions):
             x = sampler.sample(n, results.seed_sequence(1, key(sampler.label), k, r))
             plain.append(max(cap_discrepancy_squared(x), 0.0))
-            if sampler.uniform:
+            if sampler.is_rule:  # the rule's own weights
+                with_weights.append(max(cap_discrepancy_squared(x, sampler.rule_weights(n)), 0.0))
+            elif sampler.uniform:
                 with_weights.append(plain[-1])
             else:
                 w = weighted(np.ones(n), n * 4 * math.pi * sampler.pdf(x))

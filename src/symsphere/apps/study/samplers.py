@@ -86,28 +86,44 @@ class Sampler:
         """Whether the density is uniform on the domain."""
         return get_map(self.method).uniform if self.is_scheme else self.peer.uniform
 
+    @property
+    def is_rule(self) -> bool:
+        """Whether this is a quadrature rule with unequal weights (the Lebedev peers)."""
+        return not self.is_scheme and self.peer.rule_weights is not None
+
+    @property
+    def is_random(self) -> bool:
+        """Whether the estimate is random (False only for the deterministic peers: Fibonacci, Lebedev)."""
+        return self.is_scheme or self.peer.is_random
+
+    def rule_weights(self, n: int) -> np.ndarray:
+        """The weights of a rule's n directions, normalised to add up to 1 (for the discrepancy)."""
+        w = self.peer.rule_weights(n)
+        return w / w.sum()
+
     def n_for(self, k: int) -> int:
-        """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds)."""
+        """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds; a Lebedev rule
+        takes its largest size at most n)."""
         n = 48 * 2**k
         if self.is_scheme and self.points == "stratified":
             count = orbit_size(self.domain)
             side = max(1, round(math.sqrt(n // count)))
             return count * side * side
-        return n
+        return n if self.is_scheme else self.peer.largest_n(n)
 
     def estimate(self, f: Callable[[np.ndarray], np.ndarray], n: int, rng) -> float:
         """One estimate of the integral of f from n evaluations.
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
-        ``mean(f / pdf)`` over its n directions.
+        :meth:`symsphere.peers.Peer.estimate`, ``mean(f / pdf)`` over its n directions (a rule:
+        ``sum(w f)``).
         """
         if self.is_scheme:
             replicates = None if self.points == "random" else 1
             result = integrate(f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng,
                                replicates=replicates)
             return float(result.integral)
-        d = self.peer.sample(n, rng=rng, points=self.points)
-        return float(np.mean(weighted(f(d), self.peer.pdf(d))))
+        return self.peer.estimate(f, n, rng=rng, points=self.points)
 
     def sample(self, n: int, rng) -> np.ndarray:
         """n directions (for the scheme: n/48 or n/24 whole orbits)."""
