@@ -35,7 +35,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
+from numba import njit, prange
 
+from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
 from ._validation import check_choice, check_count, check_rng
 
@@ -240,20 +242,46 @@ def interlace_digits(x: npt.ArrayLike, factor: int) -> Float64Array:
         raise ValueError(f"'x' must have shape (m, s * factor) with factor={factor}, got {x.shape}")
     if np.any(~((x >= 0) & (x < 1))):
         raise ValueError("'x' must lie in [0, 1)")
-    bits = 53 // factor
-    digits = np.floor(np.ldexp(x, bits)).astype(np.uint64)  # the leading `bits` digits, exactly
-    m, width = x.shape
-    # Bit i of a byte goes to bit i * factor: one table look-up per byte of each source.
-    table = np.zeros(256, dtype=np.uint64)
-    for i in range(8):
-        table |= ((np.arange(256, dtype=np.uint64) >> np.uint64(i)) & np.uint64(1)) << np.uint64(i * factor)
-    out = np.zeros((m, width // factor), dtype=np.uint64)
-    for k in range(factor):  # source k's digit b (from the top, 1-based) -> output digit (b - 1) factor + k + 1
-        source = digits[:, k::factor]
-        for byte in range(-(-bits // 8)):
-            spread = table[(source >> np.uint64(8 * byte)) & np.uint64(255)]
-            out |= spread << np.uint64(8 * byte * factor + factor - 1 - k)
-    return np.ldexp(out.astype(np.float64) + 0.5, -factor * bits)
+    out = np.empty((x.shape[0], x.shape[1] // factor))
+    start_threads()  # numba's threads wait passively (symsphere._threads)
+    _interlace(x, factor, 53 // factor, out)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _spread(d, factor, bits):  # type: ignore[no-untyped-def]
+    # Digit b of d (from the top, 1-based) -> bit factor * bits - 1 - (b - 1) factor of the result.
+    if factor == 2:  # 26 bits: the "magic numbers" of Morton codes
+        d = (d | (d << np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
+        d = (d | (d << np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
+        d = (d | (d << np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+        d = (d | (d << np.uint64(2))) & np.uint64(0x3333333333333333)
+        return (d | (d << np.uint64(1))) & np.uint64(0x5555555555555555)
+    if factor == 3:  # 17 bits
+        d = (d | (d << np.uint64(32))) & np.uint64(0x001F00000000FFFF)
+        d = (d | (d << np.uint64(16))) & np.uint64(0x001F0000FF0000FF)
+        d = (d | (d << np.uint64(8))) & np.uint64(0x100F00F00F00F00F)
+        d = (d | (d << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+        return (d | (d << np.uint64(2))) & np.uint64(0x1249249249249249)
+    value = np.uint64(0)
+    for b in range(bits):
+        value |= ((d >> np.uint64(b)) & np.uint64(1)) << np.uint64(b * factor)
+    return value
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _interlace(x, factor, bits, out):  # type: ignore[no-untyped-def]
+    # Output digit (b - 1) factor + k + 1 is digit b of source k (from the top); the output is the
+    # centre of its cell of side 2^-(factor bits).
+    scale = 2.0**bits
+    cell = 2.0 ** -(factor * bits)
+    for i in prange(x.shape[0]):
+        for j in range(out.shape[1]):
+            value = np.uint64(0)
+            for k in range(factor):
+                digits = np.uint64(x[i, j * factor + k] * scale)  # the leading `bits` digits, exactly
+                value |= _spread(digits, factor, bits) << np.uint64(factor - 1 - k)
+            out[i, j] = (float(value) + 0.5) * cell
 
 
 def check_points(points: object) -> QMCEngine | None:

@@ -338,10 +338,11 @@ def report_markdown(results: Results) -> str:
         "- **Efficiency** 1/(MSE × seconds) at the largest n, seconds = median wall time of one estimate "
         "(sampling and evaluation), relative to the baseline i.i.d. sampler (classic on the sphere, "
         "classic_hemisphere on the hemisphere): above 1 is better than the baseline. **What is compiled:** the "
-        "scheme's directions come from symsphere's numba kernels (all threads); a peer's from numpy (its base "
-        "points from scipy's compiled Sobol' engine, its map, rotation or rule in vectorised numpy, one thread); "
-        "f is the same numpy function for both, called on blocks of 4096 orbits by the scheme and once on all "
-        "n directions by a peer.",
+        "scheme's directions come from symsphere's numba kernels, parallel over all threads; so do those of the "
+        "peers marked *compiled* in the table of samplers (numba kernels of their maps, Fibonacci points and "
+        "rotations, parallel alike, from the same base points: numpy's PCG64 stream or scipy's Sobol' engine, "
+        "interlaced by a numba kernel); the other peers' come from vectorised numpy. f is the same numpy "
+        "function for all, called on blocks of 4096 orbits by the scheme and once on all n directions by a peer.",
         "- **Estimators**: the scheme (`symsphere_<map>`) is `symsphere.integrate` (orbit mean weighted by "
         "1/pdf, so the paper's maps are unbiased), one call with `replicates=1` per repetition; a peer gives "
         "mean(f/pdf).",
@@ -561,7 +562,7 @@ def _sampler_note(sampler):
             note += " (the paper's map as printed, weighted by 1/pdf)"
         return note
     peer = sampler.peer
-    note = peer.reference.split(";")[0]
+    note = peer.reference.split(";")[0] + ("; *compiled*" if sampler.is_compiled else "; numpy")
     if peer.is_random and peer.orbit_size is None:  # one random choice for all rows: the rotation
         note += " (a new random rotation per repetition)"
     return note

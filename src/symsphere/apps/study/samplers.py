@@ -18,6 +18,7 @@ from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sph
 from ...maps import get_map
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
+from ._compiled import COMPILED_PEERS, compiled_sample
 from .config import StudyConfig, domains
 
 __all__ = ["Sampler", "all_samplers", "samplers", "weighted"]
@@ -116,21 +117,34 @@ class Sampler:
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
         :meth:`symsphere.peers.Peer.estimate`, ``mean(f / pdf)`` over its n directions (a rule:
-        ``sum(w f)``).
+        ``sum(w f)``), the directions from a compiled kernel (:mod:`._compiled`) for the peers of
+        ``COMPILED_PEERS``.
         """
         if self.is_scheme:
             replicates = None if self.points == "random" else 1
             result = integrate(f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng,
                                replicates=replicates)
             return float(result.integral)
-        return self.peer.estimate(f, n, rng=rng, points=self.points)
+        if self.peer.name not in COMPILED_PEERS:
+            return self.peer.estimate(f, n, rng=rng, points=self.points)
+        d = compiled_sample(self.peer, n, rng, self.points)
+        if self.is_rule:
+            return float(np.sum(self.peer.rule_weights(n) * f(d)))
+        return float(np.mean(weighted(f(d), self.peer.pdf(d))))
 
     def sample(self, n: int, rng) -> np.ndarray:
         """n directions (for the scheme: n/48 or n/24 whole orbits)."""
         if self.is_scheme:
             sample = sample_sphere if self.domain == "sphere" else sample_hemisphere
             return sample(n, method=self.method, points=self.points, rng=rng)
+        if self.peer.name in COMPILED_PEERS:
+            return compiled_sample(self.peer, n, rng, self.points)
         return self.peer.sample(n, rng=rng, points=self.points)
+
+    @property
+    def is_compiled(self) -> bool:
+        """Whether the directions come from a compiled kernel (the scheme, and the peers of COMPILED_PEERS)."""
+        return self.is_scheme or self.peer.name in COMPILED_PEERS
 
     def pdf(self, d: npt.ArrayLike) -> np.ndarray:
         """The density of the directions *d* with respect to solid angle."""
