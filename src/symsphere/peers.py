@@ -8,8 +8,8 @@ Densities are with respect to solid angle.  Where a peer is a map from the
 unit square, the map and its inverse are public too, in :mod:`symsphere.warps`
 and :mod:`symsphere.spherical_triangles` (``square_to_*`` and ``*_to_square``, side
 by side with the pdf, as in pbrt-v4's ``util/sampling.h``; re-exported here), and its sampler takes quasi-Monte Carlo points
-(``points=`` 'random', 'stratified', 'sobol', 'halton' or a
-``scipy.stats.qmc.QMCEngine`` with ``d == 2``).
+(``points=`` 'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2',
+'sobol_interlaced3' or a ``scipy.stats.qmc.QMCEngine`` with ``d == 2``).
 
 ========================= =========== ===================================================
 peer (key of `PEERS`)     domain      what
@@ -321,8 +321,9 @@ def sample_classic(
     ----------
     n : int
         Number of directions, positive.
-    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
-        The points of the unit square (``'stratified'`` needs ``n`` to be a square).
+    points : str in symsphere.POINT_SETS or scipy.stats.qmc.QMCEngine
+        The points of the unit square: 'random', 'stratified', 'sobol', 'halton',
+        'sobol_interlaced2', 'sobol_interlaced3' (``'stratified'`` needs ``n`` to be a square).
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
     dtype : {numpy.float64, numpy.float32}
 

@@ -49,3 +49,20 @@ def test_compiled_sample_rejects_other_peers():
     assert "gaussian" not in COMPILED_PEERS
     with pytest.raises(ValueError, match="'peer'"):
         compiled_sample(PEERS["gaussian"], 10, 0)
+
+
+def test_compiled_peers_are_uniform_on_the_sphere():
+    # The study weights the compiled peers' directions by 4 pi (no pdf evaluated): that needs these facts.
+    for name in COMPILED_PEERS:
+        assert PEERS[name].domain == "sphere" and PEERS[name].uniform, name
+
+
+def test_study_estimate_of_a_compiled_peer_is_the_peers_estimate():
+    from symsphere.apps.study.samplers import Sampler
+
+    f = lambda d: np.exp(d @ np.array([0.3, -0.5, 0.6]))  # noqa: E731
+    for name, points, n in (("octahedral", "sobol_interlaced2", 1024), ("fibonacci_rotated", "random", 1000),
+                            ("lebedev_rotated", "random", 2 * 5810)):
+        sampler = Sampler.of_peer(PEERS[name], points)
+        assert np.isclose(sampler.estimate(f, n, 3), PEERS[name].estimate(f, n, rng=3, points=points),
+                          rtol=1e-14, atol=0)
