@@ -462,7 +462,8 @@ def report_markdown(results: Results) -> str:
             "![discrepancy](discrepancy.png)",
             "",
             "rms of D over the sets; i.i.d. uniform points have E D² = 1/(3N). Rows *weights 1/pdf*: the "
-            "paper's maps with the estimator's weights (for the Lebedev rules: the rule's weights).",
+            "paper's maps with the estimator's weights; *the rule's weights*: a Lebedev rule with its own "
+            "weights, at its largest size within N (the columns give the budget N).",
             "",
             "| point set | " + " | ".join(f"N = {n}" for n in ns) + " | slope |",
             "|---|" + "---:|" * (len(ns) + 1),
@@ -476,7 +477,8 @@ def report_markdown(results: Results) -> str:
             if not by_label[(name, points)].uniform or by_label[(name, points)].is_rule:
                 cells = [_g(r["weighted_discrepancy_rms"]) for r in rows]
                 slope = f"{f['weighted_fit'].slope:.2f}" if f["weighted_fit"] is not None else "–"
-                lines.append(f"| {name}/{points}, weights 1/pdf | " + " | ".join(cells) + f" | {slope} |")
+                weights = "the rule's weights" if by_label[(name, points)].is_rule else "weights 1/pdf"
+                lines.append(f"| {name}/{points}, {weights} | " + " | ".join(cells) + f" | {slope} |")
         lines.append("")
 
     if results.chi2:
