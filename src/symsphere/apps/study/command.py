@@ -45,7 +45,8 @@ def add_study_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
             "L2 discrepancy of every point set (exact, by Stolarsky's invariance principle); chi-square "
             "p-values of the random samplers; and write report.md, report.html, CSV tables and PNG figures "
             "into DIR.  --config full (the default) takes about 13 minutes on 2 cores; --config small, "
-            "well under a minute.  An existing DIR is replaced only if it holds nothing but an earlier "
+            "well under a minute; --config qmc (higher-order QMC base points against Lebedev and rotated "
+            "Fibonacci, sphere only) about 15 minutes.  An existing DIR is replaced only if it holds nothing but an earlier "
             "study's output."
         ),
     )
