@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import qmc
 
-from symsphere.points import BLOCK, POINT_SETS, BasePoints, check_points, unit_square_points
+from symsphere.points import BLOCK, POINT_SETS, BasePoints, check_points, interlace_digits, unit_square_points
 
 
 def test_random_points_are_numpys_pcg64_stream():
@@ -67,3 +67,138 @@ def test_base_points_any_stretch():
         assert np.array_equal(source.take(start, stop), whole[start:stop])
     with pytest.raises(ValueError, match="'start'"):
         source.take(2, 1)
+
+
+# --- interlaced Sobol' points (higher-order digital nets) -----------------------------------------
+
+
+def _t_value(x, m):
+    """The smallest t such that every elementary dyadic box of volume 2^-(m - t) holds 2^t of the 2^m points.
+
+    Brute force over every split of the m - t digits among the coordinates: the definition of a
+    (t, m, s)-net in base 2, independent of how the points were made.
+    """
+    n, s = x.shape
+    assert n == 2**m
+    cells = [np.floor(x[:, j] * 2.0**m).astype(np.int64) for j in range(s)]  # the leading m digits
+
+    def splits(total, parts):
+        if parts == 1:
+            yield (total,)
+            return
+        for first in range(total + 1):
+            for rest in splits(total - first, parts - 1):
+                yield (first,) + rest
+
+    for t in range(m + 1):
+        if all(
+            np.all(np.bincount(_box_index(cells, depths, m), minlength=2 ** (m - t)) == 2**t)
+            for depths in splits(m - t, s)
+        ):
+            return t
+    raise AssertionError("unreachable: t = m always holds")
+
+
+def _box_index(cells, depths, m):
+    index = np.zeros_like(cells[0])
+    for c, k in zip(cells, depths):
+        index = (index << k) | (c >> (m - k))
+    return index
+
+
+@pytest.mark.parametrize("factor", [2, 3])
+def test_interlaced_sobol_is_a_digital_net(factor):
+    # Interlacing maps a (t, m, 2 factor)-net to a (t, m, 2)-net: the interlaced box with depths (k1, k2)
+    # is the box of the source net with depths ceil((k_j - r)/factor), r = 0 ... factor - 1, whose
+    # depths add up to k1 + k2.  Reference: the t of scipy's unscrambled Sobol' points of dimension
+    # 2 factor, found by brute force; the interlaced points, unscrambled (interlace_digits of those
+    # points) and scrambled (BasePoints), must be nets with that t or better (measured: 2, 2, 2, 1).
+    name = f"sobol_interlaced{factor}"
+    for m in (6, 9):
+        source = qmc.Sobol(d=2 * factor, scramble=False).random(2**m)
+        t_source = _t_value(source, m)
+        assert t_source <= 4  # measured t = 2, 3 (dimension 4) and 3, 4 (dimension 6) at m = 6, 9
+        assert _t_value(interlace_digits(source, factor), m) <= t_source
+        for seed in (0, 1):
+            scrambled = BasePoints(name, seed, total=2**m).take(0, 2**m)
+            assert scrambled.shape == (2**m, 2) and np.all((scrambled > 0) & (scrambled < 1))
+            assert _t_value(scrambled, m) <= t_source
+
+
+def test_interlace_digits_by_definition():
+    # Digit by digit, from the definition (Python integers), on random inputs.
+    rng = np.random.default_rng(8)
+    for factor in (1, 2, 3, 5):
+        bits = 53 // factor
+        x = rng.random((20, 2 * factor))
+        expected = np.empty((20, 2))
+        for i, row in enumerate(x):
+            for j in range(2):
+                sources = [int(np.floor(row[j * factor + k] * 2.0**bits)) for k in range(factor)]
+                value = 0
+                for b in range(bits):
+                    for k in range(factor):
+                        value = (value << 1) | ((sources[k] >> (bits - 1 - b)) & 1)
+                expected[i, j] = (value + 0.5) / 2.0 ** (factor * bits)
+        assert np.array_equal(interlace_digits(x, factor), expected)
+    with pytest.raises(ValueError, match="'factor'"):
+        interlace_digits(x, 0)
+    with pytest.raises(ValueError, match="'x'"):
+        interlace_digits(np.zeros((3, 5)), 2)
+    with pytest.raises(ValueError, match="'x'"):
+        interlace_digits(np.ones((3, 4)), 2)
+
+
+@pytest.mark.parametrize("name", ["sobol_interlaced2", "sobol_interlaced3"])
+def test_interlaced_points_by_index(name):
+    total = 4 * BLOCK
+    whole = BasePoints(name, 6, total=total).take(0, total)
+    for start, stop in [(0, 1), (BLOCK - 1, BLOCK + 1), (5, 2 * BLOCK + 7)]:
+        assert np.array_equal(BasePoints(name, 6, total=total).take(start, stop), whole[start:stop])
+    assert not np.array_equal(BasePoints(name, 7, total=total).take(0, 8), whole[:8])  # another scrambling
+    with pytest.warns(UserWarning, match="power of 2"):
+        BasePoints(name, 6, total=3 * BLOCK)
+
+
+def test_interlaced_points_converge_faster_on_a_smooth_function():
+    # f(u, v) = exp(u) cos(u + 2 v), exact integral over the square in closed form (complex exponentials).
+    # RMSE over 32 scramblings at 2^12 points (seeded, so deterministic): measured 6.6e-6 for 'sobol',
+    # 1.7e-7 and 2.4e-7 for the interlaced sets (slopes about -1.3 against -2.4 and -2.5 over 2^6 ... 2^14).
+    exact = (((np.exp(1 + 1j) - 1) / (1 + 1j)) * ((np.exp(2j) - 1) / 2j)).real
+
+    def rmse(name):
+        errors = [np.mean(np.exp(uv[:, 0]) * np.cos(uv[:, 0] + 2 * uv[:, 1])) - exact
+                  for uv in (BasePoints(name, seed, total=2**12).take(0, 2**12) for seed in range(32))]
+        return np.sqrt(np.mean(np.square(errors)))
+
+    plain = rmse("sobol")
+    assert rmse("sobol_interlaced2") < plain / 10
+    assert rmse("sobol_interlaced3") < plain / 10
+
+
+@pytest.mark.slow
+@pytest.mark.statistical
+def test_interlaced_points_keep_the_scheme_unbiased():
+    # The scheme with interlaced base points is unbiased: the mean of 200 independent estimates (seeds
+    # 0 ... 199, each of 8 replicates at n = 48 * 64 * 8) against closed forms, a smooth and a
+    # discontinuous integrand: exp(w . a) (4 pi sinh|a| / |a|) and the indicator of a cap (2 pi (1 - t)).
+    # Student t test of the mean, family significance 1e-3, Sidak-corrected over the 4 tests.
+    import symsphere
+    from scipy import stats
+
+    a, centre, t = np.array([0.3, -0.5, 0.6]), np.array([1.0, 2.0, 2.0]) / 3.0, 0.3
+    cases = [
+        (lambda w: np.exp(w @ a), 4 * np.pi * np.sinh(np.linalg.norm(a)) / np.linalg.norm(a)),
+        (lambda w: (w @ centre > t).astype(np.float64), 2 * np.pi * (1 - t)),
+    ]
+    seeds, tests = 200, 4
+    alpha = 1 - (1 - 1e-3) ** (1 / tests)
+    threshold = stats.t.ppf(1 - alpha / 2, seeds - 1)
+    for name in ("sobol_interlaced2", "sobol_interlaced3"):
+        for f, exact in cases:
+            estimates = np.array([
+                symsphere.integrate(f, n=48 * 64 * 8, points=name, rng=seed, replicates=8).integral
+                for seed in range(seeds)
+            ])
+            z = (estimates.mean() - exact) / (estimates.std(ddof=1) / np.sqrt(seeds))
+            assert abs(z) < threshold, (name, exact, z)

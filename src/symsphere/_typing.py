@@ -48,7 +48,7 @@ ChiDomain: TypeAlias = Literal["sphere", "hemisphere", "triangle"]
 MapMethod: TypeAlias = Literal["equal_area", "paper1", "paper2"]
 """The maps of the unit square onto T0 (:data:`symsphere.maps.METHODS`)."""
 
-PointSet: TypeAlias = Literal["random", "stratified", "sobol", "halton"]
+PointSet: TypeAlias = Literal["random", "stratified", "sobol", "halton", "sobol_interlaced2", "sobol_interlaced3"]
 """The named point sets of the unit square (:data:`symsphere.points.POINT_SETS`)."""
 
 PointsLike: TypeAlias = "PointSet | QMCEngine"

@@ -8,8 +8,8 @@ Densities are with respect to solid angle.  Where a peer is a map from the
 unit square, the map and its inverse are public too, in :mod:`symsphere.warps`
 and :mod:`symsphere.spherical_triangles` (``square_to_*`` and ``*_to_square``, side
 by side with the pdf, as in pbrt-v4's ``util/sampling.h``; re-exported here), and its sampler takes quasi-Monte Carlo points
-(``points=`` 'random', 'stratified', 'sobol', 'halton' or a
-``scipy.stats.qmc.QMCEngine`` with ``d == 2``).
+(``points=`` 'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2',
+'sobol_interlaced3' or a ``scipy.stats.qmc.QMCEngine`` with ``d == 2``).
 
 ========================= =========== ===================================================
 peer (key of `PEERS`)     domain      what
@@ -22,6 +22,8 @@ peer (key of `PEERS`)     domain      what
 ``fibonacci``             sphere      spherical Fibonacci points (Keinert et al. 2015)
 ``fibonacci_rotated``     sphere      the same, under a uniformly random rotation
 ``arvo``                  sphere      Arvo (1995) on T0, then the 48 symmetric images
+``lebedev``               sphere      Lebedev quadrature (scipy's rules, orders 3 to 131)
+``lebedev_rotated``       sphere      the same, under uniformly random rotations
 ``cosine``                hemisphere  Shirley-Chiu concentric disk + Malley: cos(theta)/pi
 ========================= =========== ===================================================
 
@@ -30,10 +32,23 @@ float32.
 
 Arvo versus ``equal_area``: the same uniform distribution on T0, by a different map
 (:mod:`symsphere.spherical_triangles` says how they relate).
+
+The Lebedev rules are quadratures, not samplers: nodes with unequal weights
+(:func:`lebedev_weights`, :attr:`Peer.rule_weights`; :meth:`Peer.estimate` uses them), in the
+sizes of :data:`LEBEDEV_SIZES` only (:meth:`Peer.largest_n`).  A Lebedev rule is invariant under
+the octahedral group: its nodes are whole orbits (of 6, 8, 12, 24 or 48 points) of the same 48
+signed permutations of (x, y, z) as the symmetric scheme's, one weight per orbit, so it is itself a
+sum over orbits of the same 48 maps, with the orbits and weights chosen to integrate polynomials
+exactly up to the order.  Rotated by a uniformly random rotation it is unbiased for every
+integrable f; ``n = r x 5810`` gives r independent rotations of the order-131 rule, whose spread
+(replicates) gives the error bar.  Clarberg's octahedral map with scrambled Sobol' points
+(LMS + digital shift, scipy's) is ``PEERS['octahedral'].sample(n, points='sobol')``, and with
+interlaced (higher-order) Sobol' points ``points='sobol_interlaced2'``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,6 +59,7 @@ from scipy.spatial.transform import Rotation
 
 from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
 from ._validation import check_choice, check_count, check_dtype, check_rng
+from ._lebedev import LEBEDEV_ORDERS, LEBEDEV_SIZES, lebedev_size, lebedev_weights, sample_lebedev
 from .points import POINT_SETS, check_points, unit_square_points
 from .spherical_triangles import (
     T0_VERTICES,
@@ -82,6 +98,11 @@ __all__ = [
     "sample_cosine",
     "sample_fibonacci",
     "sample_gaussian",
+    "sample_lebedev",
+    "lebedev_size",
+    "lebedev_weights",
+    "LEBEDEV_ORDERS",
+    "LEBEDEV_SIZES",
     "sample_octahedral",
     "sample_octahedral_hemisphere",
     # maps, inverses and densities (symsphere.warps, re-exported)
@@ -150,6 +171,13 @@ class Peer:
         with ``T0_VERTICES``) followed by the 48 images.
     reference : str
         Where the method comes from.
+    rule_weights : callable or None
+        For a quadrature rule with unequal weights (the Lebedev rules): ``rule_weights(n)``, the
+        weights of the n rows of :meth:`sample`, adding up to the domain's area; the estimate is
+        ``sum(w f)`` instead of ``mean(f / pdf)`` (:meth:`estimate`).  None for equal weights 1/pdf.
+    sizes : callable or None
+        ``sizes(n)``: the largest count at most n that :meth:`sample` accepts, if not every multiple
+        of ``multiple`` is (the Lebedev rules); see :meth:`largest_n`.
 
     Examples
     --------
@@ -187,6 +215,8 @@ class Peer:
     forward: Callable[[npt.ArrayLike], FloatArray] | None = None
     inverse: Callable[[npt.ArrayLike], FloatArray] | None = None
     reference: str = ""
+    rule_weights: Callable[[int], Float64Array] | None = None
+    sizes: Callable[[int], int] | None = None
 
     def sample(
         self, n: int, rng: RNGLike = None, dtype: DTypeLike = np.float64, points: PointsLike = "random"
@@ -218,6 +248,49 @@ class Peer:
         """
         return POINT_SETS if self.is_map else ("random",)
 
+    def largest_n(self, n: int) -> int:
+        """The largest count at most *n* that :meth:`sample` accepts (n rounded down to ``multiple``, or a rule's size).
+
+        Examples
+        --------
+        >>> from symsphere.peers import PEERS
+        >>> PEERS["arvo"].largest_n(1000), PEERS["lebedev"].largest_n(1000), PEERS["classic"].largest_n(1000)
+        (960, 974, 1000)
+        """
+        n = check_count(n, "n")
+        if self.sizes is not None:
+            return self.sizes(n)
+        if n < self.multiple:
+            raise ValueError(f"'n' must be at least {self.multiple} for the peer {self.name!r}, got {n}")
+        return n - n % self.multiple
+
+    def estimate(
+        self, f: Callable[[Float64Array], npt.ArrayLike], n: int, rng: RNGLike = None, points: PointsLike = "random"
+    ) -> float:
+        """One estimate of the integral of f over the domain from n evaluations.
+
+        ``sum(w f(d))`` for a quadrature rule (:attr:`rule_weights`), else ``mean(f(d) / pdf(d))``,
+        with the directions where the pdf is 0 or infinite (probability 0) counted as 0.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from symsphere.peers import PEERS
+        >>> f = lambda d: np.exp(d[:, 0])                        # integral 2 pi (e - 1/e)
+        >>> exact = 2 * np.pi * (np.e - 1 / np.e)
+        >>> bool(abs(PEERS["lebedev"].estimate(f, 50) - exact) < 1e-6)
+        True
+        >>> bool(abs(PEERS["octahedral"].estimate(f, 4096, rng=0, points="sobol") - exact) < 1e-3)
+        True
+        """
+        d = self.sample(n, rng=rng, points=points)
+        values = np.asarray(f(np.asarray(d, dtype=np.float64)), dtype=np.float64)
+        if self.rule_weights is not None:
+            return float(np.sum(self.rule_weights(len(d)) * values))
+        pdf = np.asarray(self.pdf(d), dtype=np.float64)
+        ok = (pdf > 0) & np.isfinite(pdf)
+        return float(np.sum(np.divide(values, pdf, out=np.zeros_like(values), where=ok)) / len(d))
+
 
 def get_peer(name: str) -> Peer:
     """The registered :class:`Peer` called *name*; ValueError naming 'peer' otherwise.
@@ -248,8 +321,9 @@ def sample_classic(
     ----------
     n : int
         Number of directions, positive.
-    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
-        The points of the unit square (``'stratified'`` needs ``n`` to be a square).
+    points : str in symsphere.POINT_SETS or scipy.stats.qmc.QMCEngine
+        The points of the unit square: 'random', 'stratified', 'sobol', 'halton',
+        'sobol_interlaced2', 'sobol_interlaced3' (``'stratified'`` needs ``n`` to be a square).
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
     dtype : {numpy.float64, numpy.float32}
 
@@ -506,6 +580,15 @@ def _random_only(sampler: Callable[..., FloatArray]) -> Sampler:
     return wrapped
 
 
+def _lebedev_sampler(randomize: bool) -> Sampler:
+    def wrapped(
+        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
+        return sample_lebedev(n, randomize=randomize, rng=rng, dtype=dtype)
+
+    return wrapped
+
+
 def _fibonacci_sampler(randomize: bool) -> Sampler:
     def wrapped(
         n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
@@ -569,6 +652,13 @@ def _build_peers() -> dict[str, Peer]:
              reference="Keinert et al. 2015, under a uniformly random rotation"),
         Peer("arvo", "sphere", sample_arvo, uniform_sphere_pdf, True, True, False, multiple=48, orbit_size=48,
              reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995; on T0, then 48 images"),
+        Peer("lebedev", "sphere", _lebedev_sampler(False), uniform_sphere_pdf, False, False, False,
+             orbit_size=None, rule_weights=lebedev_weights, sizes=lebedev_size,
+             reference="Lebedev & Laikov 1999; scipy.integrate.lebedev_rule (orders 3-131, 6-5810 points)"),
+        Peer("lebedev_rotated", "sphere", _lebedev_sampler(True), uniform_sphere_pdf, True, False, False,
+             orbit_size=None, rule_weights=functools.partial(lebedev_weights, randomize=True),
+             sizes=functools.partial(lebedev_size, randomize=True),
+             reference="Lebedev rules under uniformly random rotations; r x 5810 points: r rotations"),
         Peer("cosine", "hemisphere", sample_cosine, cosine_hemisphere_pdf, True, True, True, uniform=False,
              forward=square_to_cosine_hemisphere, inverse=cosine_hemisphere_to_square,
              reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere"),

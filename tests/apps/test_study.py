@@ -73,6 +73,31 @@ def test_sizes_are_valid_for_every_sampler():
                 assert n == 48 * 2**k
 
 
+def test_qmc_config_sizes_and_samplers():
+    # The Lebedev peers use their largest rule within the budget n = 48 * 2**k (r x 5810 when rotated);
+    # every other sampler of the 'qmc' configuration uses n itself.
+    from symsphere.peers import LEBEDEV_SIZES
+
+    config = CONFIGS["qmc"]
+    labels = {s.label for s in all_samplers(config)}
+    assert {"symsphere_equal_area/sobol_interlaced2", "symsphere_equal_area/sobol_interlaced3",
+            "octahedral/sobol_interlaced2", "lebedev/random", "lebedev_rotated/random",
+            "fibonacci_rotated/random"} <= labels
+    for sampler in all_samplers(config):
+        for k in config.ks:
+            budget, n = 48 * 2**k, sampler.n_for(k)
+            if sampler.name == "lebedev":
+                assert n == max(size for size in LEBEDEV_SIZES if size <= budget)
+            elif sampler.name == "lebedev_rotated" and budget >= 2 * 5810:
+                assert n == budget - budget % 5810
+            elif sampler.name == "lebedev_rotated":
+                assert n in LEBEDEV_SIZES and n <= budget
+            else:
+                assert n == budget
+    assert [s.is_random for s in all_samplers(config) if s.name.startswith("lebedev")] == [False, True]
+    assert chi2_tests(config) == [t for t in chi2_tests(config) if not t[0].name.startswith("lebedev")]
+
+
 # --- the command line ----------------------------------------------------------------------
 
 
@@ -201,6 +226,32 @@ def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
     assert (out / "notes.txt").read_text() == "mine"
 
 
+
+
+@pytest.mark.slow
+def test_tiny_study_with_interlaced_points_and_lebedev(tmp_path):
+    config = StudyConfig(
+        name="tiny-qmc", k_min=1, k_max=3, repetitions=2, integrands=("exp",),
+        scheme_methods=("equal_area",), scheme_points=("sobol", "sobol_interlaced2"),
+        sphere_peers=(("classic", "random"), ("lebedev", "random"), ("lebedev_rotated", "random")),
+        hemisphere_peers=(), discrepancy_k_max=2, discrepancy_repetitions=1, chi2_samples=1000,
+        density_samples=4800, warp_samples=1000,
+    )
+    out = tmp_path / "tiny-qmc"
+    run_study(out, config=config, progress=False)
+    _, rows = _read_csv(out / "convergence.csv")
+    lebedev = [r for r in rows if r["sampler"] == "lebedev"]
+    assert [int(r["n"]) for r in lebedev] == [86, 170, 350]
+    assert all(float(r["mean_error_se"]) == 0 for r in lebedev)  # deterministic: every repetition agrees
+    assert {r["points"] for r in rows if r["sampler"] == "symsphere_equal_area"} == {"sobol", "sobol_interlaced2"}
+    _, discrepancy = _read_csv(out / "discrepancy.csv")
+    rule = [r for r in discrepancy if r["sampler"] == "lebedev"]
+    assert [int(r["n"]) for r in rule] == [86, 170]
+    assert all(float(r["weighted_discrepancy_rms"]) != float(r["discrepancy_rms"]) for r in rule)  # rule weights
+    text = (out / "report.md").read_text(encoding="utf-8")
+    assert "The most accurate randomized method" in text and "Lebedev (deterministic" in text
+    assert "What is compiled" in text
+    assert not (out / "density_lebedev.png").exists()
 
 
 def test_report_html_converts_the_report_markdown():

@@ -45,7 +45,8 @@ def add_study_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
             "L2 discrepancy of every point set (exact, by Stolarsky's invariance principle); chi-square "
             "p-values of the random samplers; and write report.md, report.html, CSV tables and PNG figures "
             "into DIR.  --config full (the default) takes about 13 minutes on 2 cores; --config small, "
-            "well under a minute.  An existing DIR is replaced only if it holds nothing but an earlier "
+            "well under a minute; --config qmc (higher-order QMC base points against Lebedev and rotated "
+            "Fibonacci, sphere only) about 15 minutes.  An existing DIR is replaced only if it holds nothing but an earlier "
             "study's output."
         ),
     )
@@ -54,11 +55,11 @@ def add_study_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
     study.add_argument("--seed", type=int, default=0, help="non-negative integer (default: %(default)s)")
     study.add_argument(
         "--repetitions", type=int, default=None,
-        help="independent repetitions per cell, >= 2 (default: 32 for full, 4 for small)",
+        help="independent repetitions per cell, >= 2 (default: 32 for full and qmc, 4 for small)",
     )
     study.add_argument(
         "--k-max", type=int, default=None, dest="k_max", metavar="K",
-        help="largest size n = 48*2^K (default: 14 for full, 6 for small)",
+        help="largest size n = 48*2^K (default: 14 for full and qmc, 6 for small)",
     )
     study.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     study.set_defaults(handler=run_study_command)

@@ -53,6 +53,16 @@ _PEER_HEMISPHERE = (
     ("cosine", "random"),
     ("cosine", "sobol"),
 )
+_PEER_SPHERE_QMC = (
+    ("classic", "random"),
+    ("classic", "sobol"),
+    ("octahedral", "sobol"),
+    ("octahedral", "sobol_interlaced2"),
+    ("fibonacci_rotated", "random"),
+    ("lebedev", "random"),
+    ("lebedev_rotated", "random"),
+)
+_CLASSIC_POINTS = ("random", "stratified", "sobol", "halton")
 _FULL_INTEGRANDS = (
     "shifted_sh4_0",
     "shifted_cubic4",
@@ -83,7 +93,8 @@ class StudyConfig:
     scheme_methods : tuple of str
         Maps of the symmetric scheme (:data:`symsphere.METHODS`).
     scheme_points : tuple of str
-        Base point sets of the scheme (:data:`symsphere.POINT_SETS`).
+        Base point sets of the scheme (:data:`symsphere.POINT_SETS`); by default the four of the
+        original study (random, stratified, sobol, halton), without the interlaced Sobol' sets.
     sphere_peers, hemisphere_peers : tuple of (str, str)
         ``(peer, points)`` pairs from :data:`symsphere.peers.PEERS` of that domain.
     discrepancy_k_max : int
@@ -122,7 +133,7 @@ class StudyConfig:
     repetitions: int = 32
     integrands: tuple = _FULL_INTEGRANDS
     scheme_methods: tuple = METHODS
-    scheme_points: tuple = POINT_SETS
+    scheme_points: tuple = _CLASSIC_POINTS
     sphere_peers: tuple = _PEER_SPHERE
     hemisphere_peers: tuple = _PEER_HEMISPHERE
     discrepancy_k_max: int = 8
@@ -250,8 +261,24 @@ CONFIGS = {
         density_samples=48 * 2**10,
         warp_samples=2**13,
     ),
+    "qmc": StudyConfig(
+        name="qmc",
+        k_min=2,
+        k_max=14,
+        repetitions=32,
+        integrands=_FULL_INTEGRANDS[:6],
+        scheme_methods=("equal_area",),
+        scheme_points=("random", "sobol", "sobol_interlaced2", "sobol_interlaced3"),
+        sphere_peers=_PEER_SPHERE_QMC,
+        discrepancy_k_max=8,
+        discrepancy_repetitions=4,
+        chi2_samples=2**14,
+        density_samples=48 * 2**12,
+        warp_samples=2**13,
+    ),
 }
-"""The named configurations: ``'full'`` (the documented study) and ``'small'`` (CI)."""
+"""The named configurations: ``'full'`` (the documented study), ``'small'`` (CI) and ``'qmc'`` (higher-order
+QMC base points against the strongest peers, Lebedev and the rotated Fibonacci set, on the sphere)."""
 
 
 def resolve_config(config: str | StudyConfig) -> StudyConfig:

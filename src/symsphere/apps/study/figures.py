@@ -25,10 +25,11 @@ _METHOD_COLOURS = {"equal_area": "#1f77b4", "paper1": "#ff7f0e", "paper2": "#d62
 _PEER_COLOURS = {
     "classic": "#2ca02c", "classic_hemisphere": "#2ca02c", "gaussian": "#9467bd", "octahedral": "#8c564b",
     "octahedral_hemisphere": "#8c564b", "fibonacci_rotated": "#e377c2", "fibonacci": "#e377c2",
-    "arvo": "#bcbd22", "cosine": "#17becf",
+    "arvo": "#bcbd22", "cosine": "#17becf", "lebedev": "#000000", "lebedev_rotated": "#7f7f7f",
 }
 _POINT_STYLES = {
     "random": ("-", "o"), "stratified": ("--", "s"), "sobol": ("-.", "^"), "halton": (":", "v"),
+    "sobol_interlaced2": ((0, (5, 1, 1, 1)), "D"), "sobol_interlaced3": ((0, (3, 1, 1, 1, 1, 1)), "P"),
 }
 
 
@@ -36,7 +37,7 @@ def density_samplers(config: StudyConfig) -> list[Sampler]:
     """The samplers that get a density map: one per name, with random points."""
     seen, out = set(), []
     for sampler in all_samplers(config):
-        if sampler.points == "random" and sampler.name not in seen:
+        if sampler.points == "random" and sampler.name not in seen and not sampler.is_rule:
             seen.add(sampler.name)
             out.append(sampler)
     return out

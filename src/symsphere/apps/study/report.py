@@ -88,6 +88,16 @@ _COMPARISONS = (
     (("symsphere_equal_area", "sobol"), ("classic", "sobol"), "QMC with orbits vs Sobol' on the classic map"),
     (("symsphere_equal_area", "sobol"), ("octahedral", "sobol"), "QMC with orbits vs Sobol' on the octahedral map"),
     (("symsphere_equal_area", "sobol"), ("fibonacci_rotated", "random"), "QMC with orbits vs rotated Fibonacci"),
+    (("symsphere_equal_area", "sobol_interlaced2"), ("symsphere_equal_area", "sobol"),
+     "order-2 interlaced vs plain Sobol' base points"),
+    (("symsphere_equal_area", "sobol_interlaced3"), ("symsphere_equal_area", "sobol"),
+     "order-3 interlaced vs plain Sobol' base points"),
+    (("symsphere_equal_area", "sobol_interlaced2"), ("octahedral", "sobol_interlaced2"),
+     "order-2 points: orbits vs Clarberg's octahedral map"),
+    (("symsphere_equal_area", "sobol_interlaced2"), ("fibonacci_rotated", "random"),
+     "order-2 QMC with orbits vs rotated Fibonacci"),
+    (("symsphere_equal_area", "sobol_interlaced2"), ("lebedev_rotated", "random"),
+     "order-2 QMC with orbits vs rotated Lebedev (131)"),
     (("symsphere_equal_area", "random"), ("classic_hemisphere", "random"), "hemisphere: orbits of 24 vs i.i.d."),
     (("symsphere_equal_area", "random"), ("cosine", "random"), "hemisphere: uniform orbits vs cosine-weighted i.i.d."),
     (("symsphere_equal_area", "sobol"), ("classic_hemisphere", "sobol"), "hemisphere QMC: orbits vs classic map"),
@@ -222,6 +232,72 @@ def _findings(results):
     return out
 
 
+def _best_randomized(results):
+    """Per integrand: the most accurate randomized sampler at the largest n, and the most efficient one.
+
+    Randomized: every sampler whose estimate is random (the deterministic Fibonacci and Lebedev rules
+    excepted).  Ties at rounding level are all named.
+    """
+    config = results.config
+    labels = {(s.name, s.points): s for s in all_samplers(config)}
+    out = []
+    for g in config.integrands:
+        rows = [r for r in results.summary if r["integrand"] == g and labels[(r["sampler"], r["points"])].is_random]
+        if len(rows) < 2:
+            continue
+        label = lambda r: f"{r['sampler']}/{r['points']}"  # noqa: E731
+        exact = [r for r in rows if r["status"] == "exact" or not math.isfinite(r["efficiency"])]
+        rest = [r for r in rows if r not in exact]
+        text = f"`{g}`: " + (f"at rounding level with {', '.join(label(r) for r in exact)}; among the others, "
+                             if exact else "")
+        if len(rest) < 2:
+            out.append(text.rstrip("; among the others, "))
+            continue
+        by_mse = sorted(rest, key=lambda r: r["rmse_at_n_max"])
+        by_time = sorted(rest, key=lambda r: -r["efficiency"])
+        mse_ratio = (by_mse[1]["rmse_at_n_max"] / by_mse[0]["rmse_at_n_max"]) ** 2
+        time_ratio = by_time[0]["efficiency"] / by_time[1]["efficiency"]
+        out.append(
+            text + f"at equal n {label(by_mse[0])} (MSE {_g(mse_ratio)}x below {label(by_mse[1])}); "
+            f"at equal time {label(by_time[0])} ({_g(time_ratio)}x the efficiency of {label(by_time[1])})"
+        )
+    return out
+
+
+def _lebedev_text(results):
+    """Per integrand: the deterministic Lebedev rule's error at its largest size against the best randomized
+    sampler at the same budget, and the n that sampler needs to match it."""
+    config = results.config
+    labels = {(s.name, s.points): s for s in all_samplers(config)}
+    rule = next((s for s in all_samplers(config) if s.name == "lebedev"), None)
+    if rule is None:
+        return []
+    k = next((k for k in config.ks if rule.n_for(k) == rule.n_for(config.ks[-1])), config.ks[-1])
+    out = []
+    for g in config.integrands:
+        lebedev = _lookup(results.convergence, integrand=g, sampler="lebedev", points=rule.points, k=k)
+        if lebedev is None:
+            continue
+        rows = [r for r in results.convergence if r["integrand"] == g and r["k"] == k
+                and labels[(r["sampler"], r["points"])].is_random]
+        if not rows:
+            continue
+        best = min(rows, key=lambda r: r["rmse"])
+        error = abs(lebedev["mean_error"])
+        if lebedev["rounding_level"]:
+            out.append(f"`{g}`: Lebedev at rounding level (n = {lebedev['n']})")
+            continue
+        series = [r for r in results.convergence if r["integrand"] == g and r["sampler"] == best["sampler"]
+                  and r["points"] == best["points"]]
+        match = next((r["n"] for r in series if r["rmse"] <= error), None)
+        needs = f"reaches it at n = {match}" if match is not None else f"does not reach it by n = {series[-1]['n']}"
+        out.append(
+            f"`{g}`: Lebedev {_g(error)} (n = {lebedev['n']}); best randomized at n = {best['n']}: "
+            f"{best['sampler']}/{best['points']} {_g(best['rmse'])}, which {needs}"
+        )
+    return out
+
+
 def report_markdown(results: Results) -> str:
     """The text of ``report.md`` for the measurements of a finished study.
 
@@ -261,7 +337,12 @@ def report_markdown(results: Results) -> str:
         "that is at rounding level at every n is *exact*.",
         "- **Efficiency** 1/(MSE × seconds) at the largest n, seconds = median wall time of one estimate "
         "(sampling and evaluation), relative to the baseline i.i.d. sampler (classic on the sphere, "
-        "classic_hemisphere on the hemisphere): above 1 is better than the baseline.",
+        "classic_hemisphere on the hemisphere): above 1 is better than the baseline. **What is compiled:** the "
+        "scheme's directions come from symsphere's numba kernels, parallel over all threads; so do those of the "
+        "peers marked *compiled* in the table of samplers (numba kernels of their maps, Fibonacci points and "
+        "rotations, parallel alike, from the same base points: numpy's PCG64 stream or scipy's Sobol' engine, "
+        "interlaced by a numba kernel); the other peers' come from vectorised numpy. f is the same numpy "
+        "function for all, called on blocks of 4096 orbits by the scheme and once on all n directions by a peer.",
         "- **Estimators**: the scheme (`symsphere_<map>`) is `symsphere.integrate` (orbit mean weighted by "
         "1/pdf, so the paper's maps are unbiased), one call with `replicates=1` per repetition; a peer gives "
         "mean(f/pdf).",
@@ -337,6 +418,14 @@ def report_markdown(results: Results) -> str:
 
     lines += ["## What the measurements say", ""]
     lines += [f"- {sentence}" for sentence in _findings(results)]
+    best = _best_randomized(results)
+    if best:
+        lines.append("- **The most accurate randomized method** (largest n; equal time: efficiency 1/(MSE·seconds)): "
+                     + "; ".join(best) + ".")
+    lebedev = _lebedev_text(results)
+    if lebedev:
+        lines.append("- **Lebedev (deterministic, exact to degree 131 at 5810 points) against the best randomized "
+                     "method at the same budget** (absolute errors): " + "; ".join(lebedev) + ".")
     lines += ["", "## Convergence", ""]
     for g in config.integrands:
         it = INTEGRANDS[g]
@@ -373,7 +462,8 @@ def report_markdown(results: Results) -> str:
             "![discrepancy](discrepancy.png)",
             "",
             "rms of D over the sets; i.i.d. uniform points have E D² = 1/(3N). Rows *weights 1/pdf*: the "
-            "paper's maps with the estimator's weights.",
+            "paper's maps with the estimator's weights; *the rule's weights*: a Lebedev rule with its own "
+            "weights, at its largest size within N (the columns give the budget N).",
             "",
             "| point set | " + " | ".join(f"N = {n}" for n in ns) + " | slope |",
             "|---|" + "---:|" * (len(ns) + 1),
@@ -384,10 +474,11 @@ def report_markdown(results: Results) -> str:
             cells = [_g(r["discrepancy_rms"]) for r in rows]
             slope = f"{f['fit'].slope:.2f}" if f["fit"] is not None else "–"
             lines.append(f"| {name}/{points} | " + " | ".join(cells) + f" | {slope} |")
-            if not by_label[(name, points)].uniform:
+            if not by_label[(name, points)].uniform or by_label[(name, points)].is_rule:
                 cells = [_g(r["weighted_discrepancy_rms"]) for r in rows]
                 slope = f"{f['weighted_fit'].slope:.2f}" if f["weighted_fit"] is not None else "–"
-                lines.append(f"| {name}/{points}, weights 1/pdf | " + " | ".join(cells) + f" | {slope} |")
+                weights = "the rule's weights" if by_label[(name, points)].is_rule else "weights 1/pdf"
+                lines.append(f"| {name}/{points}, {weights} | " + " | ".join(cells) + f" | {slope} |")
         lines.append("")
 
     if results.chi2:
@@ -473,7 +564,7 @@ def _sampler_note(sampler):
             note += " (the paper's map as printed, weighted by 1/pdf)"
         return note
     peer = sampler.peer
-    note = peer.reference.split(";")[0]
+    note = peer.reference.split(";")[0] + ("; *compiled*" if sampler.is_compiled else "; numpy")
     if peer.is_random and peer.orbit_size is None:  # one random choice for all rows: the rotation
         note += " (a new random rotation per repetition)"
     return note

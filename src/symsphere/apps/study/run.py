@@ -83,9 +83,11 @@ def run_study(
         into it only when complete.  An existing folder is replaced only if it
         is empty or holds nothing but files an earlier study writes;
         otherwise ``FileExistsError`` is raised before any work.
-    config : {'full', 'small'} or StudyConfig
+    config : {'full', 'small', 'qmc'} or StudyConfig
         ``'full'`` is the documented study (about 13 minutes on 2 cores);
-        ``'small'`` is the quick end-to-end run of CI (well under a minute).
+        ``'small'`` is the quick end-to-end run of CI (well under a minute);
+        ``'qmc'`` compares interlaced Sobol' base points with Lebedev and the rotated
+        Fibonacci set on the sphere (about 15 minutes on 2 cores).
     seed : int
         Non-negative; seeds every random choice (same seed, same numbers;
         the timings vary).
@@ -268,7 +270,9 @@ def _run_discrepancy(results, cells, bar):
         for r in range(config.discrepancy_repetitions):
             x = sampler.sample(n, results.seed_sequence(1, key(sampler.label), k, r))
             plain.append(max(cap_discrepancy_squared(x), 0.0))
-            if sampler.uniform:
+            if sampler.is_rule:  # the rule's own weights
+                with_weights.append(max(cap_discrepancy_squared(x, sampler.rule_weights(n)), 0.0))
+            elif sampler.uniform:
                 with_weights.append(plain[-1])
             else:
                 w = weighted(np.ones(n), n * 4 * math.pi * sampler.pdf(x))

@@ -18,6 +18,7 @@ from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sph
 from ...maps import get_map
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
+from ._compiled import COMPILED_PEERS, compiled_sample
 from .config import StudyConfig, domains
 
 __all__ = ["Sampler", "all_samplers", "samplers", "weighted"]
@@ -86,35 +87,66 @@ class Sampler:
         """Whether the density is uniform on the domain."""
         return get_map(self.method).uniform if self.is_scheme else self.peer.uniform
 
+    @property
+    def is_rule(self) -> bool:
+        """Whether this is a quadrature rule with unequal weights (the Lebedev peers)."""
+        return not self.is_scheme and self.peer.rule_weights is not None
+
+    @property
+    def is_random(self) -> bool:
+        """Whether the estimate is random (False only for the deterministic peers: Fibonacci, Lebedev)."""
+        return self.is_scheme or self.peer.is_random
+
+    def rule_weights(self, n: int) -> np.ndarray:
+        """The weights of a rule's n directions, normalised to add up to 1 (for the discrepancy)."""
+        w = self.peer.rule_weights(n)
+        return w / w.sum()
+
     def n_for(self, k: int) -> int:
-        """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds)."""
+        """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds; a Lebedev rule
+        takes its largest size at most n)."""
         n = 48 * 2**k
         if self.is_scheme and self.points == "stratified":
             count = orbit_size(self.domain)
             side = max(1, round(math.sqrt(n // count)))
             return count * side * side
-        return n
+        return n if self.is_scheme else self.peer.largest_n(n)
 
     def estimate(self, f: Callable[[np.ndarray], np.ndarray], n: int, rng) -> float:
         """One estimate of the integral of f from n evaluations.
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
-        ``mean(f / pdf)`` over its n directions.
+        :meth:`symsphere.peers.Peer.estimate`, ``mean(f / pdf)`` over its n directions (a rule:
+        ``sum(w f)``), the directions from a compiled kernel (:mod:`._compiled`) for the peers of
+        ``COMPILED_PEERS``.
         """
         if self.is_scheme:
             replicates = None if self.points == "random" else 1
             result = integrate(f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng,
                                replicates=replicates)
             return float(result.integral)
-        d = self.peer.sample(n, rng=rng, points=self.points)
-        return float(np.mean(weighted(f(d), self.peer.pdf(d))))
+        if self.peer.name not in COMPILED_PEERS:
+            return self.peer.estimate(f, n, rng=rng, points=self.points)
+        d = compiled_sample(self.peer, n, rng, self.points)
+        if self.is_rule:
+            return float(np.sum(self.peer.rule_weights(n) * f(d)))
+        # These peers are uniform on the sphere (tested in tests/apps/test_study_compiled.py): weight 4 pi, as
+        # the scheme's estimator, which evaluates no pdf for a uniform map either.
+        return float(4 * np.pi * np.mean(f(d)))
 
     def sample(self, n: int, rng) -> np.ndarray:
         """n directions (for the scheme: n/48 or n/24 whole orbits)."""
         if self.is_scheme:
             sample = sample_sphere if self.domain == "sphere" else sample_hemisphere
             return sample(n, method=self.method, points=self.points, rng=rng)
+        if self.peer.name in COMPILED_PEERS:
+            return compiled_sample(self.peer, n, rng, self.points)
         return self.peer.sample(n, rng=rng, points=self.points)
+
+    @property
+    def is_compiled(self) -> bool:
+        """Whether the directions come from a compiled kernel (the scheme, and the peers of COMPILED_PEERS)."""
+        return self.is_scheme or self.peer.name in COMPILED_PEERS
 
     def pdf(self, d: npt.ArrayLike) -> np.ndarray:
         """The density of the directions *d* with respect to solid angle."""
