@@ -7,6 +7,7 @@ Usage (from the repository root, package installed)::
     python benchmarks/bench_render.py convergence              # RMSE vs spp, efficiency, images -> docs/
     python benchmarks/bench_render.py validation               # furnace and z-test tables (as the tests)
     python benchmarks/bench_render.py equal-time               # every strategy vs Mitsuba 3 at equal spp and time
+    python benchmarks/bench_render.py paths-vs-mitsuba         # paths/s, ours (cosine, both integrators) vs Mitsuba 3
     python benchmarks/bench_render.py equal-time --budgets 0.2 0.4 --equal-spp 8 --reference-spp 256 \\
         --mitsuba-reference-spp 128 --width 64 --height 48 --seeds 1 --no-images   # a quick check
 
@@ -30,6 +31,13 @@ Usage (from the repository root, package installed)::
     ``docs/images/render_cornell_<sampler>.png`` (all at the same spp),
     ``docs/images/render_translucent_<sampler>.png`` and prints Markdown tables for
     docs/rendering.md.
+``paths-vs-mitsuba``
+    Paths per second only: ours (``--samplers``, default cosine, with each
+    integrator) and Mitsuba 3's ``path`` on ``--scenes`` at ``--spp``, taking
+    turns for ``--rounds`` rounds after a warm-up; the medians, their range and
+    the ratio to Mitsuba's median, with the load average and the CPU share of
+    other processes (a quick check on a busy machine; ``--json`` keeps every
+    measurement).
 ``equal-time``
     Every strategy -- each sampler in ``SAMPLERS`` x ``integrator`` in
     {"path", "bsdf"} (when ``render`` takes an ``integrator``; else today's
@@ -722,6 +730,45 @@ def _equal_time_targets(results):
     print("\n" + "\n".join(f"- {line}" for line in lines))
 
 
+def paths_vs_mitsuba(args):
+    """Paths/s of ours (each sampler given, both integrators) and of Mitsuba 3 ``path``, interleaved: medians."""
+    ok, reason = _mitsuba_status(args.no_mitsuba)
+    integrators, _ = _integrator_choices()
+    out = dict(command="python benchmarks/bench_render.py " + " ".join(sys.argv[1:]),
+               date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+               machine=f"{os.cpu_count()} CPUs, {cpu_name()}, numba {numba.__version__} ({args.threads} threads)",
+               spp=args.spp, rounds=args.rounds, scenes=[])  # fmt: skip
+    for name in args.scenes:
+        scene = _scene_for(name)
+        strategies = [_Ours(scene, s, i, args.width, args.height, args.threads) for s in args.samplers for i in integrators]
+        if ok:
+            strategies.append(_Mitsuba(scene, args.width, args.height, args.threads))
+        for strategy in strategies:
+            strategy.warm_up(args.spp)
+        rates = {strategy.key: [] for strategy in strategies}
+        before, start = cpu_snapshot(), time.perf_counter()
+        load = os.getloadavg()[0]
+        for round_ in range(args.rounds):
+            for strategy in _rotated(strategies, round_):
+                seconds = strategy.render(args.spp, 1000 + round_)[1]
+                rates[strategy.key].append(args.width * args.height * args.spp / seconds)
+        others = others_cpu(before, cpu_snapshot(), time.perf_counter() - start)
+        medians = {k: statistics.median(v) for k, v in rates.items()}
+        mitsuba = medians.get("mitsuba/path")
+        share = "?" if others is None else f"{100 * others['share_of_all_cpus']:.0f}%"
+        print(f"\n{name} {args.width}x{args.height}, {args.spp} spp, {args.rounds} interleaved rounds; load average "
+              f"{load:.2f} before; other processes used {share} of the CPUs")  # fmt: skip
+        print("| strategy | Mpaths/s (median) | min–max | × Mitsuba |\n|---|---:|---:|---:|")
+        for key, values in rates.items():
+            ratio = f"{medians[key] / mitsuba:.2f}" if mitsuba else "–"
+            print(f"| {key} | {medians[key] / 1e6:.2f} | {min(values) / 1e6:.2f}–{max(values) / 1e6:.2f} | {ratio} |")
+        out["scenes"].append(dict(scene=name, width=args.width, height=args.height, paths_per_second=rates,
+                                  medians=medians, others_cpu=others, load_before=load,
+                                  mitsuba=None if ok else reason))  # fmt: skip
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     verbs = parser.add_subparsers(dest="verb", required=True)
@@ -765,6 +812,17 @@ def main():
     e.add_argument("--images-dir", default=str(ROOT / "docs" / "images"))
     e.add_argument("--json", help="default: benchmarks/results/<date>-bench_render-equal_time.json")
     e.set_defaults(run=equal_time)
+    q = verbs.add_parser("paths-vs-mitsuba", help="paths/s of ours and of Mitsuba 3 path, interleaved rounds")
+    q.add_argument("--scenes", nargs="+", default=["cornell", "gap"])
+    q.add_argument("--samplers", nargs="+", choices=SAMPLERS, default=["cosine"])
+    q.add_argument("--width", type=int, default=256)
+    q.add_argument("--height", type=int, default=192)
+    q.add_argument("--spp", type=int, default=24)
+    q.add_argument("--rounds", type=int, default=7)
+    q.add_argument("--threads", type=int, default=numba.config.NUMBA_NUM_THREADS)
+    q.add_argument("--no-mitsuba", action="store_true")
+    q.add_argument("--json", help="write every measurement here")
+    q.set_defaults(run=paths_vs_mitsuba)
     args = parser.parse_args()
     if getattr(args, "integrator", None):
         _INTEGRATOR["integrator"] = args.integrator

@@ -325,11 +325,7 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
     np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-14)
     ts, hits = P.first_hits(np.broadcast_to(p, w.shape).copy(), w, spheres, quads, 1e-9)
     assert np.all(hits == 0)  # every sampled direction reaches the emitter
-    cone = out[0, 3] < 0
-    if cone:  # directions: the hit is the sampled point
-        assert np.all(out[:, 3] == -1)
-    else:  # points: the first hit is the sampled point
-        np.testing.assert_allclose(ts, out[:, 3], rtol=1e-9)
+    np.testing.assert_allclose(ts, out[:, 3], rtol=1e-9)  # the first hit is the sampled point (cone: its distance)
     q = p + ts[:, None] * w
     if is_quad:
         cosines = np.abs(w @ quads[9:12, 0])
@@ -412,6 +408,31 @@ def test_rectangle_samples_are_uniform_in_solid_angle(point):
     expected = count * omega / omega.sum()
     statistic = np.sum((counts - expected) ** 2 / expected)
     assert stats.chi2.sf(statistic, df=15) > _sidak(3), (statistic, counts, expected)
+
+
+def test_rectangle_solid_angle_everywhere():
+    """emitter_pdf of a rectangle = 1 / its solid angle (Van Oosterom & Strackee, numpy) from points all around it.
+
+    The kernel forms the solid angle from one atan2 of a product of complex
+    numbers, on either side of pi: points far off (solid angle near the
+    1e-3 threshold), next to its plane over its interior (near 2 pi), off to
+    a side, behind it; and an edge not along an axis.
+    """
+    rng = np.random.default_rng(20261130)
+    corner, e1, e2 = np.array([0.3, -0.2, 0.1]), np.array([0.8, 0.6, 0.0]), np.array([0.0, 0.0, 1.3]) * 1.0
+    spheres, quads = _tables(quads=(Quad(tuple(corner), tuple(e1), tuple(e2), "lamp"),))
+    assert quads[25, 0] == 1.0
+    normal = np.cross(e1, e2) / np.linalg.norm(np.cross(e1, e2))
+    st = rng.uniform(-1.5, 2.5, (4000, 2))
+    height = np.concatenate([rng.uniform(-30, 30, 1000), rng.uniform(-1, 1, 1000), rng.uniform(-1e-3, 1e-3, 2000)])
+    points = corner + st[:, :1] * e1 + st[:, 1:] * e2 + height[:, None] * normal
+    a, b, c, d = (corner + i * e1 + j * e2 - points for i, j in ((0, 0), (1, 0), (1, 1), (0, 1)))
+    omega = _triangle_solid_angle(a, b, c) + _triangle_solid_angle(a, c, d)
+    keep = omega > 1.1e-3
+    assert keep.sum() > 2000 and omega.max() > 6.2  # up to almost 2 pi
+    for p, expected in zip(points[keep], omega[keep]):
+        pdf = P.emitter_pdfs(p, 0, np.array([1.0]), np.array([1.0]), spheres, quads)[0]
+        assert math.isclose(pdf, 1 / expected, rel_tol=1e-8), (p, pdf, 1 / expected)
 
 
 def test_clipped_sphere_intersection_against_numpy():

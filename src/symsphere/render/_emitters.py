@@ -2,7 +2,10 @@
 
 Scalar numba functions (``register_jitable``), inlined into the path-tracing
 kernel of :mod:`symsphere.render._integrator`, which calls :func:`choose_light`,
-:func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.
+:func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.  Those
+that take the scene's tables are inlined at the numba-IR level
+(``inline="always"``): as calls, numba reference-counts their array arguments,
+atomic operations on counters that both threads share, at every light sample.
 The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
 spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
 ``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
@@ -76,7 +79,7 @@ def rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
 # --- emitters ------------------------------------------------------------------------
 
 
-@register_jitable
+@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
 def _sphere_cone(px, py, pz, i, spheres):
     """(e = c - p, |e|^2, p outside the sphere): whether a full sphere is sampled by its cone from p.
 
@@ -91,41 +94,36 @@ def _sphere_cone(px, py, pz, i, spheres):
     return ex, ey, ez, d2, d2 > spheres[4, i] and spheres[8, i] == -np.inf
 
 
-@register_jitable
-def _angle_between(ax, ay, az, bx, by, bz):
-    """The angle between unit vectors a and b, accurate near 0 and pi (pbrt-v4 ``AngleBetween``)."""
-    if ax * bx + ay * by + az * bz < 0.0:
-        return _PI - 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((ax + bx) ** 2 + (ay + by) ** 2 + (az + bz) ** 2)))
-    return 2.0 * math.asin(min(1.0, 0.5 * math.sqrt((bx - ax) ** 2 + (by - ay) ** 2 + (bz - az) ** 2)))
-
-
-@register_jitable
-def _unit_cross(ax, ay, az, bx, by, bz):
-    cx = ay * bz - az * by
-    cy = az * bx - ax * bz
-    cz = ax * by - ay * bx
-    inv = 1.0 / math.sqrt(cx * cx + cy * cy + cz * cz)
-    return cx * inv, cy * inv, cz * inv
-
-
-@register_jitable
+@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
 def spherical_rectangle(px, py, pz, j, quads):
     """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
     Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
 
     In the frame (x, y, z) of its edges, with z flipped to point away from
     the rectangle (so z0 < 0), the corners are (x0 | x1, y0 | y1, z0).  The
-    planes through p and each edge have unit normals n0..n3; the spherical
+    planes through p and each edge have normals n0..n3; the spherical
     rectangle's interior angles are g_i = angle(-n_i, n_(i+1)) and its solid
     angle S = g0 + g1 + g2 + g3 - 2 pi.  Returns (S, x0, y0, z0, x1, y1,
-    zsign, b0 = n0.z, b1 = n2.z, k = 2 pi - g2 - g3); S = 0 when p is in the
-    rectangle's plane.
+    zsign, b0 = n0.z, b1 = n2.z, cos k, sin k) with k = 2 pi - g2 - g3; S = 0
+    when p is in the rectangle's plane.
+
+    No normal is formed (pbrt-v4: four cross products, four normalisations,
+    four ``asin``): with a = -z0 and r_xy the distance to corner (x, y), the
+    angle at that corner has cosine and sine proportional to (+-x y, a r_xy)
+    (the cross product of the normals of two edges is a times their corner),
+    so ``g = pi / 2 -+ A_xy`` with ``A_xy = atan(x y / (a r_xy))``, whence
+    S = (A11 - A10) + (A00 - A01) (the classic solid angle of a rectangle;
+    no cancellation against 2 pi) and k = pi - (A00 - A01).  The sums of
+    angles are formed as products of the complex numbers ``a r_xy + i x y``
+    (whose arguments are the A_xy), so that one ``atan2`` gives S: in
+    [0, pi] unless the foot of p lies inside the rectangle, in (0, 2 pi)
+    then (the argument is taken of -Z there, which has no branch cut near S
+    = 0; a rectangle off to one side lies in a quarter sphere, S <= pi).
+    ``e^{ik}`` is the normalised conjugate of -(A00 - A01)'s number: no angle.
     """
     ex, ey, ez = quads[17, j], quads[18, j], quads[19, j]
     fx, fy, fz = quads[20, j], quads[21, j], quads[22, j]
-    gx = ey * fz - ez * fy
-    gy = ez * fx - ex * fz
-    gz = ex * fy - ey * fx
+    gx, gy, gz = quads[9, j], quads[10, j], quads[11, j]  # the unit normal: e x f for a rectangle
     dx = quads[0, j] - px
     dy = quads[1, j] - py
     dz = quads[2, j] - pz
@@ -137,19 +135,31 @@ def spherical_rectangle(px, py, pz, j, quads):
         zsign = -1.0
         z0 = -z0
     if not z0 < 0.0:
-        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 0.0
+        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 1.0, 0.0
     x1 = x0 + quads[23, j]
     y1 = y0 + quads[24, j]
-    n0x, n0y, n0z = _unit_cross(x0, y0, z0, x1, y0, z0)
-    n1x, n1y, n1z = _unit_cross(x1, y0, z0, x1, y1, z0)
-    n2x, n2y, n2z = _unit_cross(x1, y1, z0, x0, y1, z0)
-    n3x, n3y, n3z = _unit_cross(x0, y1, z0, x0, y0, z0)
-    g0 = _angle_between(-n0x, -n0y, -n0z, n1x, n1y, n1z)
-    g1 = _angle_between(-n1x, -n1y, -n1z, n2x, n2y, n2z)
-    g2 = _angle_between(-n2x, -n2y, -n2z, n3x, n3y, n3z)
-    g3 = _angle_between(-n3x, -n3y, -n3z, n0x, n0y, n0z)
-    solid_angle = max(0.0, g0 + g1 + g2 + g3 - 2.0 * _PI)
-    return solid_angle, x0, y0, z0, x1, y1, zsign, n0z, n2z, 2.0 * _PI - g2 - g3
+    a = -z0
+    z2 = z0 * z0
+    x02, x12, y02, y12 = x0 * x0, x1 * x1, y0 * y0, y1 * y1
+    c00 = a * math.sqrt(x02 + y02 + z2)  # e^{i A_xy} is proportional to c_xy + i x y
+    c10 = a * math.sqrt(x12 + y02 + z2)
+    c01 = a * math.sqrt(x02 + y12 + z2)
+    c11 = a * math.sqrt(x12 + y12 + z2)
+    s00, s10, s01, s11 = x0 * y0, x1 * y0, x0 * y1, x1 * y1
+    re1 = c11 * c10 + s11 * s10  # (c11 + i s11) (c10 - i s10): A11 - A10
+    im1 = s11 * c10 - c11 * s10
+    re2 = c00 * c01 + s00 * s01  # (c00 + i s00) (c01 - i s01): A00 - A01
+    im2 = s00 * c01 - c00 * s01
+    re = re1 * re2 - im1 * im2
+    im = re1 * im2 + im1 * re2
+    if x0 < 0.0 and x1 > 0.0 and y0 < 0.0 and y1 > 0.0:
+        solid_angle = _PI + math.atan2(-im, -re)
+    else:
+        solid_angle = max(0.0, math.atan2(im, re))
+    inv2 = 1.0 / math.sqrt(re2 * re2 + im2 * im2)
+    b0 = -y0 / math.sqrt(y02 + z2)
+    b1 = y1 / math.sqrt(y12 + z2)
+    return solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1, -re2 * inv2, im2 * inv2
 
 
 @register_jitable
@@ -170,14 +180,14 @@ def disk_point(state):
             return x, y, r2, state
 
 
-@register_jitable
+@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
 def sample_emitter(px, py, pz, obj, state, spheres, quads):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
     w is a unit direction, pdf its solid-angle density (without the emitter's
-    selection probability).  distance is that of the sampled point, or -1 when
-    a direction was sampled (cone): then any hit of *obj* along w is the
-    sampled one.  ``ok`` is False for a degenerate sample (zero distance or a
+    selection probability), distance that of the sampled point (for a cone,
+    where a direction is sampled, the nearer intersection with the sphere), so
+    that the point is visible when nothing is hit before it.  ``ok`` is False for a degenerate sample (zero distance or a
     grazing point), which contributes nothing.  *state* is the path's stream.
 
     - a full sphere seen from outside: uniform in the cone it subtends
@@ -204,35 +214,37 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
         r = spheres[3, obj]
-        inv_r = spheres[10, obj]
         x, y, u, state = disk_point(state)
-        clipped = spheres[8, obj] != -np.inf
-        cone = False
-        ex, ey, ez, d2 = 0.0, 0.0, 0.0, 1.0
-        if not clipped:  # (a clipped sphere is never sampled by its cone: skip the test)
+        if spheres[8, obj] == -np.inf:  # a full sphere: by its cone from outside (a clipped one never)
             ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
-        if cone:
-            sin2 = spheres[4, obj] / d2
-            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
-            one_minus_cos_max = sin2 / (1.0 + cos_max)
-            w = u * one_minus_cos_max  # 1 - cos theta
-            scale = math.sqrt(max(0.0, one_minus_cos_max * (2.0 - w)))  # sin theta / sqrt(u)
-            inv = 1.0 / math.sqrt(d2)
-            wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
-            return wx, wy, wz, -1.0, INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0, state
-        if clipped:
-            ax, ay, az = spheres[5, obj], spheres[6, obj], spheres[7, obj]
-        else:
-            ax, ay, az = 0.0, 0.0, 1.0
+            if cone:
+                sin2 = spheres[4, obj] / d2
+                cos_max = math.sqrt(max(0.0, 1.0 - sin2))
+                one_minus_cos_max = sin2 / (1.0 + cos_max)
+                w = u * one_minus_cos_max  # 1 - cos theta
+                scale = math.sqrt(max(0.0, one_minus_cos_max * (2.0 - w)))  # sin theta / sqrt(u)
+                inv = 1.0 / math.sqrt(d2)
+                wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
+                # the distance to the sphere along w: the nearer root of |p + t w - c|^2 = r^2
+                b = ex * wx + ey * wy + ez * wz
+                dist = b - math.sqrt(max(0.0, b * b - (d2 - spheres[4, obj])))
+                return wx, wy, wz, dist, INV_2PI / one_minus_cos_max, one_minus_cos_max > 0.0 and dist > 0.0, state
         height = spheres[9, obj]
         w = u * height  # depth below the pole c + r a
         scale = math.sqrt(max(0.0, height * (2.0 * r - w)))  # ring radius / sqrt(u)
-        ox, oy, oz = to_world(x * scale, y * scale, r - w, ax, ay, az)  # q - c
-        qx = spheres[0, obj] + ox
-        qy = spheres[1, obj] + oy
-        qz = spheres[2, obj] + oz
-        nx, ny, nz = ox * inv_r, oy * inv_r, oz * inv_r
-        area = 2.0 * _PI * r * height
+        lx, ly, lz = x * scale, y * scale, r - w  # q - c in the frame (t, b, a) of the cap's axis a (stored)
+        ox = lx * spheres[11, obj] + ly * spheres[14, obj] + lz * spheres[5, obj]
+        oy = lx * spheres[12, obj] + ly * spheres[15, obj] + lz * spheres[6, obj]
+        oz = lx * spheres[13, obj] + ly * spheres[16, obj] + lz * spheres[7, obj]
+        dx = spheres[0, obj] + ox - px  # q - p
+        dy = spheres[1, obj] + oy - py
+        dz = spheres[2, obj] + oz - pz
+        dist2 = dx * dx + dy * dy + dz * dz
+        dist = math.sqrt(dist2)
+        proj = abs(dx * ox + dy * oy + dz * oz)  # |(q - p) . (q - c)| = dist r |cos_l|: no normal, no division
+        inv = 1.0 / dist
+        pdf = dist2 * dist / (proj * (2.0 * _PI * height))  # d^2 / (|cos_l| 2 pi r h)
+        return dx * inv, dy * inv, dz * inv, dist, pdf, proj > 0.0 and dist > 0.0, state
     else:
         j = obj - n_spheres
         state, b1 = next_u64(state)
@@ -240,27 +252,32 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
         u = u01(b1)
         v = u01(b2)
         if quads[25, j] != 0.0:
-            solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, k = spherical_rectangle(px, py, pz, j, quads)
+            solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, ck, sk = spherical_rectangle(px, py, pz, j, quads)
             if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
-                au = u * solid_angle + k
-                fu = (math.cos(au) * b0 - b1_) / math.sin(au)
-                cu = math.copysign(1.0 / math.sqrt(fu * fu + b0 * b0), fu)
-                cu = min(max(cu, -_ONE_MINUS_EPSILON), _ONE_MINUS_EPSILON)
-                xu = min(max(-(cu * z0) / math.sqrt(max(0.0, 1.0 - cu * cu)), x0), x1)
-                dd = math.sqrt(xu * xu + z0 * z0)
-                h0 = y0 / math.sqrt(dd * dd + y0 * y0)
-                h1 = y1 / math.sqrt(dd * dd + y1 * y1)
+                # au = u S + k; cu = fu / sqrt(fu^2 + b0^2), fu = (cos(au) b0 - b1) / sin(au), and
+                # xu = -cu z0 / sqrt(1 - cu^2) = -z0 sign(fu) / sqrt(fu^2 - (1 - b0^2)), 1 - b0^2 = z0^2 / (y0^2 + z0^2):
+                # xu = -z0 sign(nu) sin(au) / sqrt(nu^2 - (1 - b0^2) sin(au)^2) with nu = cos(au) b0 - b1
+                cs = math.cos(u * solid_angle)
+                ss = math.sin(u * solid_angle)
+                ca = cs * ck - ss * sk
+                sa = ss * ck + cs * sk
+                nu = ca * b0 - b1_
+                z2 = z0 * z0
+                den = nu * nu - z2 / (y0 * y0 + z2) * (sa * sa)
+                xu = -z0 * math.copysign(1.0, nu) * sa / math.sqrt(max(den, 1e-300))
+                xu = min(max(xu, x0), x1)
+                d2 = xu * xu + z2
+                h0 = y0 / math.sqrt(d2 + y0 * y0)
+                h1 = y1 / math.sqrt(d2 + y1 * y1)
                 hv = h0 + v * (h1 - h0)
-                yv = (hv * dd) / math.sqrt(1.0 - hv * hv) if hv * hv < 1.0 - 1e-12 else y1
+                hv2 = hv * hv
+                yv = hv * math.sqrt(d2 / (1.0 - hv2)) if hv2 < 1.0 - 1e-12 else y1
                 yv = min(max(yv, y0), y1)
                 lz = z0 * zsign  # back to the frame of the edges
-                gx = quads[18, j] * quads[22, j] - quads[19, j] * quads[21, j]
-                gy = quads[19, j] * quads[20, j] - quads[17, j] * quads[22, j]
-                gz = quads[17, j] * quads[21, j] - quads[18, j] * quads[20, j]
-                wx = xu * quads[17, j] + yv * quads[20, j] + lz * gx
-                wy = xu * quads[18, j] + yv * quads[21, j] + lz * gy
-                wz = xu * quads[19, j] + yv * quads[22, j] + lz * gz
-                dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+                wx = xu * quads[17, j] + yv * quads[20, j] + lz * quads[9, j]  # the normal is e x f
+                wy = xu * quads[18, j] + yv * quads[21, j] + lz * quads[10, j]
+                wz = xu * quads[19, j] + yv * quads[22, j] + lz * quads[11, j]
+                dist = math.sqrt(d2 + yv * yv)
                 if not dist > 0.0:
                     return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
                 inv = 1.0 / dist
@@ -287,7 +304,7 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
-@register_jitable
+@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
 def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
@@ -314,7 +331,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     return t * t / (cos_l * area)
 
 
-@register_jitable
+@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
 def choose_light(lights, u):
     """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
     last = lights.shape[1] - 1

@@ -95,9 +95,10 @@ PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
 
-# rows of the (11, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; 0 if
-# unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped), 1 / r
-SPHERE_COLUMNS = 11
+# rows of the (17, n) sphere table: centre (3), r, r^2, clip axis a (3, unit, into the kept side; +z if
+# unclipped), clip offset d (keep a . p >= d; -inf if unclipped), cap height h (2 r if unclipped), 1 / r,
+# t and b (3 each): with a, the frame in which a cap is sampled (frames.frame_rows(a))
+SPHERE_COLUMNS = 17
 # rows of the (26, m) quad table: corner, edge1, edge2, unit normal, N / |N|^2 (3 each), n . corner, area,
 # edge1 / |edge1|, edge2 / |edge2| (3 each), |edge1|, |edge2|, 1 if a rectangle (edges orthogonal) else 0
 QUAD_COLUMNS = 26
@@ -110,7 +111,7 @@ KERNEL_OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=Fals
 _INV_PI = 1.0 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
-_SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if it hits it within this
+_SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if nothing is hit this much before it
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -275,8 +276,8 @@ def _film_offset(pixel_filter, state):
 
 
 @register_jitable(inline="always")
-def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch):
-    """Nearest hit with t > eps: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
+def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
+    """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
     The first *plain* spheres are unclipped (:func:`plain_spheres`), the others clipped.
 
@@ -293,7 +294,7 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch):
     the common unclipped ones cost what they did before clipping existed
     (smallpt's 8 unclipped spheres fill one AVX-512 vector).
     """
-    t_best = np.inf
+    t_best = t_max  # (a shadow ray: only what lies before the sampled point counts)
     hit = -1
     n = spheres.shape[1]
     if n > 0:
@@ -392,25 +393,26 @@ def radiance(
     pdf_bsdf = 0.0  # solid-angle pdf of the direction sampled at the previous diffuse vertex
     # One intersect() site traces the path rays and the shadow rays in turn (a second inlined copy
     # doubles the compile time): after a vertex with a shadow ray pending, the next trip through the
-    # loop traces it, adds its contribution if the sampled emitter point is what it hits, and then
-    # resumes the path (or ends it) from the saved direction.
+    # loop traces it (only up to the sampled emitter point: t_max), adds its contribution if it hits
+    # nothing, and then resumes the path (or ends it) from the saved direction.
     shadow = False
     alive = True
-    shadow_obj, shadow_dist = -1, 0.0
+    t_max = np.inf  # the path's rays: any hit; a shadow ray: hits before the sampled point
     cr, cg, cb = 0.0, 0.0, 0.0  # the pending shadow ray's contribution if unoccluded
     ndx, ndy, ndz = 0.0, 0.0, 0.0  # the path's next direction while the shadow ray is traced
     px, py, pz = ox, oy, oz
     depth = 0
     while True:
-        t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch)
+        t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max)
         if shadow:
-            if hit == shadow_obj and (shadow_dist < 0.0 or abs(t - shadow_dist) <= _SHADOW_TOLERANCE * shadow_dist + eps):
+            if hit < 0:  # nothing before the sampled point
                 lr += cr
                 lg += cg
                 lb += cb
             if not alive:
                 break
             shadow = False
+            t_max = np.inf
             dx, dy, dz = ndx, ndy, ndz
             continue
         if hit < 0:
@@ -474,7 +476,8 @@ def radiance(
                         cg = bg * fg * materials[lm, 9] * g
                         cb = bb * fb * materials[lm, 10] * g
                         shadow = cr != 0.0 or cg != 0.0 or cb != 0.0
-                        shadow_obj, shadow_dist = obj, dist
+                        if shadow:  # the sampled point itself is not an occluder
+                            t_max = dist * (1.0 - _SHADOW_TOLERANCE) - eps
                         ndx, ndy, ndz = wx, wy, wz  # swapped with the path's direction below
             x, y, z, weight, pdf_bsdf, state = sample_local(sampler, code, full, key, s, depth, state)
             if z >= 0.0:

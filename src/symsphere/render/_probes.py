@@ -74,7 +74,7 @@ def first_hits(origins, directions, spheres, quads, eps):
     for i in range(count):
         ts[i], hits[i] = intersect(
             origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1], directions[i, 2],
-            spheres, plain, quads, eps, scratch,
+            spheres, plain, quads, eps, scratch, np.inf,
         )  # fmt: skip
     return ts, hits
 

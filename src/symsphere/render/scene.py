@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 import numpy.typing as npt
 
+from ..frames import frame_rows
 from . import _integrator as _k
 from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, vector
 
@@ -284,7 +285,10 @@ class Scene:
         areas = []
         for i, s in enumerate(ordered):
             axis, offset, cap_height = _clip_table(s)
-            spheres[i] = [*s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height, 1.0 / s.radius]
+            t_row, b_row = frame_rows(*axis)  # the sampling frame of the cap (t, b, axis), once per render
+            spheres[i] = [
+                *s.center, s.radius, s.radius * s.radius, *axis, offset, cap_height, 1.0 / s.radius, *t_row, *b_row,
+            ]  # fmt: skip
             areas.append(2 * math.pi * s.radius * cap_height)  # Archimedes: the area of a cap is 2 pi r h
         quads = np.zeros((len(self.quads), _k.QUAD_COLUMNS))
         for i, q in enumerate(self.quads):
@@ -339,10 +343,11 @@ def _clip_table(sphere):
 
     The kept cap is {p on the sphere : a . (p - c) >= d - a . c}; its height
     along a is ``r - max(d - a . c, -r)`` (2 r for an unclipped sphere, whose
-    axis is 0 and offset -inf, so that the intersection test keeps every point).
+    offset is -inf, so that the intersection test keeps every point, and whose
+    axis, used only to sample it by area, is +z).
     """
     if sphere.clip is None:
-        return (0.0, 0.0, 0.0), -math.inf, 2.0 * sphere.radius
+        return (0.0, 0.0, 1.0), -math.inf, 2.0 * sphere.radius
     axis = _unit(sphere.clip.normal)
     offset = float(axis @ np.array(sphere.clip.point, dtype=np.float64))
     lowest = offset - float(axis @ np.array(sphere.center, dtype=np.float64))
