@@ -17,6 +17,7 @@ import numpy.typing as npt
 
 from . import frames
 from ._blocks import fill_range
+from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
 from ._validation import check_choice, check_count, check_normal, check_rng
 from .maps import get_map
@@ -29,7 +30,17 @@ Integrand = Callable[[Float64Array], npt.ArrayLike]
 Partial = tuple[int, Float64Array, Float64Array]
 """A block's (orbits, sum of orbit estimates, sum of squared deviations from their mean)."""
 
-__all__ = ["DEFAULT_REPLICATES", "IntegrationResult", "Plan", "plan", "block_partial", "evaluate", "combine", "finish"]
+__all__ = [
+    "DEFAULT_REPLICATES",
+    "IntegrationResult",
+    "Plan",
+    "plan",
+    "block_partial",
+    "block_partials",
+    "evaluate",
+    "combine",
+    "finish",
+]
 
 DEFAULT_REPLICATES = 8
 
@@ -117,6 +128,7 @@ class Plan:
     unit: str
     basis: Float64Array | None
     confidence_level: float
+    compiled: Compiled | None = None  # (numba function, caller): the fused path of symsphere._fused
 
 
 def plan(
@@ -133,6 +145,7 @@ def plan(
     """Validate every argument of :func:`symsphere.integrate` and fix the run: sources, blocks, unit."""
     if not callable(f):
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
+    compiled = compiled_integrand(f)
     domain = check_choice(domain, "domain", DOMAINS)
     count = 48 if domain == "sphere" else 24
     get_map(method)
@@ -171,11 +184,31 @@ def plan(
         unit=unit,
         basis=None if normal is None else frames.frame(normal),
         confidence_level=float(confidence_level),
+        compiled=compiled,
     )
+
+
+def block_partials(plan: Plan, replicate: int, first: int, stop: int) -> list[Partial]:
+    """The partials of blocks ``first ... stop - 1`` of a replicate (fused: in one parallel kernel call)."""
+    if plan.compiled is not None:
+        return fused_partials(
+            plan.compiled,
+            plan.sources[replicate],
+            plan.orbits_per_replicate,
+            first,
+            stop,
+            plan.method,
+            plan.count,
+            plan.basis,
+            get_map(plan.method).uniform,
+        )
+    return [block_partial(plan, replicate, block) for block in range(first, stop)]
 
 
 def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     """(orbits, sum of orbit estimates, sum of squared deviations from their mean) of one block."""
+    if plan.compiled is not None:
+        return block_partials(plan, replicate, block, block + 1)[0]
     start = block * BLOCK
     stop = min(start + BLOCK, plan.orbits_per_replicate)
     source = plan.sources[replicate]

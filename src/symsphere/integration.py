@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy.typing as npt
 
-from ._integration import DEFAULT_REPLICATES, IntegrationResult, Integrand, block_partial, finish, plan
+from ._integration import DEFAULT_REPLICATES, IntegrationResult, Integrand, block_partials, finish, plan
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 
 __all__ = ["IntegrationResult", "integrate"]
@@ -93,5 +93,5 @@ def integrate(
     (3.1416, 'replicate')
     """
     work = plan(f, domain, n, method, points, normal, rng, replicates, confidence_level)
-    partials = [[block_partial(work, r, b) for b in range(work.blocks_per_replicate)] for r in range(work.replicates)]
+    partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
     return finish(work, partials)
