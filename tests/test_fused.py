@@ -132,3 +132,22 @@ def test_compiled_f_errors():
         integrate(pair, n=48)
     with pytest.raises(ValueError, match="non-finite"):
         integrate(blows_up, n=48 * 16, rng=0)
+
+
+@pytest.mark.slow
+def test_distributed_ships_the_fused_kernel():
+    """distributed.integrate with a compiled f: bit for bit the single-process fused result."""
+    pytest.importorskip("distributed")
+    from symsphere import distributed
+
+    kwargs = dict(n=48 * (3 * BLOCK + 5), rng=8)
+    single = integrate(exp_xyz, **kwargs)
+    client = distributed.local_client(1)
+    try:
+        for chunk_blocks in (1, 2):
+            result = distributed.integrate(exp_xyz, client=client, chunk_blocks=chunk_blocks, **kwargs)
+            assert result == single
+        result = distributed.integrate(INTEGRANDS["exp"], client=client, **kwargs)
+        assert result == integrate(INTEGRANDS["exp"], **kwargs)
+    finally:
+        distributed.close_client(client)
