@@ -72,6 +72,14 @@ class IntegrationResult:
     points : str
         The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, or the
         class name of the ``QMCEngine`` given.
+    tolerance : float or None
+        With ``atol``/``rtol``: the target ``max(atol, rtol * |integral|)`` the interval's
+        half-width was compared with (None for a fixed n).
+    n_stages : int
+        With ``atol``/``rtol``: the doublings run (the interval is that stage's, at level
+        ``1 - (1 - requested level) / (n_stages (n_stages + 1))``); 1 for a fixed n.
+    converged : bool
+        Whether the half-width reached the tolerance (always True for a fixed n).
 
     Examples
     --------
@@ -101,14 +109,21 @@ class IntegrationResult:
     domain: str
     method: str
     points: str = field(repr=False)
+    tolerance: float | None = field(default=None, repr=False)
+    n_stages: int = field(default=1, repr=False)
+    converged: bool = field(default=True, repr=False)
 
     def __str__(self) -> str:
         low, high = self.confidence_interval
-        return (
+        text = (
             f"integral = {self.integral} ± {self.standard_error} (standard error; "
-            f"{self.confidence_level:.0%} interval [{low}, {high}]) from {self.n_evaluations} evaluations, "
+            f"{100 * self.confidence_level:.4g}% interval [{low}, {high}]) from {self.n_evaluations} evaluations, "
             f"{self.n_units} independent {self.unit}s ({self.domain}, {self.method}, {self.points})"
         )
+        if self.tolerance is not None:
+            state = "reached" if self.converged else "NOT reached"
+            text += f"; tolerance {self.tolerance:.3g} {state} after {self.n_stages} stages"
+        return text
 
 
 @dataclass(frozen=True)
