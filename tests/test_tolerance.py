@@ -108,3 +108,30 @@ def test_coverage_over_seeds(points, rtol):
     assert max(stages) > 1, "the rule must stop at different stages for the test to mean anything"
     assert covered >= bound, (covered, np.bincount(stages))
     assert within_tolerance >= covered
+
+
+def test_cli_rtol(capsys):
+    from symsphere.apps.cli import main
+
+    assert main(["integrate", "--integrand", "exp", "--rtol", "1e-4", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "tolerance" in out and "reached: half-width" in out and "stages" in out
+    assert main(["integrate", "--integrand", "exp", "--atol", "1e-9", "--n-max", "24576", "--seed", "1"]) == 0
+    assert "NOT reached (n_max)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--rtol", "1e-3", "--workers", "2"], "--rtol/--atol run in one process"),
+        ([], "--n is required unless --rtol or --atol is given"),
+        (["--n", "480", "--n-max", "960"], "--n-max is only valid with --rtol or --atol"),
+        (["--rtol", "-1"], "'rtol' must be >= 0"),
+    ],
+)
+def test_cli_tolerance_errors(capsys, argv, message):
+    from symsphere.apps.cli import main
+
+    assert main(["integrate", "--integrand", "exp", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
