@@ -22,8 +22,8 @@ the parallel kernel: directions are never stored, orbit sums stay in registers. 
 estimator, same error bar (to rounding); see ``docs/integration.md``.
 
 To a tolerance (``atol=``, ``rtol=``, ``n_max=``, scipy's names): n doubles (``'stratified'``:
-quadruples, the grid's side doubles), reusing the points and block sums of the previous
-stages, until the interval's half-width is at most ``max(atol, rtol * |integral|)``.  To keep
+quadruples, the grid's side doubles; ``'random'``: jumps by the power of 2 that the n**-0.5
+law predicts), reusing the points and block sums of the previous stages, until the interval's half-width is at most ``max(atol, rtol * |integral|)``.  To keep
 the interval honest however early the rule stops, stage j spends ``alpha / (j (j + 1))`` of
 ``alpha = 1 - confidence_level`` (the sum over all stages is alpha): every stage's interval,
 the returned one included, covers the integral with probability at least
@@ -136,8 +136,8 @@ def integrate(
     >>> @njit
     ... def g(x, y, z):
     ...     return np.exp(x)
-    >>> result = integrate(g, rtol=1e-4, points="sobol", rng=3)
-    >>> result.converged, bool(abs(result.integral - exact) <= 1e-4 * exact)
+    >>> result = integrate(g, rtol=1e-7, points="sobol", rng=3)
+    >>> result.converged, bool(abs(result.integral - exact) <= 1e-7 * exact)
     (True, True)
     >>> low, high = result.confidence_interval
     >>> bool((high - low) / 2 <= result.tolerance), result.n_evaluations, result.n_stages
@@ -190,15 +190,16 @@ def _to_tolerance(
     if n_max < n:
         raise ValueError(f"'n_max' must be at least n={n}, got {n_max}")
     growth = 4 if stratified else 2
-    stages = [n]
-    while stages[-1] * growth <= n_max:
-        stages.append(stages[-1] * growth)
+    largest_n = n
+    while largest_n * growth <= n_max:
+        largest_n *= growth
     # One plan for the largest stage: its point sources address every stage's points by index.
     # 'stratified' grids are not nested (a finer grid is other points), so each stage plans anew.
-    largest = plan(f, domain, stages[-1], method, points, normal, rng, replicates, confidence_level)
+    largest = plan(f, domain, largest_n, method, points, normal, rng, replicates, confidence_level)
     kept: dict[tuple[int, int], Partial] = {}  # (replicate, block) -> the partial of a whole block
     alpha = 1.0 - largest.confidence_level
-    for stage, n_stage in enumerate(stages, start=1):
+    stage, n_stage = 1, n
+    while True:
         level = 1.0 - alpha / (stage * (stage + 1))
         if stratified:
             work = plan(f, domain, n_stage, method, points, normal, rng, replicates, level)
@@ -209,16 +210,36 @@ def _to_tolerance(
                 largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK), confidence_level=level
             )
         result = _stage_result(work, kept, stage, atol, rtol)
-        if result.converged:
-            return result
-    low, high = result.confidence_interval
-    warnings.warn(
-        f"integrate: the tolerance {result.tolerance:.3g} was not reached by n_max={n_max}: at n={stages[-1]} the "
-        f"half-width of the {100 * result.confidence_level:.4g}% interval is {np.max((high - low) / 2):.3g}",
-        UserWarning,  # as scipy's IntegrationWarning
-        stacklevel=3,  # the caller of integrate
-    )
+        if result.converged or n_stage == largest_n:
+            break
+        factor = growth
+        if points == "random":  # the error falls as n**-0.5 exactly: jump to the n predicted for the next level
+            factor = max(2, _predicted_factor(result, alpha / ((stage + 1) * (stage + 2))))
+        while n_stage * factor > largest_n:
+            factor //= 2
+        stage, n_stage = stage + 1, n_stage * factor
+    if not result.converged:
+        low, high = result.confidence_interval
+        warnings.warn(
+            f"integrate: the tolerance {result.tolerance:.3g} was not reached by n_max={n_max}: at n={n_stage} the "
+            f"half-width of the {100 * result.confidence_level:.4g}% interval is {np.max((high - low) / 2):.3g}",
+            UserWarning,  # as scipy's IntegrationWarning
+            stacklevel=3,  # the caller of integrate
+        )
     return result
+
+
+def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
+    """The power of 2 by which n must grow for the next stage's half-width to meet the tolerance,
+    if the standard error falls as n**-0.5 (random points: exactly, in expectation)."""
+    from scipy import stats as _scipy_stats  # not at import: it costs 0.3 s
+
+    assert result.tolerance is not None
+    t = _scipy_stats.t.ppf(1 - next_alpha / 2, df=result.n_units - 1)
+    ratio = float(np.max(t * np.asarray(result.standard_error))) / result.tolerance if result.tolerance > 0 else np.inf
+    if not np.isfinite(ratio):
+        return 2
+    return int(2 ** max(1, int(np.ceil(np.log2(max(ratio * ratio, 1.0))))))
 
 
 def _stage_result(work: Plan, kept: dict[tuple[int, int], Partial], stage: int, atol: float, rtol: float) -> IntegrationResult:
