@@ -9,7 +9,7 @@ unit square onto T0 are shipped as printed, with their exact (non-uniform)
 densities; the default map, ``'equal_area'``, is exactly uniform.
 
 The names below are the package's everyday interface; each is documented in
-its module (:mod:`symsphere.sampling`, :mod:`symsphere.integrate`,
+its module (:mod:`symsphere.sampling`, :mod:`symsphere.integration`,
 :mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`,
 :mod:`symsphere.square_warps`).
 :mod:`symsphere.stats`, :mod:`symsphere.peers`, :mod:`symsphere.integrands`,
@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .integrate import IntegrationResult, integrate
+from .integration import IntegrationResult, integrate
 from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
 from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf

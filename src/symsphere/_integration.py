@@ -17,6 +17,7 @@ import numpy.typing as npt
 
 from . import frames
 from ._blocks import fill_range
+from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
 from ._validation import check_choice, check_count, check_normal, check_rng
 from .maps import get_map
@@ -29,7 +30,17 @@ Integrand = Callable[[Float64Array], npt.ArrayLike]
 Partial = tuple[int, Float64Array, Float64Array]
 """A block's (orbits, sum of orbit estimates, sum of squared deviations from their mean)."""
 
-__all__ = ["DEFAULT_REPLICATES", "IntegrationResult", "Plan", "plan", "block_partial", "evaluate", "combine", "finish"]
+__all__ = [
+    "DEFAULT_REPLICATES",
+    "IntegrationResult",
+    "Plan",
+    "plan",
+    "block_partial",
+    "block_partials",
+    "evaluate",
+    "combine",
+    "finish",
+]
 
 DEFAULT_REPLICATES = 8
 
@@ -61,6 +72,14 @@ class IntegrationResult:
     points : str
         The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, or the
         class name of the ``QMCEngine`` given.
+    tolerance : float or None
+        With ``atol``/``rtol``: the target ``max(atol, rtol * |integral|)`` the interval's
+        half-width was compared with (None for a fixed n).
+    n_stages : int
+        With ``atol``/``rtol``: the doublings run (the interval is that stage's, at level
+        ``1 - (1 - requested level) / (n_stages (n_stages + 1))``); 1 for a fixed n.
+    converged : bool
+        Whether the half-width reached the tolerance (always True for a fixed n).
 
     Examples
     --------
@@ -90,17 +109,25 @@ class IntegrationResult:
     domain: str
     method: str
     points: str = field(repr=False)
+    tolerance: float | None = field(default=None, repr=False)
+    n_stages: int = field(default=1, repr=False)
+    converged: bool = field(default=True, repr=False)
 
     def __str__(self) -> str:
         low, high = self.confidence_interval
         source = f"from {self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
         source += f"({self.domain}, {self.method}, {self.points})"
         if np.all(np.isnan(self.standard_error)):  # say why, and what to pass instead (issue 13)
-            return f"integral = {self.integral} {source}; {self._no_error_bar()}"
-        return (
-            f"integral = {self.integral} ± {self.standard_error} (standard error; "
-            f"{self.confidence_level:.0%} interval [{low}, {high}]) {source}"
-        )
+            text = f"integral = {self.integral} {source}; {self._no_error_bar()}"
+        else:
+            text = (
+                f"integral = {self.integral} ± {self.standard_error} (standard error; "
+                f"{100 * self.confidence_level:.4g}% interval [{low}, {high}]) {source}"
+            )
+        if self.tolerance is not None:
+            state = "reached" if self.converged else "NOT reached"
+            text += f"; tolerance {self.tolerance:.3g} {state} after {self.n_stages} stages"
+        return text
 
     def _no_error_bar(self) -> str:
         if self.unit == "run":
@@ -149,6 +176,7 @@ class Plan:
     unit: str
     basis: Float64Array | None
     confidence_level: float
+    compiled: Compiled | None = None  # (numba function, caller): the fused path of symsphere._fused
 
 
 def plan(
@@ -165,6 +193,7 @@ def plan(
     """Validate every argument of :func:`symsphere.integrate` and fix the run: sources, blocks, unit."""
     if not callable(f):
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
+    compiled = compiled_integrand(f)
     domain = check_choice(domain, "domain", DOMAINS)
     count = 48 if domain == "sphere" else 24
     get_map(method)
@@ -203,11 +232,31 @@ def plan(
         unit=unit,
         basis=None if normal is None else frames.frame(normal),
         confidence_level=float(confidence_level),
+        compiled=compiled,
     )
+
+
+def block_partials(plan: Plan, replicate: int, first: int, stop: int) -> list[Partial]:
+    """The partials of blocks ``first ... stop - 1`` of a replicate (fused: in one parallel kernel call)."""
+    if plan.compiled is not None:
+        return fused_partials(
+            plan.compiled,
+            plan.sources[replicate],
+            plan.orbits_per_replicate,
+            first,
+            stop,
+            plan.method,
+            plan.count,
+            plan.basis,
+            get_map(plan.method).uniform,
+        )
+    return [block_partial(plan, replicate, block) for block in range(first, stop)]
 
 
 def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     """(orbits, sum of orbit estimates, sum of squared deviations from their mean) of one block."""
+    if plan.compiled is not None:
+        return block_partials(plan, replicate, block, block + 1)[0]
     start = block * BLOCK
     stop = min(start + BLOCK, plan.orbits_per_replicate)
     source = plan.sources[replicate]

@@ -32,7 +32,11 @@ from .symmetry import SIGNS, SOURCES
 
 
 __all__ = [
+    "BATCH",
     "METHOD_CODES",
+    "map_batch",
+    "rotated_weights",
+    "prepare_kernels",
     "fill_orbits",
     "fill_random_orbits",
     "part_bounds",
@@ -357,6 +361,14 @@ def fill_random_orbits(
     rows = out.reshape(m, 3 * count)
     _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows)
     return out
+
+
+# The same batch map, batch size and image weights for the fused integration kernels
+# (symsphere._fused), which evaluate f where these kernels store directions.
+BATCH = _BATCH
+map_batch = _map_batch
+rotated_weights = _rotated_weights
+prepare_kernels = _prepare_kernels
 
 
 def part_bounds(m, parts=0):

@@ -32,7 +32,7 @@ import numpy as np
 
 from ._validation import check_count
 from ._blocks import fill_range, prepare
-from ._integration import block_partial, finish, plan
+from ._integration import block_partials, finish, plan
 from ._threads import start_threads
 from .points import BLOCK
 
@@ -115,7 +115,8 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     Parameters
     ----------
     f : callable
-        The integrand; it is pickled (cloudpickle) to the workers.
+        The integrand; it is pickled (cloudpickle) to the workers.  A compiled f
+        (numba, or a suite integrand) runs fused there too, compiled once per worker.
     client : distributed.Client, optional
         Default: a ``LocalCluster`` with one single-threaded worker per core,
         started for this call and closed after it.
@@ -357,7 +358,7 @@ def _partials_task(work, replicate, first, stop):
     _single_threaded_kernels()
     # A private copy of the point sources: QMC engines are stateful, and tasks may share a process.
     work = dataclasses.replace(work, sources=tuple(copy.deepcopy(source) for source in work.sources))
-    return [block_partial(work, replicate, block) for block in range(first, stop)]
+    return block_partials(work, replicate, first, stop)  # a compiled f: one fused kernel call
 
 
 def _render_task(plan, first_pass, stop_pass):

@@ -141,7 +141,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--integrand", required=True, metavar="NAME",
         help=f"one of: {', '.join(sorted(INTEGRANDS))} (symsphere.integrands.INTEGRANDS; docs/integrands.md)",
     )  # fmt: skip
-    integrate.add_argument("--n", type=int, required=True, help="evaluations: a multiple of 48 (hemisphere: 24)")
+    integrate.add_argument(
+        "--n", type=int, default=None,
+        help="evaluations: a multiple of 48 (hemisphere: 24); with --rtol/--atol the first stage's (optional)",
+    )
     integrate.add_argument(
         "--method", choices=METHODS, default="equal_area",
         help="map onto the triangle; every map is unbiased (weighted by 1/pdf) (default: %(default)s)",
@@ -152,6 +155,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="independent randomisations of stratified and QMC points; the error bar needs 2 or more (default 8)",
     )  # fmt: skip
     integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
+    integrate.add_argument("--rtol", type=float, default=None, help="relative tolerance: double n until it is met")
+    integrate.add_argument("--atol", type=float, default=None, help="absolute tolerance: double n until it is met")
+    integrate.add_argument("--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)")
     _add_cluster_options(integrate)
     integrate.set_defaults(handler=_run_integrate)
 
@@ -415,11 +421,22 @@ def _run_integrate(args) -> int:
     kwargs = dict(
         domain=integrand.domain, n=args.n, method=args.method, points=args.points, replicates=args.replicates, rng=seed
     )
+    to_tolerance = args.rtol is not None or args.atol is not None
+    if to_tolerance:
+        kwargs.update(rtol=args.rtol, atol=args.atol, n_max=args.n_max)
+        if args.workers is not None or args.scheduler is not None:
+            raise _UsageError("--rtol/--atol run in one process; drop --workers/--scheduler")
+    elif args.n is None:
+        raise _UsageError("--n is required unless --rtol or --atol is given")
+    elif args.n_max is not None:
+        raise _UsageError("--n-max is only valid with --rtol or --atol")
     start = time.perf_counter()
     client = _cluster_client(args)
     try:
         if client is None:
-            result = integrate(integrand.f, **kwargs)
+            with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
+                warnings.filterwarnings("ignore", message="integrate: the tolerance")
+                result = integrate(integrand.f, **kwargs)
         else:
             from .. import distributed  # function-level: dask is slow to import and optional
 
@@ -440,6 +457,9 @@ def _run_integrate(args) -> int:
         print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
     print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
     print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
+    if to_tolerance:
+        state = "reached" if result.converged else "NOT reached (n_max)"
+        print(f"  tolerance {result.tolerance:.3g} {state}: half-width {(high - low) / 2:.3g} after {result.n_stages} stages")
     return 0
 
 

@@ -125,3 +125,19 @@ def test_bad_input(kwargs, error, match):
     kwargs = {"f": exp_dot, "n": 48 * 8, **kwargs}
     with pytest.raises(error, match=match):
         integrate(**kwargs)
+
+
+def test_module_is_not_named_after_the_function():
+    """``symsphere.integrate`` is the function; the module is ``symsphere.integration`` (issue 13, item 7)."""
+    import importlib
+    import importlib.util
+    import types
+
+    import symsphere
+    import symsphere.integration as module
+
+    assert isinstance(module, types.ModuleType) and module.integrate is symsphere.integrate
+    assert callable(symsphere.integrate) and not isinstance(symsphere.integrate, types.ModuleType)
+    assert importlib.util.find_spec("symsphere.integrate") is None
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("symsphere.integrate")

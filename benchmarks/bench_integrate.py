@@ -1,0 +1,156 @@
+"""Fused integration benchmark: integrate(f) with f in numpy vs compiled f evaluated inside the kernel.
+
+At n = 48 * 2**20 directions (random points, equal_area, sphere; one run, interleaved rounds,
+medians), for each integrand:
+
+- ``numpy f``: ``symsphere.integrate`` with f written with numpy on (m, 3) blocks;
+- ``fused``: ``symsphere.integrate`` with a compiled f (numba ``@njit`` of (x, y, z), or the
+  integrand suite's generated kernel): the kernel maps, takes the 48 images and evaluates f in
+  registers, with per-orbit statistics for the error bar;
+- ``limit``: "map + orbit + f in registers" alone: the same pieces (inlined PCG64, the batch
+  map, the image weights, f) summing f to one number per thread, no weights, no statistics,
+  no block reduction -- the compute limit of the fused path.
+
+Integrands: the polynomial x^4 + y^4 + z^4 + xyz/2 + z; exp(w . a) as a user's @njit function
+(numba's scalar libm exp); the suite's ``exp`` integrand (its kernel uses a libm-free
+polynomial exp, so the batch loop vectorises); and the polynomial as f(w) of a (3,) array.
+
+    python benchmarks/bench_integrate.py [--log2-orbits 20] [--rounds 5] [--json PATH]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from numba import get_num_threads, njit, prange
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _machine import cpu_name  # noqa: E402
+
+import symsphere  # noqa: E402
+from symsphere._fused import call_vector, call_xyz  # noqa: E402
+from symsphere._kernels import BATCH, map_batch, pcg64_advanced, pcg64_random, pcg64_seeded  # noqa: E402
+from symsphere._kernels import rotated_weights  # noqa: E402
+from symsphere.integrands import INTEGRANDS  # noqa: E402
+from symsphere.points import BasePoints  # noqa: E402
+
+A = np.array([0.7, -0.4, 0.5])
+
+
+@njit
+def poly_xyz(x, y, z):
+    return x**4 + y**4 + z**4 + x * y * z / 2 + z
+
+
+@njit
+def poly_vector(w):
+    return w[0] ** 4 + w[1] ** 4 + w[2] ** 4 + w[0] * w[1] * w[2] / 2 + w[2]
+
+
+@njit
+def exp_xyz(x, y, z):
+    return np.exp(0.7 * x - 0.4 * y + 0.5 * z)
+
+
+def poly_numpy(w):
+    return (w**4).sum(axis=1) + w[:, 0] * w[:, 1] * w[:, 2] / 2 + w[:, 2]
+
+
+def exp_numpy(w):
+    return np.exp(w @ A)
+
+
+@njit(parallel=True, error_model="numpy", nogil=True)
+def _limit(f, caller, seed_words, m, parts, weights):
+    # map + orbit + f in registers: random base points drawn in the kernel, 48 images, f summed.
+    start = pcg64_seeded(seed_words)
+    totals = np.zeros(parts)
+    images = weights.shape[1] // 3
+    for part in prange(parts):
+        lo, hi = m * part // parts, m * (part + 1) // parts
+        stream = pcg64_advanced(start, 2 * lo)
+        u = np.full(BATCH, 0.5)
+        v = np.full(BATCH, 0.5)
+        base = np.empty((3, BATCH))
+        sums = np.zeros(BATCH)
+        buffer = np.empty(3)
+        for first in range(lo, hi, BATCH):
+            for j in range(min(BATCH, hi - first)):
+                u[j] = pcg64_random(stream)
+                v[j] = pcg64_random(stream)
+            map_batch(u, v, 0, base)
+            for k in range(images):
+                w00, w01, w02 = weights[0, 3 * k], weights[0, 3 * k + 1], weights[0, 3 * k + 2]
+                w10, w11, w12 = weights[1, 3 * k], weights[1, 3 * k + 1], weights[1, 3 * k + 2]
+                w20, w21, w22 = weights[2, 3 * k], weights[2, 3 * k + 1], weights[2, 3 * k + 2]
+                for j in range(BATCH):
+                    x, y, z = base[0, j], base[1, j], base[2, j]
+                    sums[j] += caller(
+                        f, x * w00 + y * w10 + z * w20, x * w01 + y * w11 + z * w21, x * w02 + y * w12 + z * w22, buffer
+                    )
+        totals[part] = sums.sum()
+    return totals.sum() * (4 * np.pi / 48) / m
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--log2-orbits", type=int, default=20, help="n = 48 * 2**this (default 20)")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds; medians are reported")
+    parser.add_argument("--json", type=Path, default=None, help="write the measurements here")
+    args = parser.parse_args(argv)
+    orbits = 2**args.log2_orbits
+    n = 48 * orbits
+    seed_words = BasePoints("random", 1, orbits).seed_words
+    weights = rotated_weights(np.eye(3), 48)
+    parts = max(get_num_threads(), orbits // 512)  # as many parts as the fused kernel has chunks
+    suite_exp = INTEGRANDS["exp"]
+    cases = {  # name: (numpy f, compiled f for integrate, (kernel, caller) for the limit)
+        "x^4+y^4+z^4+xyz/2+z": (poly_numpy, poly_xyz, (poly_xyz, call_xyz)),
+        "exp(w.a), user @njit (libm exp)": (exp_numpy, exp_xyz, (exp_xyz, call_xyz)),
+        "suite 'exp' (polynomial exp)": (suite_exp.f, suite_exp, (suite_exp.kernel, call_xyz)),
+        "x^4+... as f(w), w a (3,) array": (poly_numpy, poly_vector, (poly_vector, call_vector)),
+    }
+    runs = {}
+    for name, (numpy_f, compiled, (kernel, caller)) in cases.items():
+        runs[(name, "numpy f")] = lambda f=numpy_f: symsphere.integrate(f, n=n, rng=1).integral
+        runs[(name, "fused")] = lambda f=compiled: symsphere.integrate(f, n=n, rng=1).integral
+        runs[(name, "limit")] = lambda k=kernel, c=caller: _limit(k, c, seed_words, orbits, parts, weights)
+    values = {}
+    for key, run in runs.items():  # warm up: compile, and check that the three agree
+        if key[1] != "numpy f":
+            symsphere.integrate(cases[key[0]][1], n=48 * 4096, rng=1)
+        values[key] = run()
+    times = {key: [] for key in runs}
+    for _ in range(args.rounds):
+        for key, run in runs.items():
+            start = time.perf_counter()
+            run()
+            times[key].append(time.perf_counter() - start)
+    medians = {key: statistics.median(t) for key, t in times.items()}
+    print(f"n = 48 * 2**{args.log2_orbits} = {n:,} directions, {get_num_threads()} threads, {cpu_name()}, "
+          f"medians of {args.rounds} interleaved rounds")
+    print("| integrand | numpy f (s) | fused (s) | limit (s) | numpy f M/s | fused M/s | limit M/s | fused / numpy | fused / limit |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    rows = []
+    for name in cases:
+        t_numpy, t_fused, t_limit = (medians[(name, kind)] for kind in ("numpy f", "fused", "limit"))
+        row = dict(integrand=name, numpy=t_numpy, fused=t_fused, limit=t_limit,
+                   speedup=t_numpy / t_fused, of_limit=t_limit / t_fused,
+                   integral_numpy=float(values[(name, "numpy f")]), integral_fused=float(values[(name, "fused")]),
+                   integral_limit=float(values[(name, "limit")]))
+        rows.append(row)
+        print(f"| {name} | {t_numpy:.3f} | {t_fused:.3f} | {t_limit:.3f} | {n / t_numpy / 1e6:.0f} | "
+              f"{n / t_fused / 1e6:.0f} | {n / t_limit / 1e6:.0f} | {row['speedup']:.1f}x | {row['of_limit']:.2f}x |")
+    if args.json:
+        args.json.write_text(json.dumps(dict(n=n, threads=get_num_threads(), cpu=cpu_name(), rounds=args.rounds, rows=rows,
+                                             times={f"{k[0]} | {k[1]}": v for k, v in times.items()}), indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,153 @@
+"""Fused integration: compiled integrands evaluated inside the kernel give the numpy path's result.
+
+The reference is the numpy path (``integrate`` with a numpy ``f``): the same estimator and
+error bar, so the results must agree to rounding (relative 1e-12) for every map, point set,
+domain and normal.  The kernel's only differences (the order of the sums, the batch-merged
+sum of squared deviations) are rounding-level; see symsphere._fused.
+"""
+
+import numpy as np
+import pytest
+from numba import njit
+from scipy.stats import qmc
+
+import symsphere as ss
+from symsphere import METHODS, integrate
+from symsphere._fused import vexp
+from symsphere.integrands import INTEGRANDS
+from symsphere.points import BLOCK
+
+A = np.array([0.7, -0.4, 0.5])
+
+
+@njit
+def exp_xyz(x, y, z):
+    return np.exp(0.7 * x - 0.4 * y + 0.5 * z)
+
+
+@njit
+def exp_vector(w):
+    return np.exp(w[0] * A[0] + w[1] * A[1] + w[2] * A[2])
+
+
+def exp_numpy(w):
+    return np.exp(w @ A)
+
+
+def _close(fused, reference, rtol=1e-12):
+    assert fused.n_evaluations == reference.n_evaluations and fused.n_units == reference.n_units
+    assert fused.unit == reference.unit
+    np.testing.assert_allclose(fused.integral, reference.integral, rtol=rtol, atol=0)
+    scale = np.abs(reference.integral)  # replicate errors of smooth integrands cancel: rounding of |I|
+    np.testing.assert_allclose(fused.standard_error, reference.standard_error, rtol=1e-9, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize(
+    "domain, normal, points",
+    [
+        ("sphere", None, "random"),
+        ("sphere", None, "stratified"),
+        ("sphere", None, "sobol"),
+        ("sphere", None, "halton"),
+        ("hemisphere", None, "random"),
+        ("hemisphere", None, "sobol"),
+        ("hemisphere", [0.3, 0.4, -0.5], "random"),
+        ("hemisphere", [0.3, 0.4, -0.5], "stratified"),
+    ],
+)
+def test_fused_equals_numpy_path(method, domain, normal, points):
+    count = 48 if domain == "sphere" else 24
+    kwargs = dict(domain=domain, normal=normal, n=count * (2 * BLOCK + 100), method=method, points=points, rng=11)
+    if points != "random":
+        kwargs["replicates"] = 4
+        kwargs["n"] = count * 4 * (48**2 if points == "stratified" else 2**12)
+    reference = integrate(exp_numpy, **kwargs)
+    _close(integrate(exp_xyz, **kwargs), reference)
+    _close(integrate(exp_vector, **kwargs), reference)
+
+
+def test_fused_with_an_engine():
+    reference = integrate(exp_numpy, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
+    fused = integrate(exp_xyz, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
+    assert fused.unit == "run" and np.isnan(fused.standard_error)
+    np.testing.assert_allclose(fused.integral, reference.integral, rtol=1e-12)
+
+
+def test_fused_does_not_depend_on_threads():
+    from numba import get_num_threads, set_num_threads
+
+    kwargs = dict(n=48 * (3 * BLOCK + 17), rng=2)
+    many = integrate(exp_xyz, **kwargs)
+    threads = get_num_threads()
+    try:
+        set_num_threads(1)
+        one = integrate(exp_xyz, **kwargs)
+    finally:
+        set_num_threads(threads)
+    assert one == many  # bit for bit
+
+
+@pytest.mark.parametrize("name", ["exp", "exp_hemisphere", "cap", "quad_light", "shifted_cubic4", "sh4_0"])
+def test_suite_integrands_fused(name):
+    g = INTEGRANDS[name]
+    count = 48 if g.domain == "sphere" else 24
+    kwargs = dict(domain=g.domain, n=count * 3 * BLOCK, rng=5)
+    _close(integrate(g, **kwargs), integrate(g.f, **kwargs), rtol=1e-11)
+
+
+@pytest.mark.parametrize("name", sorted(INTEGRANDS))
+def test_suite_kernels_equal_f(name):
+    g = INTEGRANDS[name]
+    assert g.kernel is not None
+    d = ss.sample_hemisphere(24 * 40, rng=3) if g.domain == "hemisphere" else ss.sample_sphere(48 * 20, rng=3)
+    values = np.array([g.kernel(*w) for w in d])
+    np.testing.assert_allclose(values, g.f(d), rtol=1e-12, atol=1e-13)
+
+
+def test_vexp_within_one_ulp():
+    t = np.concatenate([np.linspace(-708, 709, 200_001), np.random.default_rng(0).normal(0, 3, 100_000)])
+    got = np.array([vexp(x) for x in t[:: 7]])
+    want = np.exp(t[:: 7])
+    assert np.all(np.abs(got - want) <= np.spacing(want))
+    assert np.isfinite(vexp(1e6)) and vexp(-1e6) >= 0
+
+
+def test_compiled_f_errors():
+    @njit
+    def two(x, y):
+        return x + y
+
+    @njit
+    def pair(x, y, z):
+        return (x, y)
+
+    @njit
+    def blows_up(x, y, z):
+        return np.sqrt(x)  # NaN for x < 0
+
+    with pytest.raises(TypeError, match="f\\(x, y, z\\) or f\\(w\\)"):
+        integrate(two, n=48)
+    with pytest.raises(TypeError, match="one real number"):
+        integrate(pair, n=48)
+    with pytest.raises(ValueError, match="non-finite"):
+        integrate(blows_up, n=48 * 16, rng=0)
+
+
+@pytest.mark.slow
+def test_distributed_ships_the_fused_kernel():
+    """distributed.integrate with a compiled f: bit for bit the single-process fused result."""
+    pytest.importorskip("distributed")
+    from symsphere import distributed
+
+    kwargs = dict(n=48 * (3 * BLOCK + 5), rng=8)
+    single = integrate(exp_xyz, **kwargs)
+    client = distributed.local_client(1)
+    try:
+        for chunk_blocks in (1, 2):
+            result = distributed.integrate(exp_xyz, client=client, chunk_blocks=chunk_blocks, **kwargs)
+            assert result == single
+        result = distributed.integrate(INTEGRANDS["exp"], client=client, **kwargs)
+        assert result == integrate(INTEGRANDS["exp"], **kwargs)
+    finally:
+        distributed.close_client(client)
