@@ -1,5 +1,7 @@
 """The integrator: closed forms within the interval, honest error bars, bounded memory, bad input."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.stats import qmc
@@ -141,3 +143,13 @@ def test_module_is_not_named_after_the_function():
     assert importlib.util.find_spec("symsphere.integrate") is None
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("symsphere.integrate")
+
+
+def test_sobol_balance_warning_once_at_the_callers_line():
+    """scipy's balance warning (n not a power of 2) is issued once, attributed to this file (issue 13, item 3)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        integrate(lambda d: d[:, 2] ** 2, n=48 * 3 * 8, points="sobol", rng=1)
+    balance = [w for w in caught if "balance" in str(w.message)]
+    assert len(balance) == 1
+    assert balance[0].filename == __file__

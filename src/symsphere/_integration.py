@@ -8,6 +8,7 @@ update), so the result does not depend on how the work is split.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -16,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import frames
-from ._blocks import fill_range
+from ._blocks import fill_range, warn_at_caller
 from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
 from ._validation import check_choice, check_count, check_normal, check_rng
@@ -213,10 +214,14 @@ def plan(
     n = check_count(n, "n", multiple=count * replicates)
     root = np.random.SeedSequence(check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64).tolist())
     orbits = n // (count * replicates)
-    sources = tuple(
-        BasePoints(points, np.random.default_rng(child), orbits, per_point=count * replicates)
-        for child in root.spawn(replicates)
-    )
+    with warnings.catch_warnings(record=True) as caught:  # e.g. scipy's Sobol' balance warning, once per replicate
+        warnings.simplefilter("always")
+        sources = tuple(
+            BasePoints(points, np.random.default_rng(child), orbits, per_point=count * replicates)
+            for child in root.spawn(replicates)
+        )
+    for message, category in dict.fromkeys((str(w.message), w.category) for w in caught):
+        warn_at_caller(message, category)  # once, at the user's line
     unit = "run" if engine is not None else ("orbit" if points == "random" else "replicate")
     return Plan(
         f=f,
