@@ -41,13 +41,18 @@ def check_choice(value: _T, name: str, choices: Sequence[object]) -> _T:
     return value
 
 
-def check_count(n: object, name: str = "n", multiple: int = 1) -> int:
-    """Return *n* as a positive int that is a multiple of *multiple*."""
+def check_count(n: object, name: str = "n", multiple: int = 1, maximum: int | None = None) -> int:
+    """Return *n* as a positive int that is a multiple of *multiple* and at most *maximum*.
+
+    *maximum* defaults to :data:`MAX_COUNT` (what index arithmetic in int64 allows); see
+    :func:`check_size` for the message.
+    """
     if isinstance(n, bool) or not isinstance(n, numbers.Integral):
-        raise TypeError(f"'{name}' must be an integer, got {type(n).__name__} {n!r}")
+        raise TypeError(f"'{name}' must be an integer, got {type(n).__name__} {_short(n)}")
     n = int(n)
     if n <= 0:
-        raise ValueError(f"'{name}' must be positive, got {n}")
+        raise ValueError(f"'{name}' must be positive, got {_short(n)}")
+    check_size(n, name, MAX_COUNT if maximum is None else maximum)
     if n % multiple:
         below = (n // multiple) * multiple
         above = below + multiple
@@ -57,6 +62,100 @@ def check_count(n: object, name: str = "n", multiple: int = 1) -> int:
             f"the nearest valid sizes are {nearest}"
         )
     return n
+
+
+def _short(value: object) -> str:
+    """repr of *value*, shortened (an int of 10**400 digits would flood a terminal)."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:25]}...{text[-10:]} ({len(text)} characters)"
+
+
+# ---------------------------------------------------------------------------
+# Size limits: the one place that says how large a run, an array or a degree may be
+# ---------------------------------------------------------------------------
+
+MAX_COUNT = 2**56
+"""Largest count of anything (directions, orbits, points, tasks) an argument may ask for: 48 times it
+still fits the int64 index arithmetic of the kernels (2**62)."""
+
+MAX_SOBOL_POINTS = 2**30
+"""Largest number of points of one scrambled Sobol' sequence (``scipy.stats.qmc.Sobol``: 30 bits)."""
+
+MAX_TASKS = 100_000
+"""Largest number of tasks of one Dask graph the library builds (building it takes seconds per 10**5)."""
+
+MAX_PATHS = 2**62
+"""Largest number of camera paths (width * height * spp) of one render: path indices are int64."""
+
+MAX_SH_DEGREE = 1000
+"""Largest degree l of a real spherical harmonic evaluated in floating point (:mod:`symsphere.harmonics`):
+above it the unnormalised recurrence overflows float64."""
+
+MAX_POLYNOMIAL_DEGREE = 2000
+"""Largest total degree of a monomial or polynomial integrated exactly (rational arithmetic grows as the
+degree squared in time)."""
+
+MAX_DIMENSIONS = 32
+"""Largest number of array dimensions (batch dimensions plus the last one) public functions accept:
+numpy's indexing and broadcasting are limited to 32 or 64 dimensions, depending on its version."""
+
+
+def check_size(value: int, name: str, limit: int, what: str = "") -> int:
+    """Return *value* if it is at most *limit*, else raise ValueError naming *name* and the limit.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_size
+    >>> check_size(48, "n", 2**56)
+    48
+    >>> check_size(48 * 2**64, "n", 2**56)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'n'=885443715538058477568 is too large; at most 72057594037927936 (2**56) is supported
+    """
+    if value > limit:
+        power = f" (2**{limit.bit_length() - 1})" if limit & (limit - 1) == 0 else ""
+        detail = f" {what}" if what else ""
+        raise ValueError(f"'{name}'={_short(value)} is too large{detail}; at most {limit}{power} is supported")
+    return value
+
+
+def check_sobol_size(points: object, total: int, per_point: int = 1) -> None:
+    """Raise ValueError if a Sobol' point set (by name or a ``scipy.stats.qmc.Sobol`` engine, counting the
+    points it has already given) would need more than :data:`MAX_SOBOL_POINTS` points for *total* points;
+    the message is in terms of the caller's ``n`` (``n = total * per_point``).
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_sobol_size
+    >>> check_sobol_size("sobol", 2**31, per_point=48)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'n'=103079215104 needs 2147483648 Sobol' points (n/48) but the sequence has 2**30: use n <= 51539607552, or points='random' or 'halton'
+    """
+    if isinstance(points, str):
+        if points != "sobol":
+            return
+        used = 0
+    elif type(points).__name__ == "Sobol":  # scipy.stats.qmc.Sobol (not imported here: 0.3 s)
+        used = int(getattr(points, "num_generated", 0))
+    else:
+        return
+    if used + total <= MAX_SOBOL_POINTS:
+        return
+    name, per = ("n", f" (n/{per_point})") if per_point > 1 else ("m", "")
+    already = f" after the engine's {used}" if used else ""
+    limit = (MAX_SOBOL_POINTS - used) * per_point
+    raise ValueError(
+        f"'{name}'={total * per_point} needs {total} Sobol' points{per}{already} but the sequence has 2**30: "
+        f"use {name} <= {limit}, or points='random' or 'halton'"
+    )
+
+
+def check_dimensions(arr: npt.NDArray[Any], name: str) -> None:
+    """Raise ValueError naming *name* if *arr* has more than :data:`MAX_DIMENSIONS` dimensions."""
+    if arr.ndim > MAX_DIMENSIONS:
+        raise ValueError(f"'{name}' has {arr.ndim} dimensions; at most {MAX_DIMENSIONS} are supported")
 
 
 def check_dtype(dtype: npt.DTypeLike, name: str = "dtype") -> np.dtype[Any]:
@@ -121,6 +220,7 @@ def as_float_array(a: object, name: str) -> FloatArray:
 def check_uv(uv: object, name: str = "uv") -> FloatArray:
     """Return points of the unit square as a float array of shape (..., 2)."""
     arr = as_float_array(uv, name)
+    check_dimensions(arr, name)
     if arr.ndim == 0 or arr.shape[-1] != 2:
         raise ValueError(f"'{name}' must have shape (..., 2), got {arr.shape}")
     if not np.all((arr >= 0) & (arr <= 1)):  # also rejects NaN
@@ -131,11 +231,51 @@ def check_uv(uv: object, name: str = "uv") -> FloatArray:
 def check_directions(d: object, name: str = "d") -> FloatArray:
     """Return finite vectors as a float array of shape (..., 3)."""
     arr = as_float_array(d, name)
+    check_dimensions(arr, name)
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise ValueError(f"'{name}' must have shape (..., 3), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"'{name}' must be finite (no NaN or inf)")
     return arr
+
+
+UNIT_TOLERANCE = 1e-3
+"""How far from 1 the norm of a direction given to a density or an inverse map may be (float32 rounding
+and user normalisation pass; a zero, a non-normalised or a mistyped vector does not)."""
+
+
+def check_unit_directions(d: object, name: str = "d") -> FloatArray:
+    """Return unit vectors as a float array of shape (..., 3): :func:`check_directions`, and every norm
+    within :data:`UNIT_TOLERANCE` of 1 (a density of a non-unit vector would be silently wrong).
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_unit_directions
+    >>> check_unit_directions([0.0, 0.6, 0.8]).tolist()
+    [0.0, 0.6, 0.8]
+    >>> check_unit_directions([0.0, 0.0, 2.0])
+    Traceback (most recent call last):
+        ...
+    ValueError: 'd' must be unit vectors (norm 1 within 0.001); got a norm of 2.0
+    """
+    arr = check_directions(d, name)
+    if arr.size:
+        wide = arr.astype(np.float64)
+        scale = np.max(np.abs(wide), axis=-1, keepdims=True)  # no overflow in the squares
+        with np.errstate(invalid="ignore", divide="ignore"):
+            norms = np.where(scale[..., 0] > 0, scale[..., 0] * np.sqrt(np.sum((wide / scale) ** 2, axis=-1)), 0.0)
+        bad = np.abs(norms - 1.0) > UNIT_TOLERANCE
+        if np.any(bad):
+            raise ValueError(
+                f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); "
+                f"got a norm of {float(norms[bad].flat[0]):.6g}"
+            )
+    return arr
+
+
+__all__ += ["MAX_COUNT", "MAX_DIMENSIONS", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
+__all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
+__all__ += ["check_sobol_size", "check_unit_directions"]
 
 
 # ---------------------------------------------------------------------------
@@ -312,10 +452,13 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
     arr = as_float_array(normal, name).astype(np.float64)
     if arr.shape != (3,):
         raise ValueError(f"'{name}' must be a 3-vector, got shape {arr.shape}")
-    norm = np.linalg.norm(arr)
-    if not np.isfinite(norm) or norm == 0:
+    if not np.all(np.isfinite(arr)) or not np.any(arr):
         raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {arr.tolist()}")
-    return arr / norm
+    # Scale by the largest component first: the norm of [1e200, 0, 0] or [1e-170, 0, 0] would
+    # overflow or underflow, but the direction is well defined.
+    scaled = arr / np.max(np.abs(arr))
+    unit: Float64Array = scaled / math.sqrt(float(scaled @ scaled))
+    return unit
 
 
 def check_seed(seed: int, name: str = "seed") -> int:

@@ -22,6 +22,8 @@ from .symmetry import fold
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
 
+_PLANE_ULPS = 16  # see hemisphere_pdf
+
 DEFAULT_CHUNK = 48 * 2**16
 """Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
 
@@ -245,8 +247,9 @@ def hemisphere_pdf(
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 24`` on the hemisphere about *normal*,
-        0 below it.
+        ``triangle_pdf(base, method) / 24`` on the closed hemisphere about *normal*,
+        0 below it.  Directions within 16 ulps (of *d*'s dtype) of the plane count as on
+        it, so that every direction :func:`sample_hemisphere` returns has a positive density.
 
     Examples
     --------
@@ -261,7 +264,10 @@ def hemisphere_pdf(
     if normal is not None:
         local = frames.to_local(local, frames.frame(normal))
     _, base = fold(local)
-    density = np.where(local[..., 2] >= 0, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
+    # The closed hemisphere, up to the rounding of a rotated direction in d's dtype: a sample on the
+    # equator (u = 0) rotated onto `normal` may come out a few ulps below the plane.
+    on = local[..., 2] >= -_PLANE_ULPS * np.finfo(d.dtype).eps
+    density = np.where(on, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
     return density.astype(d.dtype, copy=False)
 
 

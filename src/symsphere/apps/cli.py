@@ -11,14 +11,23 @@ Examples
     symsphere --version
 
 Exit status: 0 on success, 2 for invalid arguments (the message names the
-argument), 1 when the output cannot be written, 130 on Ctrl-C.  No partial
-output file is ever left behind.
+argument), 1 when the output cannot be written, 130 on Ctrl-C (SIGINT), 143 on
+SIGTERM (``kill``, ``timeout``, batch schedulers, containers) and 129 on SIGHUP.
+Every error is one line on stderr, never a traceback (set the environment
+variable ``SYMSPHERE_TRACEBACK=1`` to see one for an unexpected error).  No
+partial output file is ever left behind: the files of a run appear together,
+complete, or not at all.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import math
+import os
+import signal
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -43,6 +52,35 @@ _DEMO_DEFAULT_N = 48 * 2**14
 
 class _UsageError(Exception):
     """An invalid combination of arguments that argparse cannot express."""
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised in the main thread like Ctrl-C, so that the same clean-up runs."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+_CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated(signum)
+
+
+@contextlib.contextmanager
+def _signals_as_interrupts():
+    """While the command runs, SIGTERM and SIGHUP raise _Terminated (the main thread only: signal's rule)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signum: signal.signal(signum, _raise_terminated) for signum in _CLEAN_EXIT_SIGNALS}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -229,6 +267,8 @@ def _cluster_client(args):
     """A Dask client for --workers / --scheduler, or None to run in this process."""
     if args.workers is None and args.scheduler is None:
         return None
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise _UsageError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     from .. import distributed  # function-level: dask is slow to import and optional
 
     if args.scheduler is not None:
@@ -257,7 +297,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         0 on success, 2 for invalid arguments (the message on stderr names the argument), 1 when
-        the output cannot be written, 130 on Ctrl-C.  Errors are reported, not raised.
+        the output cannot be written, 130 on Ctrl-C, 143 on SIGTERM (129 on SIGHUP), in each case
+        with one line on stderr and no output file.  Errors are reported, not raised.
 
     Examples
     --------
@@ -283,17 +324,39 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     prog = f"symsphere {args.verb}"
     try:
-        return args.handler(args)
-    except (_UsageError, ValueError, TypeError) as exc:
-        # The library's validators name the argument; a traceback would add nothing.
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"{prog}: error: {_describe_os_error(exc)}", file=sys.stderr)
-        return 1
+        with _signals_as_interrupts():
+            return args.handler(args)
+    except _Terminated as exc:
+        name = signal.Signals(exc.signum).name
+        print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
         print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
         return 130
+    except (_UsageError, ValueError, TypeError) as exc:
+        # The library's validators name the argument; a traceback would add nothing.
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{prog}: error: {_one_line(_describe_os_error(exc))}", file=sys.stderr)
+        return 1
+    except MemoryError as exc:
+        print(f"{prog}: error: out of memory{': ' + _one_line(exc) if str(exc) else ''}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # a bug, or a library below failing in a new way: still one line
+        if os.environ.get("SYMSPHERE_TRACEBACK"):
+            raise
+        print(
+            f"{prog}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            "(set SYMSPHERE_TRACEBACK=1 for the traceback)",
+            file=sys.stderr,
+        )
+        return 1
+
+
+def _one_line(exc: object) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 500 else text[:480] + " ..."
 
 
 def _run_sample(args) -> int:
@@ -405,8 +468,8 @@ def _run_render(args) -> int:
         raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
     if args.seed is not None:
         check_seed(args.seed, "--seed")
-    if not args.exposure > 0:  # checked by save_png too, but only after the render: fail first
-        raise _UsageError(f"--exposure must be positive, got {args.exposure}")
+    if not (math.isfinite(args.exposure) and args.exposure > 0):  # checked by save_png too, but after the render
+        raise _UsageError(f"--exposure must be a positive finite number, got {args.exposure}")
     scene_file = Path(args.scene)
     if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
         raise _UsageError(f"--scene: file {args.scene!r} does not exist")
@@ -434,10 +497,7 @@ def _run_render(args) -> int:
             result = distributed.render(args.scene, client=client, **options)
     finally:
         _close_client(client)
-    try:
-        paths = write_outputs(result, out, exposure=args.exposure)
-    except OSError as exc:
-        raise OSError(exc.errno, exc.strerror, args.out) from exc
+    paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
     method = f" ({result.method})" if result.method else ""
     print(
         f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp, {result.integrator} integrator, "

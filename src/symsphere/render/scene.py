@@ -144,7 +144,13 @@ def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
     >>> dielectric(1.33).ior
     1.33
     """
-    return Material("dielectric", _rgb(tint, "tint"), ior=ior)
+    try:
+        index = number(ior, "ior")
+    except SceneError as exc:
+        raise ValueError(str(exc)) from None
+    if not index > 0:
+        raise ValueError(f"ior must be positive, got {index!r}")
+    return Material("dielectric", _rgb(tint, "tint"), ior=index)
 
 
 @dataclass(frozen=True)
