@@ -18,7 +18,7 @@ import numpy.typing as npt
 from . import frames
 from ._blocks import fill_range
 from ._kernels import fill_orbits
-from ._validation import check_choice, check_count, check_normal, check_rng
+from ._validation import check_choice, check_count, check_normal, check_real_values, check_rng
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
@@ -198,7 +198,7 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
 
 def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
     """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
-    values = np.asarray(f(directions), dtype=np.float64)
+    values = check_real_values(f(directions), "f")  # complex: TypeError, not a dropped imaginary part
     m = len(directions)
     if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m)):
         raise ValueError(f"'f' must return shape (m,) or (m, k) for directions of shape ({m}, 3), got {values.shape}")

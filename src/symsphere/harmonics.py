@@ -98,7 +98,7 @@ def real_sh_basis(lmax: int, d: npt.ArrayLike) -> Float64Array:
     >>> real_sh_basis(8, [[0.0, 0.6, 0.8]]).shape
     (1, 81)
     """
-    lmax, _ = check_lm(lmax, 0)
+    lmax, _ = check_lm(lmax, 0, "lmax")
     d = check_directions(d, "d").astype(np.float64)
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
     cols = [_sh(l, m, x, y, z) for l in range(lmax + 1) for m in range(-l, l + 1)]

@@ -35,7 +35,7 @@ import numpy.typing as npt
 from scipy import integrate, special
 
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
-from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive
+from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive, check_real_values
 from .harmonics import (
     cubic_harmonic,
     evaluate_polynomial,
@@ -297,7 +297,10 @@ def orbit_average(
         raise TypeError(f"'f' must be callable, got {type(f).__name__}")
     count = orbit_size(domain)
     images = orbit(p, domain)
-    values = np.asarray(f(images.reshape(-1, 3)), dtype=np.float64)
+    values = check_real_values(f(images.reshape(-1, 3)), "f")  # NaN, inf, complex: an error, not a silent mean
+    expected = (int(np.prod(images.shape[:-1])),)
+    if values.shape != expected:
+        raise ValueError(f"'f' must return one value per direction, shape {expected}, got {values.shape}")
     mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
     return mean
 

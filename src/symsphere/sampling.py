@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _blocks, frames
-from ._validation import check_count, check_directions, check_normal, check_out
+from ._validation import check_count, check_normal, check_out, check_unit_directions
 from .maps import get_map
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import fold
@@ -225,7 +225,7 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     >>> float(sphere_pdf([0.0, 0.6, -0.8])) * 4 * 3.141592653589793
     1.0
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     triangle_map = get_map(method)
     _, base = fold(d.astype(np.float64))
     return (triangle_map.pdf(base.astype(np.float64, copy=False)) / 48).astype(d.dtype, copy=False)
@@ -257,7 +257,7 @@ def hemisphere_pdf(
     >>> hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * 3.141592653589793
     array([1., 0.])
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     normal = check_normal(normal)
     triangle_map = get_map(method)
     local: FloatArray = d.astype(np.float64)
