@@ -433,6 +433,7 @@ def _run_integrate(args) -> int:
     client = _cluster_client(args)
     try:
         if client is None:
+            _print_estimate(integrand.f, kwargs)
             result = integrate(integrand.f, **kwargs)
         else:
             from .. import distributed  # function-level: dask is slow to import and optional
@@ -449,6 +450,32 @@ def _run_integrate(args) -> int:
     print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
     print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
     return 0
+
+
+_ESTIMATE_ABOVE = 48 * 2**22  # evaluations (~2 s): longer in-process runs first say how long they will take
+
+
+def _print_estimate(f, kwargs):
+    """For a long in-process integration: time a pilot of 48 * 2**14 evaluations, print the estimate."""
+    n = kwargs["n"]
+    if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
+        return
+    pilot = dict(kwargs, n=48 * 2**14, points="random", replicates=None, rng=0)
+    start = time.perf_counter()
+    integrate(f, **pilot)  # the arguments are checked at the real call: errors appear there, at once
+    rate = pilot["n"] / max(time.perf_counter() - start, 1e-9)
+    print(
+        f"symsphere integrate: {n} evaluations, estimated {_duration(n / rate)} at {rate:.3g} evaluations/s; "
+        "Ctrl-C stops",
+        file=sys.stderr,
+    )
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("days", 86400.0), ("hours", 3600.0), ("minutes", 60.0)):
+        if seconds >= 2 * size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
 
 
 def _run_demo(args) -> int:
