@@ -34,9 +34,10 @@ def prepare(
     points: PointsLike,
     rng: RNGLike,
     dtype: DTypeLike,
+    name: str = "n",
 ) -> tuple[int, np.dtype[np.floating[Any]], MapMethod, BasePoints, Float64Array | None]:
-    """Validate; return (n, dtype, method, base point source, frame or None)."""
-    n = check_count(n, "n", multiple=count)
+    """Validate (error messages call *n* by *name*); return (n, dtype, method, base point source, frame or None)."""
+    n = check_count(n, name, multiple=count)
     dtype = check_dtype(dtype)
     get_map(method)
     source = BasePoints(points, rng, n // count, per_point=count)

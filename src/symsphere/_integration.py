@@ -18,7 +18,7 @@ import numpy.typing as npt
 from . import frames
 from ._blocks import fill_range
 from ._kernels import fill_orbits
-from ._validation import check_choice, check_count, check_normal, check_real_values, check_rng
+from ._validation import check_choice, check_count, check_normal, check_real_values, check_rng, short_repr
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
@@ -141,11 +141,11 @@ def plan(
     if normal is not None and domain != "hemisphere":
         raise ValueError("'normal' is only valid with domain='hemisphere'")
     if not (isinstance(confidence_level, float | int) and 0 < confidence_level < 1):
-        raise ValueError(f"'confidence_level' must be in (0, 1), got {confidence_level!r}")
+        raise ValueError(f"'confidence_level' must be in (0, 1), got {short_repr(confidence_level)}")
     if engine is not None or points == "random":
-        if replicates not in (None, 1):
+        if not (replicates is None or (type(replicates) is int and replicates == 1)):  # noqa: E721 (no bool, no array)
             kind = "a QMCEngine" if engine is not None else "points='random'"
-            raise ValueError(f"'replicates' must be None or 1 with {kind}, got {replicates!r}")
+            raise ValueError(f"'replicates' must be None or 1 with {kind}, got {short_repr(replicates)}")
         replicates = 1
     else:
         replicates = DEFAULT_REPLICATES if replicates is None else check_count(replicates, "replicates")

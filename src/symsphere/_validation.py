@@ -37,7 +37,7 @@ def check_choice(value: _T, name: str, choices: Sequence[object]) -> _T:
     """Return *value* if it is one of *choices*, else raise ValueError."""
     if not isinstance(value, str) or value not in choices:
         allowed = "{" + ", ".join(repr(c) for c in choices) + "}"
-        raise ValueError(f"{value!r} is not a valid {name}; use one of {allowed}")
+        raise ValueError(f"{_short(value)} is not a valid {name}; use one of {allowed}")
     return value
 
 
@@ -64,10 +64,27 @@ def check_count(n: object, name: str = "n", multiple: int = 1, maximum: int | No
     return n
 
 
-def _short(value: object) -> str:
-    """repr of *value*, shortened (an int of 10**400 digits would flood a terminal)."""
-    text = repr(value)
+def short_repr(value: object) -> str:
+    """repr of *value* on one line, shortened: an array's repr spans lines, an int of 10**400 would flood a
+    terminal, and one of 10**5000 has no repr at all.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere._validation import short_repr
+    >>> short_repr(np.zeros((2, 3)))
+    'array([[0., 0., 0.], [0., 0., 0.]])'
+    """
+    if isinstance(value, np.ndarray) and value.size > 12:
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
+    try:
+        text = " ".join(repr(value).split())
+    except (ValueError, RecursionError):  # an int beyond sys.get_int_max_str_digits(), a deep nest
+        return f"a {type(value).__name__}"
     return text if len(text) <= 60 else f"{text[:25]}...{text[-10:]} ({len(text)} characters)"
+
+
+_short = short_repr
 
 
 # ---------------------------------------------------------------------------
@@ -194,7 +211,7 @@ def check_dtype(dtype: npt.DTypeLike, name: str = "dtype") -> np.dtype[Any]:
     try:
         dt = np.dtype(dtype)
     except TypeError as exc:
-        raise TypeError(f"'{name}' must be float32 or float64, got {dtype!r}") from exc
+        raise TypeError(f"'{name}' must be float32 or float64, got {_short(dtype)}") from exc
     if dt not in _DTYPES:
         raise TypeError(f"'{name}' must be float32 or float64, got {dt}")
     return dt
@@ -306,7 +323,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
 
 __all__ += ["MAX_COUNT", "MAX_DIMENSIONS", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
 __all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
-__all__ += ["check_real_values", "check_sobol_size", "check_unit_directions"]
+__all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
 
 # ---------------------------------------------------------------------------
@@ -351,7 +368,7 @@ def check_pdf(pdf: object) -> Density:
 
 def check_bins(bins: Any) -> tuple[int, int]:
     """Return *bins* as a pair ``(n_phi, n_cos)`` of positive ints."""
-    msg = f"'bins' must be a pair (n_phi, n_cos) of positive integers, got {bins!r}"
+    msg = f"'bins' must be a pair (n_phi, n_cos) of positive integers, got {_short(bins)}"
     try:
         pair = tuple(bins)
     except TypeError as exc:
@@ -403,7 +420,7 @@ def check_positive(value: object, name: str) -> float:
     for inf and NaN.
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
+        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
     if value <= 0:
         raise ValueError(f"'{name}' must be positive, got {value}")
     return float(value)
@@ -412,7 +429,7 @@ def check_positive(value: object, name: str) -> float:
 def check_nonnegative(value: object, name: str) -> float:
     """Return *value* as a float >= 0; TypeError unless it is a finite real number."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
+        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
     if value < 0:
         raise ValueError(f"'{name}' must be >= 0, got {value}")
     return float(value)
@@ -451,13 +468,16 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
         raise TypeError(f"'coeffs' must be a mapping {{(a, b, c): coefficient}}, got {type(coeffs).__name__}")
     for key in coeffs:
         if not (isinstance(key, tuple) and len(key) == 3):
-            raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {key!r}")
+            raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {_short(key)}")
         check_exponents(*key)
     return coeffs
 
 
 def check_triangle(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Float64Array:
     """Return the vertices of a non-degenerate spherical triangle as unit vectors, shape (3, 3)."""
+    for v, name in ((a, "a"), (b, "b"), (c, "c")):
+        if v is None:
+            raise TypeError(f"'{name}' must be a 3-vector (a vertex of the triangle), got None")
     verts = np.stack([check_normal(v, name) for v, name in ((a, "a"), (b, "b"), (c, "c"))])
     A, B, C = verts
     # Its area by Van Oosterom & Strackee (1983): tan(E/2) = |A.(B x C)| / (1 + A.B + B.C + C.A).
@@ -511,7 +531,7 @@ def check_seed(seed: int, name: str = "seed") -> int:
     3
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"'{name}' must be a non-negative integer, got {seed!r}")
+        raise ValueError(f"'{name}' must be a non-negative integer, got {_short(seed)}")
     return int(seed)
 
 

@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Domain, Float64Array, Polynomial
-from ._validation import check_choice, check_coeffs, check_directions, check_exponents, check_lm
+from ._validation import check_choice, check_coeffs, check_directions, check_exponents, check_lm, short_repr
 
 __all__ = [
     "real_sh",
@@ -243,7 +243,7 @@ def cubic_harmonic(degree: Literal[4, 6, 8]) -> dict[tuple[int, int, int], float
     (10, 0.0)
     """
     if isinstance(degree, bool) or not isinstance(degree, numbers.Integral) or degree not in (4, 6, 8):
-        raise ValueError(f"'degree' must be 4, 6 or 8, got {degree!r}")
+        raise ValueError(f"'degree' must be 4, 6 or 8, got {short_repr(degree)}")
     terms = {
         4: (((4, 0, 0), 1.0), ((2, 2, 0), -3.0)),
         6: (((6, 0, 0), 1.0), ((4, 2, 0), -7.5), ((2, 2, 2), 90.0)),

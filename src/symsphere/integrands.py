@@ -253,6 +253,8 @@ def sphere_light_irradiance(
     >>> sphere_light_irradiance([0, 0, 1], 2.0, 1.0) / math.pi   # sin^2(alpha) = 1/4
     0.25
     """
+    if center is None:
+        raise TypeError("'center' must be a 3-vector (the direction to the sphere), got None")
     c = check_normal(center, "center")
     distance = check_positive(distance, "distance")
     radius = check_positive(radius, "radius")

@@ -304,7 +304,7 @@ def _iterate(
     out: FloatArray | None,
 ) -> Iterator[FloatArray]:
     # Validate now, not at the first next(): a generator function would defer the errors.
-    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype)
+    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype, "n_total")
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
     total = n_total // count
     if out is not None:

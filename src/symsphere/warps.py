@@ -370,7 +370,7 @@ def _public_forward(forward, uv):
 
 
 def _public_inverse(inverse, d, hemisphere=False):
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")  # a zero or non-unit vector would map to NaN or a wrong point
     d64 = d.astype(np.float64)
     if hemisphere and np.any(d64[..., 2] < -1e-12):
         raise ValueError("'d' must have z >= 0 (directions of the hemisphere about (0, 0, 1))")
