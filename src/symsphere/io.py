@@ -449,7 +449,7 @@ def stream_directions(
                     data = np.ascontiguousarray(block, dtype=file_dtype)
                     if data.ndim != 2 or data.shape[1] != 3 or written + len(data) > n:
                         raise RuntimeError(f"expected {n} directions in blocks of shape (m, 3), got {data.shape}")
-                    handle.write(memoryview(data).cast("B"))
+                    handle.write(data.data.cast("B"))
                     written += len(data)
                     pages.written(handle)
                     if progress is not None:
