@@ -56,7 +56,7 @@ VALID = {
     "n": 48, "n_total": 48, "chunk": 48, "m": 1, "l": 2, "lmax": 3, "a": 2, "b": 0, "c": 0,
     "d": _T0_POINT, "p": _T0_POINT, "uv": np.array([[0.25, 0.5]]), "normal": [0.0, 0.0, 1.0],
     "method": "equal_area", "points": "random", "rng": 1, "dtype": np.float64, "domain": "sphere",
-    "coeffs": {(2, 0, 0): 1.0}, "degree": 4, "f": lambda d: d[:, 0] ** 2, "pdf": stats.uniform_pdf(),
+    "coeffs": {(2, 0, 0): 1.0}, "degree": 4, "f": lambda d: np.tanh(d[:, 0]), "pdf": stats.uniform_pdf(),
     "samples": _SAMPLES, "bins": (4, 4), "directions": _SAMPLES[:48], "orbit_size": 48,
     "vertices": peers.T0_VERTICES, "center": [0.0, 0.0, 3.0], "distance": 3.0, "radius": 1.0, "radiance": 1.0,
     "local": np.array([[0.0, 0.6, 0.8]]), "world": np.array([[0.0, 0.6, 0.8]]), "basis": np.eye(3),

@@ -218,7 +218,10 @@ def lambert_irradiance(
     sin = np.linalg.norm(cross, axis=1)
     theta = np.arctan2(sin, np.sum(u * w, axis=1))
     gamma_n = (cross @ n) / np.where(sin > 0, sin, 1.0)
-    return 0.5 * radiance * abs(math.fsum((theta * gamma_n).tolist()))
+    irradiance = 0.5 * radiance * abs(math.fsum((theta * gamma_n).tolist()))
+    if not math.isfinite(irradiance):
+        raise ValueError(f"'radiance'={radiance} is too large: the irradiance overflows float64")
+    return irradiance
 
 
 def sphere_light_irradiance(
@@ -264,7 +267,10 @@ def sphere_light_irradiance(
     sin_alpha = radius / distance
     if math.asin(sin_alpha) + math.acos(min(1.0, float(c[2]))) > math.pi / 2 + 1e-15:
         raise ValueError("the light must lie entirely above the horizon: beta + alpha <= pi/2")
-    return math.pi * radiance * sin_alpha**2 * float(c[2])
+    irradiance = math.pi * radiance * sin_alpha**2 * float(c[2])
+    if not math.isfinite(irradiance):
+        raise ValueError(f"'radiance'={radiance} is too large: the irradiance overflows float64")
+    return irradiance
 
 
 def orbit_average(

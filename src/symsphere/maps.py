@@ -191,9 +191,11 @@ def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> Fl
     p = check_directions(p, "p")
     triangle_map = get_map(method)
     p64 = p.astype(np.float64)
-    tol = 8 * np.finfo(p.dtype).eps * np.maximum(np.linalg.norm(p64, axis=-1), 1.0)
     x, y, z = p64[..., 0], p64[..., 1], p64[..., 2]
-    if not np.all((z - x >= -tol) & (x - y >= -tol) & (y >= -tol)):
+    with np.errstate(over="ignore"):  # a huge vector: rejected as non-unit below
+        tol = 8 * np.finfo(p.dtype).eps * np.maximum(np.linalg.norm(p64, axis=-1), 1.0)
+        inside = np.all((z - x >= -tol) & (x - y >= -tol) & (y >= -tol))
+    if not inside:
         raise ValueError("'p' must lie in the triangle T0 = {z >= x >= y >= 0}")
     check_unit_directions(p, "p")  # a zero or non-unit vector would map to NaN or a wrong point
     return triangle_map.inverse(p64).astype(p.dtype, copy=False)

@@ -64,7 +64,7 @@ def rmse(estimates: npt.ArrayLike, exact: float | npt.ArrayLike) -> np.ndarray:
         try:
             error: npt.NDArray[Any] = np.sqrt(np.mean(deviation**2, axis=-1))
         except FloatingPointError:
-            raise ValueError("'estimates' are too large: their squared errors overflow float64") from None
+            raise ValueError("'estimates' and 'exact' are too far apart: their squared errors overflow float64") from None
     return error
 
 
