@@ -244,3 +244,57 @@ def test_direction_functions_keep_the_batch_shape(name, function, argument, tail
     if tail is not None:
         assert result.shape == d.shape[:-1] + tail, (name, d.shape, result.shape)
         assert result.dtype in (np.float32, np.float64)
+
+
+# --- the renderer's inputs: images and scene files --------------------------------------------------
+
+JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=4) | st.sampled_from([10**400, -(10**40)]),
+    lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=4), children, max_size=4),
+    max_leaves=12,
+)
+SCENE_PLACES = [
+    ("name",), ("camera", "position"), ("camera", "look_at"), ("camera", "fov"), ("camera", "up"), ("camera", "near"),
+    ("materials", "m"), ("materials", "m", "type"), ("materials", "m", "albedo"), ("materials", "m", "emission"),
+    ("spheres",), ("spheres", 0, "radius"), ("spheres", 0, "center"), ("spheres", 0, "clip"),
+    ("spheres", 0, "material"), ("settings",), ("settings", "max_depth"), ("settings", "epsilon"), ("extra",),
+]  # fmt: skip
+
+
+def _valid_scene():
+    return {
+        "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 40},
+        "materials": {"m": {"type": "diffuse", "albedo": 0.5, "emission": 1}},
+        "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "m"}],
+    }
+
+
+@given(place=st.sampled_from(SCENE_PLACES), value=JSON)
+def test_scene_from_dict_accepts_or_names_the_field(place, value):
+    from symsphere.render import SceneError, scene_from_dict
+
+    data = _valid_scene()
+    target = data
+    for key in place[:-1]:
+        target = target.setdefault(key, {}) if isinstance(key, str) else target[key]
+    target[place[-1]] = value
+    try:
+        scene = scene_from_dict(data, source="fuzz.json")
+    except SceneError as exc:
+        message = str(exc)
+        assert message.startswith("scene file 'fuzz.json': ") and "\n" not in message and len(message) < 600
+        return
+    arrays = scene.arrays(4, 4)  # the kernels' tables (-inf marks "no clip plane"): no NaN
+    assert all(_all_finite(np.asarray(v), allow_inf=True) for v in arrays.values())
+
+
+@given(image=st.one_of(ODD, ARRAYS, FLOAT_ARRAYS), exposure=st.one_of(st.just(1.0), ODD))
+def test_tonemap_returns_8_bit_pixels_or_names_the_argument(image, exposure):
+    from symsphere.render import tonemap
+
+    try:
+        pixels = tonemap(image, exposure)
+    except (ValueError, TypeError) as exc:
+        assert "'image'" in str(exc) or "'exposure'" in str(exc), str(exc)
+        return
+    assert pixels.dtype == np.uint8 and pixels.shape == np.shape(image)

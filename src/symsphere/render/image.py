@@ -41,7 +41,10 @@ IMAGE_SUFFIXES = (".png", ".pfm", ".npy")
 
 
 def _check_image(image, name="image") -> np.ndarray:
-    image = np.asarray(image)
+    try:
+        image = np.asarray(image)
+    except (TypeError, ValueError):
+        raise TypeError(f"'{name}' must be an array of shape (height, width, 3)") from None
     if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 1 or image.shape[1] < 1:
         raise ValueError(f"'{name}' must have shape (height, width, 3), got {image.shape}")
     if not np.issubdtype(image.dtype, np.floating):
