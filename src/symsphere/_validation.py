@@ -113,6 +113,13 @@ MAX_POLYNOMIAL_DEGREE = 10_000
 """Largest total degree a + b + c of a monomial integrated exactly (:mod:`symsphere.harmonics`: rational
 arithmetic whose cost grows faster than the degree squared; 10**4 takes ~0.05 s, 10**7 would take hours)."""
 
+MAX_BINS = 2**20
+"""Largest number of cells (n_phi * n_cos) of a chi-square binning (:mod:`symsphere.stats`): the expected
+counts are integrated cell by cell, and a million cells is already far beyond any sample's power."""
+
+MAX_QUADRATURE_ORDER = 64
+"""Largest Gauss-Legendre order per cell and direction for the expected counts (the default is 12)."""
+
 MAX_DIMENSIONS = 32
 """Largest number of array dimensions (batch dimensions plus the last one) public functions accept:
 numpy's indexing and broadcasting are limited to 32 or 64 dimensions, depending on its version."""
@@ -321,7 +328,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     return arr
 
 
-__all__ += ["MAX_COUNT", "MAX_DIMENSIONS", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
+__all__ += ["MAX_BINS", "MAX_COUNT", "MAX_DIMENSIONS", "MAX_QUADRATURE_ORDER", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
 __all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
 __all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
@@ -380,6 +387,7 @@ def check_bins(bins: Any) -> tuple[int, int]:
             raise TypeError(msg)
         if b <= 0:
             raise ValueError(msg)
+    check_size(int(pair[0]) * int(pair[1]), "bins", MAX_BINS, "(n_phi * n_cos cells)")
     return (int(pair[0]), int(pair[1]))
 
 

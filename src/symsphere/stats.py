@@ -33,6 +33,7 @@ from ._validation import (
     check_bins,
     check_choice,
     check_count,
+    MAX_QUADRATURE_ORDER,
     check_directions,
     check_open_unit,
     check_pdf,
@@ -266,7 +267,7 @@ def chi2_test(
     significance = check_open_unit(significance, "significance")
     test_count = check_count(test_count, "test_count")
     min_expected = check_positive_real(min_expected, "min_expected")
-    quadrature_order = check_count(quadrature_order, "quadrature_order")
+    quadrature_order = check_count(quadrature_order, "quadrature_order", maximum=MAX_QUADRATURE_ORDER)
     n = d.shape[0]
     shape = _default_bins(domain, n) if bins is None else check_bins(bins)
     threshold = _sidak(significance, test_count)
