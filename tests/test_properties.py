@@ -96,6 +96,17 @@ TRUSTED = {"frame", "frame_rows", "to_world", "to_local", "cosine_wedge_point", 
 MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module)
 
 
+@pytest.fixture(autouse=True, scope="module")
+def _kernels_compiled():
+    # Compile (or load from the disk cache) every kernel specialisation before the deadlines apply:
+    # a first float32 call may take seconds.
+    for dtype in (np.float32, np.float64):
+        for points in ("random", "halton"):
+            symsphere.sample_sphere(48, points=points, rng=1, dtype=dtype)
+            for normal in (None, [0.0, 1.0, 0.0]):
+                symsphere.sample_hemisphere(24, normal=normal, points=points, rng=1, dtype=dtype)
+
+
 def _public_functions():
     seen, found = set(), []
     for module in MODULES:
