@@ -302,7 +302,7 @@ def test_absurd_sizes_fail_fast_naming_the_argument():
 
     _fails_fast(lambda: symsphere.sample_sphere(48 * 2**64), ValueError, r"'n'=.* is too large")
     _fails_fast(lambda: symsphere.integrate(lambda d: d[:, 0], n=48 * 2**64), ValueError, "'n'")
-    _fails_fast(lambda: symsphere.iter_sphere(48 * 2**64), ValueError, "'n'")
+    _fails_fast(lambda: symsphere.iter_sphere(48 * 2**64), ValueError, "'n_total'")
     _fails_fast(lambda: render("cornell", spp=10**15), ValueError, r"'spp'=1000000000000000 is too large")
     _fails_fast(lambda: harmonics.sh_polynomial(10**5, 0), ValueError, "'l'")
     _fails_fast(lambda: harmonics.monomial_integral(10**7, 0, 0), ValueError, r"'a \+ b \+ c'")

@@ -372,6 +372,7 @@ def _run_sample(args) -> int:
     seed = check_seed(seed, "--seed")
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
     count = 48 if args.domain == "sphere" else 24
+    check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
     chunk = args.chunk if args.chunk is not None else count * 2**16
     if args.domain == "sphere":
         iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
