@@ -145,11 +145,11 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     """
     from distributed import as_completed
 
-    _check_client(client)
     work = plan(f, **_integrate_arguments(kwargs))
     chunk_blocks = check_count(chunk_blocks, "chunk_blocks")
     _check_tasks(work.replicates * -(-work.blocks_per_replicate // chunk_blocks), "chunk_blocks",
                  f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}")
+    _check_client(client)  # after the arguments of the run, before any work
     tasks = [
         (replicate, first, min(first + chunk_blocks, work.blocks_per_replicate))
         for replicate in range(work.replicates)
@@ -220,10 +220,10 @@ def render(
 
     from .render.renderer import plan_passes
 
-    _check_client(client)
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     passes_per_task = check_count(passes_per_task, "passes_per_task")
     _check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
+    _check_client(client)
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
     with _client_or_local(client) as active:
         start = time.perf_counter()
