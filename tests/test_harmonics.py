@@ -130,7 +130,7 @@ def test_integrands_reexports_the_building_blocks():
         (lambda: H.real_sh(1.5, 0, [0, 0, 1]), TypeError, "'l'"),
         (lambda: H.real_sh(2, None, [0, 0, 1]), TypeError, "'m'"),
         (lambda: H.real_sh(2, 0, [0, 1]), ValueError, "'d'"),
-        (lambda: H.real_sh_basis(-2, [0, 0, 1]), ValueError, "'l'"),
+        (lambda: H.real_sh_basis(-2, [0, 0, 1]), ValueError, "'lmax'"),
         (lambda: H.sh_polynomial(3, -4), ValueError, "'m'"),
         (lambda: H.monomial_integral(-1, 0, 0), ValueError, "'a'"),
         (lambda: H.monomial_integral(0, 1.0, 0), TypeError, "'b'"),

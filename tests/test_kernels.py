@@ -156,5 +156,5 @@ def test_iter_hemisphere_equals_one_shot_with_normal_and_float32():
 def test_iter_validates_eagerly():
     with pytest.raises(ValueError, match="'chunk'=50 is not a multiple of 48"):
         iter_sphere(480, chunk=50)
-    with pytest.raises(ValueError, match="'n'=10 is not a multiple of 24"):
+    with pytest.raises(ValueError, match="'n_total'=10 is not a multiple of 24"):
         iter_hemisphere(10)

@@ -20,7 +20,7 @@ from . import frames
 from ._blocks import fill_range, warn_at_caller
 from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
-from ._validation import check_choice, check_count, check_normal, check_rng
+from ._validation import check_choice, check_count, check_normal, check_real_values, check_rng, short_repr
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
@@ -203,11 +203,11 @@ def plan(
     if normal is not None and domain != "hemisphere":
         raise ValueError("'normal' is only valid with domain='hemisphere'")
     if not (isinstance(confidence_level, float | int) and 0 < confidence_level < 1):
-        raise ValueError(f"'confidence_level' must be in (0, 1), got {confidence_level!r}")
+        raise ValueError(f"'confidence_level' must be in (0, 1), got {short_repr(confidence_level)}")
     if engine is not None or points == "random":
-        if replicates not in (None, 1):
+        if not (replicates is None or (type(replicates) is int and replicates == 1)):  # noqa: E721 (no bool, no array)
             kind = "a QMCEngine" if engine is not None else "points='random'"
-            raise ValueError(f"'replicates' must be None or 1 with {kind}, got {replicates!r}")
+            raise ValueError(f"'replicates' must be None or 1 with {kind}, got {short_repr(replicates)}")
         replicates = 1
     else:
         replicates = DEFAULT_REPLICATES if replicates is None else check_count(replicates, "replicates")
@@ -284,7 +284,7 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
 
 def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
     """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
-    values = np.asarray(f(directions), dtype=np.float64)
+    values = check_real_values(f(directions), "f")  # complex: TypeError, not a dropped imaginary part
     m = len(directions)
     if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m)):
         raise ValueError(f"'f' must return shape (m,) or (m, k) for directions of shape ({m}, 3), got {values.shape}")

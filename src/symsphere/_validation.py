@@ -37,17 +37,22 @@ def check_choice(value: _T, name: str, choices: Sequence[object]) -> _T:
     """Return *value* if it is one of *choices*, else raise ValueError."""
     if not isinstance(value, str) or value not in choices:
         allowed = "{" + ", ".join(repr(c) for c in choices) + "}"
-        raise ValueError(f"{value!r} is not a valid {name}; use one of {allowed}")
+        raise ValueError(f"{_short(value)} is not a valid {name}; use one of {allowed}")
     return value
 
 
-def check_count(n: object, name: str = "n", multiple: int = 1) -> int:
-    """Return *n* as a positive int that is a multiple of *multiple*."""
+def check_count(n: object, name: str = "n", multiple: int = 1, maximum: int | None = None) -> int:
+    """Return *n* as a positive int that is a multiple of *multiple* and at most *maximum*.
+
+    *maximum* defaults to :data:`MAX_COUNT` (what index arithmetic in int64 allows); see
+    :func:`check_size` for the message.
+    """
     if isinstance(n, bool) or not isinstance(n, numbers.Integral):
-        raise TypeError(f"'{name}' must be an integer, got {type(n).__name__} {n!r}")
+        raise TypeError(f"'{name}' must be an integer, got {type(n).__name__} {_short(n)}")
     n = int(n)
     if n <= 0:
-        raise ValueError(f"'{name}' must be positive, got {n}")
+        raise ValueError(f"'{name}' must be positive, got {_short(n)}")
+    check_size(n, name, MAX_COUNT if maximum is None else maximum)
     if n % multiple:
         below = (n // multiple) * multiple
         above = below + multiple
@@ -59,12 +64,161 @@ def check_count(n: object, name: str = "n", multiple: int = 1) -> int:
     return n
 
 
+def short_repr(value: object) -> str:
+    """repr of *value* on one line, shortened: an array's repr spans lines, an int of 10**400 would flood a
+    terminal, and one of 10**5000 has no repr at all.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere._validation import short_repr
+    >>> short_repr(np.zeros((2, 3)))
+    'array([[0., 0., 0.], [0., 0., 0.]])'
+    """
+    if isinstance(value, np.ndarray) and value.size > 12:
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
+    try:
+        text = " ".join(repr(value).split())
+    except (ValueError, RecursionError):  # an int beyond sys.get_int_max_str_digits(), a deep nest
+        return f"a {type(value).__name__}"
+    return text if len(text) <= 60 else f"{text[:25]}...{text[-10:]} ({len(text)} characters)"
+
+
+_short = short_repr
+
+
+# ---------------------------------------------------------------------------
+# Size limits: the one place that says how large a run, an array or a degree may be
+# ---------------------------------------------------------------------------
+
+MAX_COUNT = 2**56
+"""Largest count of anything (directions, orbits, points, tasks) an argument may ask for: 48 times it
+still fits the int64 index arithmetic of the kernels (2**62)."""
+
+MAX_SOBOL_POINTS = 2**30
+"""Largest number of points of one scrambled Sobol' sequence (``scipy.stats.qmc.Sobol``: 30 bits)."""
+
+MAX_TASKS = 100_000
+"""Largest number of tasks of one Dask graph the library builds (building it takes seconds per 10**5)."""
+
+MAX_PATHS = 2**62
+"""Largest number of camera paths (width * height * spp) of one render: path indices are int64."""
+
+MAX_SH_DEGREE = 85
+"""Largest degree l of a real spherical harmonic (:mod:`symsphere.harmonics`): its unnormalised Legendre
+recurrence and normalisation (factorials up to (2l)!) stay within float64 up to l = 85, accurate to 4e-14
+against scipy.special.sph_harm_y; above it they overflow."""
+
+MAX_POLYNOMIAL_DEGREE = 10_000
+"""Largest total degree a + b + c of a monomial integrated exactly (:mod:`symsphere.harmonics`: rational
+arithmetic whose cost grows faster than the degree squared; 10**4 takes ~0.05 s, 10**7 would take hours)."""
+
+MAX_BINS = 2**20
+"""Largest number of cells (n_phi * n_cos) of a chi-square binning (:mod:`symsphere.stats`): the expected
+counts are integrated cell by cell, and a million cells is already far beyond any sample's power."""
+
+MAX_QUADRATURE_ORDER = 64
+"""Largest Gauss-Legendre order per cell and direction for the expected counts (the default is 12)."""
+
+MAX_DIMENSIONS = 32
+"""Largest number of array dimensions (batch dimensions plus the last one) public functions accept:
+numpy's indexing and broadcasting are limited to 32 or 64 dimensions, depending on its version."""
+
+
+def check_size(value: int, name: str, limit: int, what: str = "") -> int:
+    """Return *value* if it is at most *limit*, else raise ValueError naming *name* and the limit.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_size
+    >>> check_size(48, "n", 2**56)
+    48
+    >>> check_size(48 * 2**64, "n", 2**56)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'n'=885443715538058477568 is too large; at most 72057594037927936 (2**56) is supported
+    """
+    if value > limit:
+        power = f" (2**{limit.bit_length() - 1})" if limit & (limit - 1) == 0 else ""
+        detail = f" {what}" if what else ""
+        raise ValueError(f"'{name}'={_short(value)} is too large{detail}; at most {limit}{power} is supported")
+    return value
+
+
+def check_sobol_size(points: object, total: int, per_point: int = 1) -> None:
+    """Raise ValueError if a Sobol' point set (by name or a ``scipy.stats.qmc.Sobol`` engine, counting the
+    points it has already given) would need more than :data:`MAX_SOBOL_POINTS` points for *total* points;
+    the message is in terms of the caller's ``n`` (``n = total * per_point``).
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_sobol_size
+    >>> check_sobol_size("sobol", 2**31, per_point=48)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'n'=103079215104 needs 2147483648 Sobol' points (n/48) but the sequence has 2**30: use n <= 51539607552, or points='random' or 'halton'
+    """
+    if isinstance(points, str):
+        if points != "sobol":
+            return
+        used = 0
+    elif type(points).__name__ == "Sobol":  # scipy.stats.qmc.Sobol (not imported here: 0.3 s)
+        used = int(getattr(points, "num_generated", 0))
+    else:
+        return
+    if used + total <= MAX_SOBOL_POINTS:
+        return
+    name, per = ("n", f" (n/{per_point})") if per_point > 1 else ("m", "")
+    already = f" after the engine's {used}" if used else ""
+    limit = (MAX_SOBOL_POINTS - used) * per_point
+    raise ValueError(
+        f"'{name}'={total * per_point} needs {total} Sobol' points{per}{already} but the sequence has 2**30: "
+        f"use {name} <= {limit}, or points='random' or 'halton'"
+    )
+
+
+def check_real_values(values: object, name: str = "f") -> Float64Array:
+    """What a user's function returned, as a finite float64 array; TypeError for complex or non-numeric
+    values (converting would drop the imaginary part), ValueError for NaN or inf.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_real_values
+    >>> check_real_values([1, 2.5])
+    array([1. , 2.5])
+    >>> check_real_values([1j])
+    Traceback (most recent call last):
+        ...
+    TypeError: 'f' returned complex values; return the real and imaginary parts as two components (shape (m, 2))
+    """
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"'{name}' must return an array of real numbers ({exc})") from None
+    if arr.dtype.kind == "c":
+        raise TypeError(
+            f"'{name}' returned complex values; return the real and imaginary parts as two components (shape (m, 2))"
+        )
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"'{name}' must return real numbers, got dtype {arr.dtype}")
+    out: Float64Array = arr.astype(np.float64)
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"'{name}' returned non-finite values (NaN or inf)")
+    return out
+
+
+def check_dimensions(arr: npt.NDArray[Any], name: str) -> None:
+    """Raise ValueError naming *name* if *arr* has more than :data:`MAX_DIMENSIONS` dimensions."""
+    if arr.ndim > MAX_DIMENSIONS:
+        raise ValueError(f"'{name}' has {arr.ndim} dimensions; at most {MAX_DIMENSIONS} are supported")
+
+
 def check_dtype(dtype: npt.DTypeLike, name: str = "dtype") -> np.dtype[Any]:
     """Return *dtype* as float32 or float64, else raise TypeError."""
     try:
         dt = np.dtype(dtype)
     except TypeError as exc:
-        raise TypeError(f"'{name}' must be float32 or float64, got {dtype!r}") from exc
+        raise TypeError(f"'{name}' must be float32 or float64, got {_short(dtype)}") from exc
     if dt not in _DTYPES:
         raise TypeError(f"'{name}' must be float32 or float64, got {dt}")
     return dt
@@ -121,6 +275,7 @@ def as_float_array(a: object, name: str) -> FloatArray:
 def check_uv(uv: object, name: str = "uv") -> FloatArray:
     """Return points of the unit square as a float array of shape (..., 2)."""
     arr = as_float_array(uv, name)
+    check_dimensions(arr, name)
     if arr.ndim == 0 or arr.shape[-1] != 2:
         raise ValueError(f"'{name}' must have shape (..., 2), got {arr.shape}")
     if not np.all((arr >= 0) & (arr <= 1)):  # also rejects NaN
@@ -131,11 +286,51 @@ def check_uv(uv: object, name: str = "uv") -> FloatArray:
 def check_directions(d: object, name: str = "d") -> FloatArray:
     """Return finite vectors as a float array of shape (..., 3)."""
     arr = as_float_array(d, name)
+    check_dimensions(arr, name)
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise ValueError(f"'{name}' must have shape (..., 3), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"'{name}' must be finite (no NaN or inf)")
     return arr
+
+
+UNIT_TOLERANCE = 1e-3
+"""How far from 1 the norm of a direction given to a density or an inverse map may be (float32 rounding
+and user normalisation pass; a zero, a non-normalised or a mistyped vector does not)."""
+
+
+def check_unit_directions(d: object, name: str = "d") -> FloatArray:
+    """Return unit vectors as a float array of shape (..., 3): :func:`check_directions`, and every norm
+    within :data:`UNIT_TOLERANCE` of 1 (a density of a non-unit vector would be silently wrong).
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_unit_directions
+    >>> check_unit_directions([0.0, 0.6, 0.8]).tolist()
+    [0.0, 0.6, 0.8]
+    >>> check_unit_directions([0.0, 0.0, 2.0])
+    Traceback (most recent call last):
+        ...
+    ValueError: 'd' must be unit vectors (norm 1 within 0.001); got a norm of 2.0
+    """
+    arr = check_directions(d, name)
+    if arr.size:
+        wide = arr.astype(np.float64)
+        scale = np.max(np.abs(wide), axis=-1, keepdims=True)  # no overflow in the squares
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # an inf norm is reported below
+            norms = np.where(scale[..., 0] > 0, scale[..., 0] * np.sqrt(np.sum((wide / scale) ** 2, axis=-1)), 0.0)
+        bad = np.abs(norms - 1.0) > UNIT_TOLERANCE
+        if np.any(bad):
+            raise ValueError(
+                f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); "
+                f"got a norm of {float(norms[bad].flat[0]):.6g}"
+            )
+    return arr
+
+
+__all__ += ["MAX_BINS", "MAX_COUNT", "MAX_DIMENSIONS", "MAX_QUADRATURE_ORDER", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
+__all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
+__all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
 
 # ---------------------------------------------------------------------------
@@ -180,7 +375,7 @@ def check_pdf(pdf: object) -> Density:
 
 def check_bins(bins: Any) -> tuple[int, int]:
     """Return *bins* as a pair ``(n_phi, n_cos)`` of positive ints."""
-    msg = f"'bins' must be a pair (n_phi, n_cos) of positive integers, got {bins!r}"
+    msg = f"'bins' must be a pair (n_phi, n_cos) of positive integers, got {_short(bins)}"
     try:
         pair = tuple(bins)
     except TypeError as exc:
@@ -192,6 +387,7 @@ def check_bins(bins: Any) -> tuple[int, int]:
             raise TypeError(msg)
         if b <= 0:
             raise ValueError(msg)
+    check_size(int(pair[0]) * int(pair[1]), "bins", MAX_BINS, "(n_phi * n_cos cells)")
     return (int(pair[0]), int(pair[1]))
 
 
@@ -232,7 +428,7 @@ def check_positive(value: object, name: str) -> float:
     for inf and NaN.
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
+        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
     if value <= 0:
         raise ValueError(f"'{name}' must be positive, got {value}")
     return float(value)
@@ -241,20 +437,21 @@ def check_positive(value: object, name: str) -> float:
 def check_nonnegative(value: object, name: str) -> float:
     """Return *value* as a float >= 0; TypeError unless it is a finite real number."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {value!r}")
+        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
     if value < 0:
         raise ValueError(f"'{name}' must be >= 0, got {value}")
     return float(value)
 
 
-def check_lm(l: object, m: object) -> tuple[int, int]:
+def check_lm(l: object, m: object, l_name: str = "l") -> tuple[int, int]:
     """Return the degree and order of a spherical harmonic as ints, l >= 0 and -l <= m <= l."""
-    for value, name in ((l, "l"), (m, "m")):
+    for value, name in ((l, l_name), (m, "m")):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise TypeError(f"'{name}' must be an integer, got {type(value).__name__}")
     degree, order = int(l), int(m)  # type: ignore[call-overload]  # Integral, checked above
     if degree < 0:
-        raise ValueError(f"'l' must be >= 0, got {degree}")
+        raise ValueError(f"'{l_name}' must be >= 0, got {degree}")
+    check_size(degree, l_name, MAX_SH_DEGREE)
     if abs(order) > degree:
         raise ValueError(f"'m' must satisfy -l <= m <= l, got l={degree}, m={order}")
     return degree, order
@@ -269,6 +466,7 @@ def check_exponents(a: object, b: object, c: object) -> tuple[int, int, int]:
         if value < 0:
             raise ValueError(f"exponent '{name}' must be >= 0, got {value}")
         out.append(int(value))
+    check_size(sum(out), "a + b + c", MAX_POLYNOMIAL_DEGREE, "(the total degree)")
     return out[0], out[1], out[2]
 
 
@@ -278,13 +476,16 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
         raise TypeError(f"'coeffs' must be a mapping {{(a, b, c): coefficient}}, got {type(coeffs).__name__}")
     for key in coeffs:
         if not (isinstance(key, tuple) and len(key) == 3):
-            raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {key!r}")
+            raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {_short(key)}")
         check_exponents(*key)
     return coeffs
 
 
 def check_triangle(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Float64Array:
     """Return the vertices of a non-degenerate spherical triangle as unit vectors, shape (3, 3)."""
+    for v, name in ((a, "a"), (b, "b"), (c, "c")):
+        if v is None:
+            raise TypeError(f"'{name}' must be a 3-vector (a vertex of the triangle), got None")
     verts = np.stack([check_normal(v, name) for v, name in ((a, "a"), (b, "b"), (c, "c"))])
     A, B, C = verts
     # Its area by Van Oosterom & Strackee (1983): tan(E/2) = |A.(B x C)| / (1 + A.B + B.C + C.A).
@@ -312,10 +513,17 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
     arr = as_float_array(normal, name).astype(np.float64)
     if arr.shape != (3,):
         raise ValueError(f"'{name}' must be a 3-vector, got shape {arr.shape}")
-    norm = np.linalg.norm(arr)
-    if not np.isfinite(norm) or norm == 0:
+    if not np.all(np.isfinite(arr)) or not np.any(arr):
         raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {arr.tolist()}")
-    return arr / norm
+    largest = float(np.max(np.abs(arr)))
+    if 1e-150 < largest < 1e150:  # the squares neither overflow nor underflow: the plain norm (as before)
+        plain: Float64Array = arr / np.linalg.norm(arr)
+        return plain
+    # Scale by the largest component first: the norm of [1e200, 0, 0] or [1e-170, 0, 0] would
+    # overflow or underflow, but the direction is well defined.
+    scaled = arr / largest
+    unit: Float64Array = scaled / math.sqrt(float(scaled @ scaled))
+    return unit
 
 
 def check_seed(seed: int, name: str = "seed") -> int:
@@ -331,7 +539,7 @@ def check_seed(seed: int, name: str = "seed") -> int:
     3
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"'{name}' must be a non-negative integer, got {seed!r}")
+        raise ValueError(f"'{name}' must be a non-negative integer, got {_short(seed)}")
     return int(seed)
 
 

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ._typing import ChiDomain, Density, Float64Array
-from ._validation import check_bins, check_choice, check_count, check_pdf
+from ._validation import MAX_QUADRATURE_ORDER, check_bins, check_choice, check_count, check_pdf
 
 __all__ = ["bin_probabilities", "equal_area_bins"]
 
@@ -114,7 +114,7 @@ def bin_probabilities(
     pdf = check_pdf(pdf)
     domain = check_choice(domain, "domain", _DOMAINS)
     shape = check_bins(bins)
-    quadrature_order = check_count(quadrature_order, "quadrature_order")
+    quadrature_order = check_count(quadrature_order, "quadrature_order", maximum=MAX_QUADRATURE_ORDER)
     return _bin_probabilities(pdf, domain, shape, quadrature_order)
 
 

@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from ._validation import check_count
+from ._validation import MAX_TASKS, check_count, check_positive_real
 from ._blocks import fill_range, prepare
 from ._integration import block_partials, finish, plan
 from ._threads import start_threads
@@ -148,6 +148,9 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
 
     work = plan(f, **_integrate_arguments(kwargs))
     chunk_blocks = check_count(chunk_blocks, "chunk_blocks")
+    _check_tasks(work.replicates * -(-work.blocks_per_replicate // chunk_blocks), "chunk_blocks",
+                 f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}")
+    _check_client(client)  # after the arguments of the run, before any work
     tasks = [
         (replicate, first, min(first + chunk_blocks, work.blocks_per_replicate))
         for replicate in range(work.replicates)
@@ -220,6 +223,8 @@ def render(
 
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     passes_per_task = check_count(passes_per_task, "passes_per_task")
+    _check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
+    _check_client(client)
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
     with _client_or_local(client) as active:
         start = time.perf_counter()
@@ -274,6 +279,12 @@ def connect(address, *, timeout=10):
     """
     from distributed import Client
 
+    if not isinstance(address, str) or not address:
+        raise TypeError(
+            f"'address' must be the scheduler's address as a string (tcp://HOST:8786), got {address!r}; "
+            "for a cluster on this machine use local_client()"
+        )
+    timeout = check_positive_real(timeout, "timeout")
     try:
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError) as exc:
@@ -333,6 +344,8 @@ def close_client(client):
     >>> client.status, cluster.status.name
     ('closed', 'closed')
     """
+    if _check_client(client) is None:
+        raise TypeError("'client' must be a distributed.Client, got None")
     cluster = getattr(client, "cluster", None)  # None for a client of a remote scheduler
     client.close()
     if cluster is not None:
@@ -395,6 +408,7 @@ def _dask_directions(n, chunks, count, normal, method, points, rng, dtype):
     chunks = check_count(chunks, "chunks", multiple=count * BLOCK)
     per_chunk = chunks // count
     total = n // count
+    _check_tasks(-(-total // per_chunk), "chunks", f"'n'={n} in chunks of {chunks}")
     pieces = []
     for start in range(0, total, per_chunk):
         stop = min(start + per_chunk, total)
@@ -403,9 +417,28 @@ def _dask_directions(n, chunks, count, normal, method, points, rng, dtype):
     return da.concatenate(pieces, axis=0)
 
 
+def _check_tasks(tasks, name, what):
+    if tasks > MAX_TASKS:
+        raise ValueError(
+            f"{what} make {tasks} Dask tasks, more than the {MAX_TASKS} a graph may have: "
+            f"raise '{name}', or split the run"
+        )
+
+
+def _check_client(client):
+    """A distributed.Client, or None for a local cluster; TypeError naming 'client' otherwise."""
+    if client is None:
+        return None
+    from distributed import Client
+
+    if not isinstance(client, Client):
+        raise TypeError(f"'client' must be a distributed.Client or None, got {type(client).__name__}")
+    return client
+
+
 @contextlib.contextmanager
 def _client_or_local(client):
-    if client is not None:
+    if _check_client(client) is not None:
         yield client
         return
     owned = local_client()

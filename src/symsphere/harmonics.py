@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Domain, Float64Array, Polynomial
-from ._validation import check_choice, check_coeffs, check_directions, check_exponents, check_lm
+from ._validation import check_choice, check_coeffs, check_directions, check_exponents, check_lm, check_unit_directions, short_repr
 
 __all__ = [
     "real_sh",
@@ -83,7 +83,7 @@ def real_sh(l: int, m: int, d: npt.ArrayLike) -> Float64Array:
     1.0
     """
     l, m = check_lm(l, m)
-    d = check_directions(d, "d").astype(np.float64)
+    d = check_unit_directions(d, "d").astype(np.float64)
     return _sh(l, m, d[..., 0], d[..., 1], d[..., 2])
 
 
@@ -98,8 +98,8 @@ def real_sh_basis(lmax: int, d: npt.ArrayLike) -> Float64Array:
     >>> real_sh_basis(8, [[0.0, 0.6, 0.8]]).shape
     (1, 81)
     """
-    lmax, _ = check_lm(lmax, 0)
-    d = check_directions(d, "d").astype(np.float64)
+    lmax, _ = check_lm(lmax, 0, "lmax")
+    d = check_unit_directions(d, "d").astype(np.float64)
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
     cols = [_sh(l, m, x, y, z) for l in range(lmax + 1) for m in range(-l, l + 1)]
     return np.stack(cols, axis=-1)
@@ -211,7 +211,11 @@ def evaluate_polynomial(coeffs: Polynomial, d: npt.ArrayLike) -> Float64Array:
     """
     coeffs = check_coeffs(coeffs)
     d = check_directions(d, "d").astype(np.float64)
-    return _poly_eval(coeffs, d)
+    with np.errstate(over="raise", invalid="raise"):
+        try:
+            return _poly_eval(coeffs, d)
+        except FloatingPointError:
+            raise ValueError("'d' is too large: the polynomial overflows float64 (use unit directions)") from None
 
 
 def cubic_harmonic(degree: Literal[4, 6, 8]) -> dict[tuple[int, int, int], float]:
@@ -243,7 +247,7 @@ def cubic_harmonic(degree: Literal[4, 6, 8]) -> dict[tuple[int, int, int], float
     (10, 0.0)
     """
     if isinstance(degree, bool) or not isinstance(degree, numbers.Integral) or degree not in (4, 6, 8):
-        raise ValueError(f"'degree' must be 4, 6 or 8, got {degree!r}")
+        raise ValueError(f"'degree' must be 4, 6 or 8, got {short_repr(degree)}")
     terms = {
         4: (((4, 0, 0), 1.0), ((2, 2, 0), -3.0)),
         6: (((6, 0, 0), 1.0), ((4, 2, 0), -7.5), ((2, 2, 2), 90.0)),

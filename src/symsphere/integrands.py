@@ -43,7 +43,7 @@ import numpy.typing as npt
 from scipy import integrate, special
 
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
-from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive
+from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive, check_real_values
 from .harmonics import (
     cubic_harmonic,
     evaluate_polynomial,
@@ -233,7 +233,10 @@ def lambert_irradiance(
     sin = np.linalg.norm(cross, axis=1)
     theta = np.arctan2(sin, np.sum(u * w, axis=1))
     gamma_n = (cross @ n) / np.where(sin > 0, sin, 1.0)
-    return 0.5 * radiance * abs(math.fsum((theta * gamma_n).tolist()))
+    irradiance = 0.5 * radiance * abs(math.fsum((theta * gamma_n).tolist()))
+    if not math.isfinite(irradiance):
+        raise ValueError(f"'radiance'={radiance} is too large: the irradiance overflows float64")
+    return irradiance
 
 
 def sphere_light_irradiance(
@@ -268,6 +271,8 @@ def sphere_light_irradiance(
     >>> sphere_light_irradiance([0, 0, 1], 2.0, 1.0) / math.pi   # sin^2(alpha) = 1/4
     0.25
     """
+    if center is None:
+        raise TypeError("'center' must be a 3-vector (the direction to the sphere), got None")
     c = check_normal(center, "center")
     distance = check_positive(distance, "distance")
     radius = check_positive(radius, "radius")
@@ -277,7 +282,10 @@ def sphere_light_irradiance(
     sin_alpha = radius / distance
     if math.asin(sin_alpha) + math.acos(min(1.0, float(c[2]))) > math.pi / 2 + 1e-15:
         raise ValueError("the light must lie entirely above the horizon: beta + alpha <= pi/2")
-    return math.pi * radiance * sin_alpha**2 * float(c[2])
+    irradiance = math.pi * radiance * sin_alpha**2 * float(c[2])
+    if not math.isfinite(irradiance):
+        raise ValueError(f"'radiance'={radiance} is too large: the irradiance overflows float64")
+    return irradiance
 
 
 def orbit_average(
@@ -312,7 +320,10 @@ def orbit_average(
         raise TypeError(f"'f' must be callable, got {type(f).__name__}")
     count = orbit_size(domain)
     images = orbit(p, domain)
-    values = np.asarray(f(images.reshape(-1, 3)), dtype=np.float64)
+    values = check_real_values(f(images.reshape(-1, 3)), "f")  # NaN, inf, complex: an error, not a silent mean
+    expected = (int(np.prod(images.shape[:-1])),)
+    if values.shape != expected:
+        raise ValueError(f"'f' must return one value per direction, shape {expected}, got {values.shape}")
     mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
     return mean
 

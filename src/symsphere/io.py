@@ -1,20 +1,33 @@
-"""Atomic file output for the command line and the demo.
+"""Atomic file output for the command line, the renderer and the demo.
 
-A file (or directory) appears under its final name only once it is complete:
-it is written under a hidden temporary name in the same directory and then
-renamed over the target (``os.replace``, atomic on POSIX and Windows within
-one file system).  On any exception, ``KeyboardInterrupt`` included, the
-temporary is removed and the target is left as it was.
+Files (or a directory) appear under their final names only once they are complete,
+and the files of one run appear *as a set* (:func:`atomic_paths`): every file is
+written under a hidden temporary name in its target's directory and flushed to disk,
+and only then are all of them renamed over their targets (``os.replace``, atomic
+within one file system).  On any exception, ``KeyboardInterrupt`` (and, in the
+command line, SIGTERM) included, the temporaries are removed and the targets are
+left as they were; if a rename fails part-way, the targets already replaced are
+restored from their previous versions.
+
+A target that is a symbolic link is written through: the file it points to is
+replaced and the link is kept.  Large outputs are written with ordinary writes
+(no memory map), their space reserved first where the file system allows
+(``os.posix_fallocate``), so a full disk is an ``OSError`` (``ENOSPC``) at the
+start, never a ``SIGBUS`` part-way, and memory stays at one block.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 import shutil
+import signal
+import threading
 from collections.abc import Callable, Collection, Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +37,7 @@ from ._typing import FloatArray
 __all__ = [
     "DIRECTION_SUFFIXES",
     "atomic_path",
+    "atomic_paths",
     "atomic_directory",
     "check_suffix",
     "save_directions",
@@ -49,7 +63,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     Parameters
     ----------
     path : str or os.PathLike
-        The final file.  Its directory must exist.
+        The final file.  Its directory must exist.  If it is a symbolic link, the
+        file it points to is replaced and the link kept.
 
     Yields
     ------
@@ -62,7 +77,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     -----
     On normal exit the temporary is flushed to disk (``fsync``) and renamed
     over *path*.  On any exception (``KeyboardInterrupt`` too) it is removed
-    and the exception propagates; *path* is untouched.
+    and the exception propagates; *path* is untouched.  :func:`atomic_paths`
+    does the same for several files at once.
 
     Examples
     --------
@@ -74,7 +90,75 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     >>> open(target).read()
     'done'
     """
-    target = Path(path)
+    with atomic_paths([path]) as (temporary,):
+        yield temporary
+
+
+@contextlib.contextmanager
+def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]]:
+    """Yield fresh temporary file paths that replace *paths* together on success: all or none.
+
+    Parameters
+    ----------
+    paths : iterable of str or os.PathLike
+        The final files (distinct; their directories must exist).  Symbolic links are
+        written through, as in :func:`atomic_path`.
+
+    Yields
+    ------
+    list of pathlib.Path
+        One empty temporary file per path, in the same order, each in its target's directory.
+
+    Notes
+    -----
+    On normal exit every temporary is flushed to disk, and then all are renamed over
+    their targets, with SIGINT and SIGTERM held back meanwhile (in the main thread).
+    If a rename fails, the targets already replaced get their previous contents back
+    (or are removed if they did not exist), so that either all files are new or all
+    are as before.  On any exception all temporaries are removed and the exception
+    propagates.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from symsphere.io import atomic_paths
+    >>> folder = tempfile.mkdtemp()
+    >>> targets = [os.path.join(folder, name) for name in ("a.txt", "b.txt")]
+    >>> with atomic_paths(targets) as (a, b):
+    ...     _ = a.write_text("first")
+    ...     _ = b.write_text("second")
+    >>> sorted(os.listdir(folder))
+    ['a.txt', 'b.txt']
+    >>> try:
+    ...     with atomic_paths(targets) as (a, b):
+    ...         _ = a.write_text("new")
+    ...         raise OSError("disk full")
+    ... except OSError:
+    ...     pass
+    >>> open(targets[0]).read(), sorted(os.listdir(folder))        # nothing changed, nothing left over
+    ('first', ['a.txt', 'b.txt'])
+    """
+    targets = [Path(os.path.realpath(path)) for path in paths]  # through symbolic links
+    if len(set(targets)) != len(targets):
+        raise ValueError(f"the output files must be distinct, got {[str(t) for t in targets]}")
+    temporaries: list[Path] = []
+    try:
+        for target in targets:
+            temporaries.append(_create_temporary(target))
+        yield list(temporaries)
+        for temporary in temporaries:
+            with open(temporary, "rb+") as handle:
+                os.fsync(handle.fileno())  # the data is on disk before the name points at it
+        with _signals_held():
+            _replace_all(temporaries, targets)
+    except BaseException:
+        for temporary in temporaries:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(temporary)
+        raise
+
+
+def _create_temporary(target: Path) -> Path:
     while True:
         temporary = _temporary_name(target, "tmp")
         try:
@@ -83,16 +167,56 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         except FileExistsError:
             continue
         os.close(descriptor)
-        break
+        return temporary
+
+
+def _replace_all(temporaries: list[Path], targets: list[Path]) -> None:
+    """Rename every temporary over its target; on a failure, put back what was there."""
+    if len(targets) == 1:  # one rename is atomic by itself
+        os.replace(temporaries[0], targets[0])
+        return
+    backups: list[Path | None] = []
+    done = 0
     try:
-        yield temporary
-        with open(temporary, "rb+") as handle:
-            os.fsync(handle.fileno())  # the data is on disk before the name points at it
-        os.replace(temporary, target)
+        for target in targets:  # keep the previous versions under a second name (a hard link)
+            backup = None
+            if target.exists():
+                backup = _temporary_name(target, "old")
+                try:
+                    os.link(target, backup)
+                except OSError:  # a file system without hard links: a copy
+                    shutil.copyfile(target, backup)
+            backups.append(backup)
+        for temporary, target in zip(temporaries, targets):
+            os.replace(temporary, target)
+            done += 1
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(temporary)
+        for target, backup in zip(targets[:done], backups):
+            with contextlib.suppress(OSError):
+                if backup is None:
+                    os.unlink(target)
+                else:
+                    os.replace(backup, target)
         raise
+    finally:
+        for backup in backups:
+            if backup is not None:
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(backup)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back (delivered on exit) while the renames run, in the main thread."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 @contextlib.contextmanager
@@ -272,24 +396,31 @@ def stream_directions(
         Number of directions in all.
     dtype : float32 or float64
     blocks : callable
-        ``blocks(out)`` returns an iterable of consecutive (m, 3) blocks.  For
-        ``.npy``, *out* is an (n, 3) memory map of the file's data and the blocks
-        may be views of it (written in place, so memory stays at one block);
-        for ``.csv``, *out* is None.
+        ``blocks(None)`` returns an iterable of consecutive (m, 3) blocks (the argument
+        is the ``out=`` of :func:`symsphere.iter_sphere`: None, so that each block is a
+        fresh array and memory stays at one block).
     name : str, optional
         How error messages call *path*.
     progress : callable, optional
         Called with the length of each block once it is written.
 
+    Raises
+    ------
+    OSError
+        If the file cannot be written; for ``.npy`` a full disk is found before any
+        block is computed (the file's space is reserved first where the file system
+        supports it), else at the write that fails.  No file is left behind.
+
     Notes
     -----
     The file appears only when complete: an interrupted or failed run leaves
-    no file under *path* (see :func:`atomic_path`).
+    no file under *path* (see :func:`atomic_path`).  The blocks are written with
+    ordinary writes, and the pages written are dropped from the page cache as
+    they reach the disk, so resident memory stays at about one block for any *n*.
 
     Examples
     --------
-    With :func:`symsphere.iter_sphere`, which fills *out* in place when given one
-    (memory stays at one block, for any *n*):
+    With :func:`symsphere.iter_sphere` (memory stays at one block, for any *n*):
 
     >>> import os, tempfile
     >>> import numpy as np
@@ -307,15 +438,22 @@ def stream_directions(
     written = 0
     with atomic_path(Path(path)) as temporary:
         if suffix == ".npy":
-            data = np.lib.format.open_memmap(temporary, mode="w+", dtype=dtype, shape=(n, 3))
-            for block in blocks(data):
-                if not np.shares_memory(block, data):
-                    data[written : written + len(block)] = block
-                written += len(block)
-                if progress is not None:
-                    progress(len(block))
-            data.flush()
-            del data
+            file_dtype = dtype.newbyteorder("<")
+            with open(temporary, "wb") as handle:
+                header = {"descr": np.lib.format.dtype_to_descr(file_dtype), "fortran_order": False, "shape": (n, 3)}
+                np.lib.format.write_array_header_1_0(handle, header)
+                handle.flush()
+                _reserve(handle.fileno(), handle.tell() + n * 3 * file_dtype.itemsize)
+                pages = _PageDropper(handle.fileno())
+                for block in blocks(None):
+                    data = np.ascontiguousarray(block, dtype=file_dtype)
+                    if data.ndim != 2 or data.shape[1] != 3 or written + len(data) > n:
+                        raise RuntimeError(f"expected {n} directions in blocks of shape (m, 3), got {data.shape}")
+                    handle.write(data.data.cast("B"))
+                    written += len(data)
+                    pages.written(handle)
+                    if progress is not None:
+                        progress(len(data))
         else:
             fmt = _CSV_FORMATS.get(dtype, "%.17g")
             with open(temporary, "w", encoding="ascii", newline="\n") as handle:
@@ -327,3 +465,40 @@ def stream_directions(
                         progress(len(block))
         if written != n:
             raise RuntimeError(f"expected {n} directions, got {written}")
+
+
+def _reserve(descriptor: int, size: int) -> None:
+    """Allocate *size* bytes of the file now, so that a full disk fails here (ENOSPC), not part-way."""
+    if not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        os.posix_fallocate(descriptor, 0, size)
+    except OSError as exc:
+        if exc.errno in (errno.EINVAL, errno.EOPNOTSUPP, errno.ENOSYS):  # not supported here: write as we go
+            return
+        raise
+
+
+class _PageDropper:
+    """Every STRIDE bytes written: flush them to disk and drop them from the page cache.
+
+    Written pages stay in the page cache, dirty, until the kernel writes them back; a
+    cgroup's memory limit counts them.  Writing back and dropping as we go keeps the
+    memory of a long run flat (and costs no extra disk writes: the final fsync would
+    write them anyway).
+    """
+
+    STRIDE = 256 * 2**20
+
+    def __init__(self, descriptor: int) -> None:
+        self.descriptor = descriptor
+        self.dropped = 0
+
+    def written(self, handle: Any) -> None:
+        position = handle.tell()
+        if position - self.dropped < self.STRIDE or not hasattr(os, "posix_fadvise"):
+            return
+        handle.flush()
+        os.fdatasync(self.descriptor)
+        os.posix_fadvise(self.descriptor, self.dropped, position - self.dropped, os.POSIX_FADV_DONTNEED)
+        self.dropped = position

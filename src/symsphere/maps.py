@@ -36,7 +36,7 @@ import numpy.typing as npt
 from numba.extending import register_jitable
 
 from ._typing import BoolArray, Float64Array, FloatArray, MapMethod
-from ._validation import check_choice, check_directions, check_uv
+from ._validation import check_choice, check_directions, check_unit_directions, check_uv
 
 __all__ = [
     "METHODS",
@@ -158,9 +158,11 @@ def triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArr
     >>> float(triangle_pdf([0.3, 0.2, 0.93273791]))   # 12/pi
     3.819718634205488
     """
-    p = check_directions(p, "p")
+    p = check_unit_directions(p, "p")
     triangle_map = get_map(method)
-    return triangle_map.pdf(p.astype(np.float64)).astype(p.dtype, copy=False)
+    density = triangle_map.pdf(p.astype(np.float64))
+    with np.errstate(over="ignore"):  # beyond float32's range near the vertex: inf, as at the vertex
+        return density.astype(p.dtype, copy=False)
 
 
 def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -189,10 +191,13 @@ def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> Fl
     p = check_directions(p, "p")
     triangle_map = get_map(method)
     p64 = p.astype(np.float64)
-    tol = 8 * np.finfo(p.dtype).eps * np.maximum(np.linalg.norm(p64, axis=-1), 1.0)
     x, y, z = p64[..., 0], p64[..., 1], p64[..., 2]
-    if not np.all((z - x >= -tol) & (x - y >= -tol) & (y >= -tol)):
+    with np.errstate(over="ignore"):  # a huge vector: rejected as non-unit below
+        tol = 8 * np.finfo(p.dtype).eps * np.maximum(np.linalg.norm(p64, axis=-1), 1.0)
+        inside = np.all((z - x >= -tol) & (x - y >= -tol) & (y >= -tol))
+    if not inside:
         raise ValueError("'p' must lie in the triangle T0 = {z >= x >= y >= 0}")
+    check_unit_directions(p, "p")  # a zero or non-unit vector would map to NaN or a wrong point
     return triangle_map.inverse(p64).astype(p.dtype, copy=False)
 
 

@@ -39,7 +39,7 @@ from numba import njit, prange
 
 from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
-from ._validation import check_choice, check_count, check_rng
+from ._validation import check_choice, check_count, check_rng, check_sobol_size
 
 if TYPE_CHECKING:
     from scipy.stats.qmc import QMCEngine
@@ -123,6 +123,7 @@ or scipy.stats.qmc.QMCEngine
     def __init__(self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1) -> None:
         self.total = check_count(total, "total")
         self._engine = check_points(points)
+        check_sobol_size(points, self.total, per_point)  # at the call, not when the last chunk is drawn
         self._kind: str = "engine" if self._engine is not None else points
         self._side: int | None = None
         entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)

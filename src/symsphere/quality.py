@@ -21,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._threads import start_threads
+from ._validation import as_float_array, check_positive_real
 from ._typing import Float64Array
 
 __all__ = ["LOG_FLOOR", "SlopeFit", "cap_discrepancy", "cap_discrepancy_squared", "fit_slope", "rmse"]
@@ -50,10 +51,20 @@ def rmse(estimates: npt.ArrayLike, exact: float | npt.ArrayLike) -> np.ndarray:
     >>> float(rmse([1.0, 3.0], 2.0))
     1.0
     """
-    estimates = np.asarray(estimates, dtype=np.float64)
-    if estimates.shape[-1] < 1:
+    estimates = _finite(estimates, "estimates")
+    exact_values = _finite(exact, "exact")
+    if estimates.ndim == 0 or estimates.shape[-1] < 1:
         raise ValueError("'estimates' must hold at least one repetition")
-    error: npt.NDArray[Any] = np.sqrt(np.mean((estimates - exact) ** 2, axis=-1))
+    try:
+        deviation = estimates - exact_values
+    except ValueError:
+        raise ValueError(f"'exact' of shape {exact_values.shape} does not broadcast against 'estimates' "
+                         f"of shape {estimates.shape}") from None
+    with np.errstate(over="raise"):
+        try:
+            error: npt.NDArray[Any] = np.sqrt(np.mean(deviation**2, axis=-1))
+        except FloatingPointError:
+            raise ValueError("'estimates' and 'exact' are too far apart: their squared errors overflow float64") from None
     return error
 
 
@@ -121,8 +132,12 @@ def fit_slope(n: npt.ArrayLike, values: npt.ArrayLike, *, floor: float = LOG_FLO
     >>> round(fit.slope, 12), round(fit.standard_error, 12)
     (-0.5, 0.0)
     """
-    x = np.log(np.asarray(n, dtype=np.float64))
-    v = np.asarray(values, dtype=np.float64)
+    counts = _finite(n, "n")
+    if np.any(counts <= 0):
+        raise ValueError("'n' must be positive")
+    x = np.log(counts)
+    v = _finite(values, "values")
+    floor = check_positive_real(floor, "floor")
     if x.shape != v.shape or x.ndim != 1:
         raise ValueError(f"'n' and 'values' must be 1-D of the same length, got {x.shape} and {v.shape}")
     if len(x) < 2:
@@ -185,18 +200,19 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
     >>> round(cap_discrepancy_squared(octahedron), 12)      # 1/3 - (24 sqrt 2 + 6 * 2)/(4 * 36)
     0.014297739604
     """
-    x = np.asarray(points, dtype=np.float64)
+    x = _finite(points, "points")
     if x.ndim != 2 or x.shape[1] != 3 or len(x) == 0:
         raise ValueError(f"'points' must have shape (N, 3) with N >= 1, got {x.shape}")
+    x = x / np.maximum(np.max(np.abs(x), axis=1, keepdims=True), 1e-300)  # no overflow in the norm
     norm = np.linalg.norm(x, axis=1)
-    if not np.all(np.isfinite(x)) or np.any(norm == 0):
+    if np.any(norm == 0):
         raise ValueError("'points' must be finite and non-zero")
     x = np.ascontiguousarray(x / norm[:, None])
     n = len(x)
     if weights is None:
         w = np.full(n, 1.0 / n)
     else:
-        w = np.ascontiguousarray(np.asarray(weights, dtype=np.float64))
+        w = np.ascontiguousarray(_finite(weights, "weights"))
         if w.shape != (n,) or not np.all(np.isfinite(w)):
             raise ValueError(f"'weights' must be finite with shape ({n},), got {w.shape}")
     total = float(np.sum(w))
@@ -254,3 +270,10 @@ def _weighted_distance_sum(x: Float64Array, w: Float64Array) -> float:  # pragma
             acc += _row_distance_sum(x, w, other)
         total += acc
     return 2.0 * total
+
+
+def _finite(values: object, name: str) -> Float64Array:
+    array: Float64Array = as_float_array(values, name).astype(np.float64)
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"'{name}' must be finite (no NaN or inf)")
+    return array

@@ -27,12 +27,14 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _blocks, frames
-from ._validation import check_count, check_directions, check_normal, check_out
+from ._validation import check_count, check_normal, check_out, check_unit_directions
 from .maps import get_map
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import fold
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
+
+_PLANE_ULPS = 16  # see hemisphere_pdf
 
 DEFAULT_CHUNK = 48 * 2**16
 """Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
@@ -244,7 +246,7 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     >>> float(sphere_pdf([0.0, 0.6, -0.8])) * 4 * 3.141592653589793
     1.0
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     triangle_map = get_map(method)
     _, base = fold(d.astype(np.float64))
     return (triangle_map.pdf(base.astype(np.float64, copy=False)) / 48).astype(d.dtype, copy=False)
@@ -266,8 +268,9 @@ def hemisphere_pdf(
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 24`` on the hemisphere about *normal*,
-        0 below it.
+        ``triangle_pdf(base, method) / 24`` on the closed hemisphere about *normal*,
+        0 below it.  Directions within 16 ulps (of *d*'s dtype) of the plane count as on
+        it, so that every direction :func:`sample_hemisphere` returns has a positive density.
 
     Examples
     --------
@@ -275,14 +278,17 @@ def hemisphere_pdf(
     >>> hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * 3.141592653589793
     array([1., 0.])
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     normal = check_normal(normal)
     triangle_map = get_map(method)
     local: FloatArray = d.astype(np.float64)
     if normal is not None:
         local = frames.to_local(local, frames.frame(normal))
     _, base = fold(local)
-    density = np.where(local[..., 2] >= 0, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
+    # The closed hemisphere, up to the rounding of a rotated direction in d's dtype: a sample on the
+    # equator (u = 0) rotated onto `normal` may come out a few ulps below the plane.
+    on = local[..., 2] >= -_PLANE_ULPS * np.finfo(d.dtype).eps
+    density = np.where(on, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
     return density.astype(d.dtype, copy=False)
 
 
@@ -318,7 +324,7 @@ def _iterate(
     out: FloatArray | None,
 ) -> Iterator[FloatArray]:
     # Validate now, not at the first next(): a generator function would defer the errors.
-    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype)
+    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype, name="n_total")
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
     total = n_total // count
     if out is not None:

@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Float64Array, FloatArray
-from ._validation import check_directions, check_triangle, check_uv
+from ._validation import check_directions, check_triangle, check_unit_directions, check_uv
 
 __all__ = [
     "T0_VERTICES",
@@ -102,7 +102,7 @@ def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arra
     >>> bool(np.allclose(spherical_triangle_to_square(p, *T0_VERTICES), uv))
     True
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     setup = _triangle_setup(check_triangle(a, b, c))
     return _arvo_inverse(d.astype(np.float64), *setup).astype(d.dtype, copy=False)
 

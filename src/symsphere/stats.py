@@ -16,6 +16,8 @@ here too).
 
 from __future__ import annotations
 
+import numbers
+
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -27,9 +29,11 @@ from scipy import stats as _scipy_stats
 
 from ._typing import ChiDomain, Density, Float64Array, FloatArray, IntArray, RNGLike
 from ._validation import (
+    short_repr,
     check_bins,
     check_choice,
     check_count,
+    MAX_QUADRATURE_ORDER,
     check_directions,
     check_open_unit,
     check_pdf,
@@ -279,7 +283,7 @@ def chi2_test(
     significance = check_open_unit(significance, "significance")
     test_count = check_count(test_count, "test_count")
     min_expected = check_positive_real(min_expected, "min_expected")
-    quadrature_order = check_count(quadrature_order, "quadrature_order")
+    quadrature_order = check_count(quadrature_order, "quadrature_order", maximum=MAX_QUADRATURE_ORDER)
     n = d.shape[0]
     shape = _default_bins(domain, n) if bins is None else check_bins(bins)
     threshold = _sidak(significance, test_count)
@@ -451,8 +455,8 @@ def one_per_orbit(directions: npt.ArrayLike, orbit_size: Literal[48, 24], rng: R
     True
     """
     directions = check_directions(directions, "directions")
-    if isinstance(orbit_size, bool) or orbit_size not in (48, 24):
-        raise ValueError(f"'orbit_size' must be 48 (sphere) or 24 (hemisphere), got {orbit_size!r}")
+    if isinstance(orbit_size, bool) or not isinstance(orbit_size, numbers.Integral) or orbit_size not in (48, 24):
+        raise ValueError(f"'orbit_size' must be 48 (sphere) or 24 (hemisphere), got {short_repr(orbit_size)}")
     if directions.ndim != 2 or len(directions) % orbit_size:
         raise ValueError(
             f"'directions' must have shape (m * {orbit_size}, 3), got {directions.shape}"

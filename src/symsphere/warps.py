@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Float64Array, FloatArray
-from ._validation import as_float_array, check_directions, check_uv
+from ._validation import as_float_array, check_directions, check_unit_directions, check_uv
 
 __all__ = [
     "square_to_uniform_sphere",
@@ -354,7 +354,7 @@ def cosine_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     >>> cosine_hemisphere_pdf([[0.0, 0.0, 1.0], [0.6, 0.0, -0.8]]) * 3.141592653589793
     array([1., 0.])
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     d64 = d.astype(np.float64)
     return np.maximum(d64[..., 2], 0.0) / (np.linalg.norm(d64, axis=-1) * math.pi)
 
@@ -370,7 +370,7 @@ def _public_forward(forward, uv):
 
 
 def _public_inverse(inverse, d, hemisphere=False):
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")  # a zero or non-unit vector would map to NaN or a wrong point
     d64 = d.astype(np.float64)
     if hemisphere and np.any(d64[..., 2] < -1e-12):
         raise ValueError("'d' must have z >= 0 (directions of the hemisphere about (0, 0, 1))")

@@ -57,7 +57,7 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import register_jitable
 
-from ._validation import check_directions, check_uv
+from ._validation import check_directions, check_unit_directions, check_uv
 from .symmetry import HEMISPHERE_MAPS
 
 __all__ = [
@@ -159,7 +159,7 @@ def cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
     >>> cosine_wedge_pdf([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.6, 0.8]]) * np.pi  # 8, 6.4, outside
     array([8. , 6.4, 0. ])
     """
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     d64 = d.astype(np.float64)
     density = cosine_wedge_density(d64[..., 0], d64[..., 1], d64[..., 2])
     return np.asarray(density, dtype=np.float64).astype(d.dtype, copy=False)
@@ -205,10 +205,13 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
     """
     d = check_directions(d, "d")
     d64 = d.astype(np.float64)
-    tol = 8 * np.finfo(d.dtype).eps * np.maximum(np.linalg.norm(d64, axis=-1), 1.0)
     x, y, z = d64[..., 0], d64[..., 1], d64[..., 2]
-    if not np.all((x - y >= -tol) & (y >= -tol) & (z >= -tol)):
+    with np.errstate(over="ignore"):  # a huge vector: rejected as non-unit below
+        tol = 8 * np.finfo(d.dtype).eps * np.maximum(np.linalg.norm(d64, axis=-1), 1.0)
+        inside = np.all((x - y >= -tol) & (y >= -tol) & (z >= -tol))
+    if not inside:
         raise ValueError("'d' must lie in the wedge W = {x >= y >= 0, z >= 0}")
+    check_unit_directions(d, "d")  # a zero or non-unit vector would map to a wrong point
     uv = np.stack(cosine_wedge_uv(x, y, z), axis=-1)
     return uv.astype(d.dtype, copy=False)
 

@@ -11,15 +11,23 @@ Examples
     symsphere --version
 
 Exit status: 0 on success, 2 for invalid arguments (the message names the
-argument), 1 when the output cannot be written, 130 on Ctrl-C.  No partial
-output file is ever left behind.
+argument), 1 when the output cannot be written, 130 on Ctrl-C (SIGINT), 143 on
+SIGTERM (``kill``, ``timeout``, batch schedulers, containers) and 129 on SIGHUP.
+Every error is one line on stderr, never a traceback (set the environment
+variable ``SYMSPHERE_TRACEBACK=1`` to see one for an unexpected error).  No
+partial output file is ever left behind: the files of a run appear together,
+complete, or not at all.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import os
+import signal
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Sequence
@@ -46,6 +54,35 @@ _DISTRIBUTED_EXTRA = "symsphere[distributed]"
 
 class _UsageError(Exception):
     """An invalid combination of arguments that argparse cannot express."""
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised in the main thread like Ctrl-C, so that the same clean-up runs."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+_CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated(signum)
+
+
+@contextlib.contextmanager
+def _signals_as_interrupts():
+    """While the command runs, SIGTERM and SIGHUP raise _Terminated (the main thread only: signal's rule)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {signum: signal.signal(signum, _raise_terminated) for signum in _CLEAN_EXIT_SIGNALS}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -257,6 +294,8 @@ def _cluster_client(args):
     """A Dask client for --workers / --scheduler, or None to run in this process."""
     if args.workers is None and args.scheduler is None:
         return None
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise _UsageError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     option = "--workers" if args.scheduler is None else "--scheduler"
     try:  # the optional extra: say so, not with a traceback from deep inside symsphere.distributed
         import importlib
@@ -295,7 +334,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         0 on success, 2 for invalid arguments (the message on stderr names the argument), 1 when
-        the output cannot be written, 130 on Ctrl-C.  Errors are reported, not raised.
+        the output cannot be written, 130 on Ctrl-C, 143 on SIGTERM (129 on SIGHUP), in each case
+        with one line on stderr and no output file.  Errors are reported, not raised.
 
     Examples
     --------
@@ -321,17 +361,39 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     prog = f"symsphere {args.verb}"
     try:
-        return _with_notes(args.handler, args, prog)
-    except (_UsageError, ValueError, TypeError) as exc:
-        # The library's validators name the argument; a traceback would add nothing.
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"{prog}: error: {_describe_os_error(exc)}", file=sys.stderr)
-        return 1
+        with _signals_as_interrupts():
+            return _with_notes(args.handler, args, prog)
+    except _Terminated as exc:
+        name = signal.Signals(exc.signum).name
+        print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
         print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
         return 130
+    except (_UsageError, ValueError, TypeError) as exc:
+        # The library's validators name the argument; a traceback would add nothing.
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{prog}: error: {_one_line(_describe_os_error(exc))}", file=sys.stderr)
+        return 1
+    except MemoryError as exc:
+        print(f"{prog}: error: out of memory{': ' + _one_line(exc) if str(exc) else ''}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # a bug, or a library below failing in a new way: still one line
+        if os.environ.get("SYMSPHERE_TRACEBACK"):
+            raise
+        print(
+            f"{prog}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+            "(set SYMSPHERE_TRACEBACK=1 for the traceback)",
+            file=sys.stderr,
+        )
+        return 1
+
+
+def _one_line(exc: object) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 500 else text[:480] + " ..."
 
 
 def _with_notes(handler, args, prog) -> int:
@@ -364,6 +426,7 @@ def _run_sample(args) -> int:
     seed = check_seed(seed, "--seed")
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
     count = 48 if args.domain == "sphere" else 24
+    check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
     chunk = args.chunk if args.chunk is not None else count * 2**16
     if args.domain == "sphere":
         iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
@@ -434,6 +497,7 @@ def _run_integrate(args) -> int:
     client = _cluster_client(args)
     try:
         if client is None:
+            _print_estimate(integrand.f, kwargs)
             with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
                 warnings.filterwarnings("ignore", message="integrate: the tolerance")
                 result = integrate(integrand.f, **kwargs)
@@ -470,6 +534,33 @@ def _no_error_bar(result) -> str:
     return f"one {result.unit} has no spread to measure; use a larger --n"
 
 
+_ESTIMATE_ABOVE = 48 * 2**22  # evaluations (~2 s): longer in-process runs first say how long they will take
+
+
+def _print_estimate(f, kwargs):
+    """For a long in-process integration: time a pilot of 48 * 2**14 evaluations, print the estimate."""
+    n = kwargs["n"]
+    if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
+        return
+    pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
+    pilot.update(n=48 * 2**14, points="random", replicates=None, rng=0)
+    start = time.perf_counter()
+    integrate(f, **pilot)  # the arguments are checked at the real call: errors appear there, at once
+    rate = pilot["n"] / max(time.perf_counter() - start, 1e-9)
+    print(
+        f"symsphere integrate: {n} evaluations, estimated {_duration(n / rate)} at {rate:.3g} evaluations/s; "
+        "Ctrl-C stops",
+        file=sys.stderr,
+    )
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("days", 86400.0), ("hours", 3600.0), ("minutes", 60.0)):
+        if seconds >= 2 * size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
+
+
 def _run_demo(args) -> int:
     start = time.perf_counter()
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
@@ -493,8 +584,8 @@ def _run_render(args) -> int:
     furnace_exact = _furnace_radiance() if args.scene == "furnace" else None
     if args.exposure is None:  # the furnace's uniform radiance 2 would clip to pure white
         args.exposure = 1.0 if furnace_exact is None else 0.5 / furnace_exact
-    if not args.exposure > 0:  # checked by save_png too, but only after the render: fail first
-        raise _UsageError(f"--exposure must be positive, got {args.exposure}")
+    if not (math.isfinite(args.exposure) and args.exposure > 0):  # checked by save_png too, but after the render
+        raise _UsageError(f"--exposure must be a positive finite number, got {args.exposure}")
     scene_file = Path(args.scene)
     if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
         raise _UsageError(f"--scene: file {args.scene!r} does not exist")
@@ -522,10 +613,7 @@ def _run_render(args) -> int:
             result = distributed.render(args.scene, client=client, **options)
     finally:
         _close_client(client)
-    try:
-        paths = write_outputs(result, out, exposure=args.exposure)
-    except OSError as exc:
-        raise OSError(exc.errno, exc.strerror, args.out) from exc
+    paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
     method = f" ({result.method})" if result.method else ""
     if client is None:
         where = f"on {result.threads} threads (+{result.startup_seconds:.2f} s compile/load)"

@@ -15,10 +15,40 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BLACK", "SceneError", "color", "integer", "number", "sequence", "vector"]
+__all__ = ["BLACK", "MAX_DEPTH", "MAX_MAGNITUDE", "SceneError", "color", "integer", "number", "sequence", "vector"]
 
 BLACK: tuple[float, float, float] = (0.0, 0.0, 0.0)
 """The colour (0, 0, 0): no emission, no background."""
+
+MAX_MAGNITUDE = 1e30
+"""Largest absolute value of a number in a scene (coordinates, radii, emission, ...): products of a few of
+them (areas, light powers, squared distances) stay finite in float64, so an image is never inf."""
+
+MAX_DEPTH = 1_000_000
+"""Largest path depth (``settings.max_depth``, ``settings.rr_depth``): the kernels count in int64, and a
+deeper path carries no measurable energy."""
+
+
+def shown(value: Any) -> str:
+    """A short repr of *value* for a message (an integer of 10**400 would flood it, one of 10**5000
+    cannot even be printed).
+
+    Examples
+    --------
+    >>> from symsphere.render._scene_checks import shown
+    >>> shown(10**400)
+    'an integer of 401 digits'
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        try:
+            return f"an integer of {len(str(abs(value)))} digits"
+        except ValueError:  # beyond sys.get_int_max_str_digits()
+            return "an integer of thousands of digits"
+    try:
+        text = repr(value)
+    except (ValueError, RecursionError):
+        return f"a {type(value).__name__}"
+    return text if len(text) <= 80 else text[:60] + "..."
 
 
 class SceneError(ValueError):
@@ -65,15 +95,20 @@ def number(value: Any, where: str) -> float:
     symsphere.render.scene.SceneError: camera.fov must be finite, got nan
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise SceneError(f"{where} must be a number, got {value!r}")
-    result = float(value)
+        raise SceneError(f"{where} must be a number, got {shown(value)}")
+    try:
+        result = float(value)
+    except OverflowError:  # an int beyond float64
+        raise SceneError(f"{where} must be at most {MAX_MAGNITUDE:g} in magnitude, got {shown(value)}") from None
     if not math.isfinite(result):
         raise SceneError(f"{where} must be finite, got {result!r}")
+    if abs(result) > MAX_MAGNITUDE:
+        raise SceneError(f"{where} must be at most {MAX_MAGNITUDE:g} in magnitude, got {result!r}")
     return result
 
 
-def integer(value: Any, where: str, minimum: int) -> int:
-    """*value*, an integer (not a bool) >= *minimum*, as an int.
+def integer(value: Any, where: str, minimum: int, maximum: int = MAX_DEPTH) -> int:
+    """*value*, an integer (not a bool) in [*minimum*, *maximum*], as an int.
 
     Examples
     --------
@@ -82,9 +117,11 @@ def integer(value: Any, where: str, minimum: int) -> int:
     5
     """
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise SceneError(f"{where} must be an integer, got {value!r}")
+        raise SceneError(f"{where} must be an integer, got {shown(value)}")
     if value < minimum:
-        raise SceneError(f"{where} must be >= {minimum}, got {value!r}")
+        raise SceneError(f"{where} must be >= {minimum}, got {shown(value)}")
+    if value > maximum:
+        raise SceneError(f"{where} must be at most {maximum}, got {shown(value)}")
     return int(value)
 
 
@@ -98,7 +135,7 @@ def vector(value: Any, where: str) -> tuple[float, ...]:
     (0.0, 1.0, 5.0)
     """
     if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
-        raise SceneError(f"{where} must be 3 numbers [x, y, z], got {value!r}")
+        raise SceneError(f"{where} must be 3 numbers [x, y, z], got {shown(value)}")
     return tuple(number(c, f"{where}[{i}]") for i, c in enumerate(value))
 
 
@@ -114,7 +151,7 @@ def color(value: Any, where: str, upper: float | None) -> tuple[float, ...]:
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         value = (value, value, value)
     elif isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
-        raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {value!r}")
+        raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {shown(value)}")
     rgb = tuple(number(c, where) for c in value)
     for c in rgb:
         if c < 0 or (upper is not None and c > upper):

@@ -1,6 +1,8 @@
 """Image output: linear HDR (PFM, .npy) and tone-mapped sRGB PNG, every file written atomically.
 
 Images are (height, width, 3) arrays of linear radiance, row 0 at the top.
+Several files of one image (:func:`save_image_set`) appear together or not at all
+(:func:`symsphere.io.atomic_paths`).
 
 - PFM (Portable Float Map): ``PF``, ``width height``, scale ``-1.0`` (negative:
   little-endian), then float32 RGB rows from the *bottom* row up.
@@ -18,20 +20,70 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from ..io import atomic_path
+from ..io import atomic_paths
 
-__all__ = ["HDR_SUFFIXES", "linear_to_srgb", "tonemap", "save_png", "save_pfm", "load_pfm", "save_npy", "save_image"]
+__all__ = [
+    "HDR_SUFFIXES",
+    "IMAGE_SUFFIXES",
+    "linear_to_srgb",
+    "tonemap",
+    "save_png",
+    "save_pfm",
+    "load_pfm",
+    "save_npy",
+    "save_image",
+    "save_image_set",
+]
 
 HDR_SUFFIXES = (".pfm", ".npy")
+IMAGE_SUFFIXES = (".png", ".pfm", ".npy")
+"""The suffixes (lower case; matched case-insensitively) :func:`save_image` and :func:`save_image_set` write."""
 
 
 def _check_image(image, name="image") -> np.ndarray:
-    image = np.asarray(image)
+    try:
+        image = np.asarray(image)
+    except (TypeError, ValueError):
+        raise TypeError(f"'{name}' must be an array of shape (height, width, 3)") from None
     if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 1 or image.shape[1] < 1:
         raise ValueError(f"'{name}' must have shape (height, width, 3), got {image.shape}")
     if not np.issubdtype(image.dtype, np.floating):
         raise TypeError(f"'{name}' must be a floating-point array, got dtype {image.dtype}")
     return image
+
+
+def _check_suffix(path: str | os.PathLike, allowed: tuple[str, ...], name: str = "path") -> str:
+    if isinstance(path, (bytes, bytearray)) or not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"'{name}' must be a str or os.PathLike, got {type(path).__name__}")
+    suffix = Path(path).suffix.lower()
+    if suffix not in allowed:
+        raise ValueError(f"'{name}' must end in {' or '.join(allowed)}, got {str(path)!r}")
+    return suffix
+
+
+def _write(suffix: str, temporary: Path, image: np.ndarray, exposure: float) -> None:
+    """Write *image* (checked) in the format of *suffix* to the file *temporary*."""
+    if suffix == ".png":
+        from matplotlib.image import imsave
+
+        imsave(temporary, tonemap(image, exposure), format="png")
+    elif suffix == ".pfm":
+        height, width = image.shape[:2]
+        data = np.ascontiguousarray(image[::-1], dtype="<f4")
+        with open(temporary, "wb") as handle:
+            handle.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
+            handle.write(data.tobytes())
+    else:
+        with open(temporary, "wb") as handle:
+            np.save(handle, image)
+
+
+def _check_exposure(exposure: object) -> float:
+    if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.integer, np.floating)):
+        raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
+    if not (np.isfinite(exposure) and exposure > 0):
+        raise ValueError(f"'exposure' must be a positive finite number, got {exposure!r}")
+    return float(exposure)
 
 
 def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
@@ -60,14 +112,16 @@ def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
     array([188, 188, 188], dtype=uint8)
     """
     image = _check_image(image)
-    if not (isinstance(exposure, (int, float)) and np.isfinite(exposure) and exposure > 0):
-        raise ValueError(f"'exposure' must be a positive number, got {exposure!r}")
-    scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
+    exposure = _check_exposure(exposure)
+    with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are handled next
+        scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
     return np.rint(255.0 * linear_to_srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
 
 
 def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
     r"""Write the tone-mapped *image* (see :func:`tonemap`) as a PNG file, atomically.
+
+    *path* must end in ``.png`` (a PNG under another name would mislead every reader).
 
     Examples
     --------
@@ -77,16 +131,14 @@ def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.
     ...     save_png(pathlib.Path(folder) / "x.png", np.zeros((2, 3, 3))).read_bytes()[:4]
     b'\x89PNG'
     """
-    from matplotlib.image import imsave
-
-    pixels = tonemap(image, exposure)
-    with atomic_path(path) as temporary:
-        imsave(temporary, pixels, format="png")
-    return Path(path)
+    _check_suffix(path, (".png",))
+    return save_image_set([path], image, exposure)[0]
 
 
 def save_pfm(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
     r"""Write *image* as a little-endian RGB PFM (float32, bottom row first), atomically.
+
+    *path* must end in ``.pfm``.
 
     Examples
     --------
@@ -96,14 +148,56 @@ def save_pfm(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
     ...     save_pfm(pathlib.Path(folder) / "x.pfm", np.zeros((2, 3, 3))).read_bytes()[:12]
     b'PF\n3 2\n-1.0\n'
     """
+    _check_suffix(path, (".pfm",))
+    return save_image_set([path], image)[0]
+
+
+def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposure: float = 1.0) -> list[Path]:
+    """Write *image* to every file of *paths*, each in the format of its suffix, all or none.
+
+    Parameters
+    ----------
+    paths : list of str or os.PathLike
+        Distinct files ending in ``.png`` (tone-mapped with *exposure*), ``.pfm`` or ``.npy``.
+    image : array_like, shape (height, width, 3)
+        Linear radiance.
+    exposure : float
+        For the PNG files (see :func:`tonemap`).
+
+    Returns
+    -------
+    list of pathlib.Path
+        *paths*.
+
+    Notes
+    -----
+    Every argument is checked before any file is created.  The files are written under
+    temporary names and renamed together (:func:`symsphere.io.atomic_paths`): after an
+    error, a full disk, Ctrl-C or SIGTERM, either every file is new or every file is as
+    it was; an ``OSError`` names the file that could not be written.
+
+    Examples
+    --------
+    >>> import numpy as np, pathlib, tempfile
+    >>> from symsphere.render import save_image_set
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     paths = save_image_set([pathlib.Path(folder) / name for name in ("x.png", "x.pfm")], np.zeros((1, 1, 3)))
+    ...     sorted(p.name for p in pathlib.Path(folder).iterdir())
+    ['x.png', 'x.pfm']
+    """
+    if isinstance(paths, (str, bytes, os.PathLike)) or not hasattr(paths, "__iter__"):
+        raise TypeError(f"'paths' must be a list of file names, got {type(paths).__name__}")
+    paths = list(paths)
+    suffixes = [_check_suffix(path, IMAGE_SUFFIXES, "paths") for path in paths]
     image = _check_image(image)
-    height, width = image.shape[:2]
-    data = np.ascontiguousarray(image[::-1], dtype="<f4")
-    with atomic_path(path) as temporary:
-        with open(temporary, "wb") as handle:
-            handle.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
-            handle.write(data.tobytes())
-    return Path(path)
+    exposure = _check_exposure(exposure)
+    with atomic_paths(paths) as temporaries:
+        for suffix, temporary, path in zip(suffixes, temporaries, paths):
+            try:
+                _write(suffix, temporary, image, exposure)
+            except OSError as exc:  # name the user's file, not the temporary next to it
+                raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+    return [Path(path) for path in paths]
 
 
 def load_pfm(path: str | os.PathLike) -> np.ndarray:
@@ -149,7 +243,7 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
 
 
 def save_npy(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
-    """Write *image* with ``numpy.save``, atomically.
+    """Write *image* with ``numpy.save``, atomically; *path* must end in ``.npy``.
 
     Examples
     --------
@@ -159,11 +253,8 @@ def save_npy(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
     ...     np.load(save_npy(pathlib.Path(folder) / "x.npy", np.ones((1, 1, 3)))).tolist()
     [[[1.0, 1.0, 1.0]]]
     """
-    image = _check_image(image)
-    with atomic_path(path) as temporary:
-        with open(temporary, "wb") as handle:
-            np.save(handle, image)
-    return Path(path)
+    _check_suffix(path, (".npy",))
+    return save_image_set([path], image)[0]
 
 
 def save_image(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
@@ -177,11 +268,5 @@ def save_image(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 
     ...     save_image(pathlib.Path(folder) / "x.npy", np.zeros((1, 1, 3))).suffix
     '.npy'
     """
-    suffix = Path(path).suffix.lower()
-    if suffix == ".png":
-        return save_png(path, image, exposure)
-    if suffix == ".pfm":
-        return save_pfm(path, image)
-    if suffix == ".npy":
-        return save_npy(path, image)
-    raise ValueError(f"the image file must end in .png, .pfm or .npy, got {str(path)!r}")
+    _check_suffix(path, IMAGE_SUFFIXES)
+    return save_image_set([path], image, exposure)[0]

@@ -13,9 +13,9 @@ import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._validation import check_count
+from .._validation import MAX_PATHS, check_count, check_size
 from . import _integrator as _k
-from .image import save_npy, save_pfm, save_png
+from .image import save_image_set
 from .scene import Scene
 from .scenes import get_scene
 
@@ -323,6 +323,7 @@ def plan_passes(
     width = check_count(width, "width")
     height = check_count(height, "height")
     spp = check_count(spp, "spp")
+    check_size(spp, "spp", MAX_PATHS // (width * height), f"for {width}x{height} pixels (paths are counted in int64)")
     if sampler not in SAMPLERS:
         raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
     if integrator not in INTEGRATORS:
@@ -397,7 +398,9 @@ def write_outputs(result: RenderResult, out: str | os.PathLike, exposure: float 
     """Write ``out`` (.png, tone-mapped) and, next to it, the HDR image as ``.pfm`` and ``.npy``.
 
     *out* may end in .png, .pfm or .npy; all three files are written with the
-    same stem, each atomically.  Returns their paths (PNG, PFM, NPY).
+    same stem, as one set: they appear together, complete, or none does (an error,
+    a full disk or a signal leaves the previous files as they were).  Returns their
+    paths (PNG, PFM, NPY).
 
     Examples
     --------
@@ -408,11 +411,12 @@ def write_outputs(result: RenderResult, out: str | os.PathLike, exposure: float 
     ...     [p.name for p in write_outputs(result, pathlib.Path(folder) / "f.png")]
     ['f.png', 'f.pfm', 'f.npy']
     """
+    if not isinstance(result, RenderResult):
+        raise TypeError(f"'result' must be a RenderResult (from render()), got {type(result).__name__}")
+    if isinstance(out, bytes) or not isinstance(out, (str, os.PathLike)):
+        raise TypeError(f"'out' must be a str or os.PathLike, got {type(out).__name__}")
     out = Path(out)
     if out.suffix.lower() not in (".png", ".pfm", ".npy"):
-        raise ValueError(f"'--out' must end in .png, .pfm or .npy, got {str(out)!r}")
-    png, pfm, npy = (out.with_suffix(s) for s in (".png", ".pfm", ".npy"))
-    save_png(png, result.image, exposure)
-    save_pfm(pfm, result.image)
-    save_npy(npy, result.image)
-    return [png, pfm, npy]
+        raise ValueError(f"'out' must end in .png, .pfm or .npy, got {str(out)!r}")
+    # One set: all three files appear together or none does (symsphere.io.atomic_paths).
+    return save_image_set([out.with_suffix(s) for s in (".png", ".pfm", ".npy")], result.image, exposure)

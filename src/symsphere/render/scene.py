@@ -29,7 +29,7 @@ import numpy.typing as npt
 
 from ..frames import frame_rows
 from . import _integrator as _k
-from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, vector
+from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, shown, vector
 
 if TYPE_CHECKING:  # importable from here (see __getattr__ below); those modules import this one
     from .scene_files import load_scene, scene_from_dict
@@ -145,7 +145,13 @@ def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
     >>> dielectric(1.33).ior
     1.33
     """
-    return Material("dielectric", _rgb(tint, "tint"), ior=ior)
+    try:
+        index = number(ior, "ior")
+    except SceneError as exc:
+        raise ValueError(str(exc)) from None
+    if not index > 0:
+        raise ValueError(f"ior must be positive, got {index!r}")
+    return Material("dielectric", _rgb(tint, "tint"), ior=index)
 
 
 @dataclass(frozen=True)
@@ -254,7 +260,7 @@ class Scene:
     source: str | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
-        where = f"scene file {self.source!r}" if self.source else f"scene {self.name!r}"
+        where = f"scene file {self.source!r}" if self.source else f"scene {shown(self.name)}"
         try:
             _normalise(self)
         except SceneError as exc:
@@ -379,7 +385,7 @@ def _normalise(scene: Scene) -> None:
     """Convert every field to plain floats / tuples in place and check it; SceneError names the field."""
     put = object.__setattr__
     if not isinstance(scene.name, str) or not scene.name:
-        raise SceneError(f"name must be a non-empty string, got {scene.name!r}")
+        raise SceneError(f"name must be a non-empty string, got {shown(scene.name)}")
     if not isinstance(scene.camera, Camera):
         raise SceneError(f"camera must be a Camera, got {type(scene.camera).__name__}")
     put(scene, "camera", _check_camera(scene.camera))
@@ -388,7 +394,7 @@ def _normalise(scene: Scene) -> None:
     materials = {}
     for name, material in scene.materials.items():
         if not isinstance(name, str) or not name:
-            raise SceneError(f"material names must be non-empty strings, got {name!r}")
+            raise SceneError(f"material names must be non-empty strings, got {shown(name)}")
         materials[name] = _check_material(material, f"materials.{name}")
     put(scene, "materials", materials)
     spheres = []
@@ -468,7 +474,7 @@ def _check_material(material, where) -> Material:
     if not isinstance(material, Material):
         raise SceneError(f"{where} must be a Material, got {type(material).__name__}")
     if material.kind not in MATERIAL_KINDS:
-        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {material.kind!r}")
+        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {shown(material.kind)}")
     color_name = {"diffuse": "albedo", "dielectric": "tint"}.get(material.kind, "reflectance")
     rgb = color(material.color, f"{where}.{color_name}", upper=1.0)
     transmittance = color(material.transmittance, f"{where}.transmittance", upper=1.0)
@@ -492,10 +498,10 @@ def _rgb(value, where):
 
 def _material_name(name, materials, where) -> str:
     if not isinstance(name, str):
-        raise SceneError(f"{where} must be the name of a material, got {name!r}")
+        raise SceneError(f"{where} must be the name of a material, got {shown(name)}")
     if name not in materials:
         known = ", ".join(sorted(materials))
-        raise SceneError(f"{where} names an unknown material {name!r}; defined: {known}")
+        raise SceneError(f"{where} names an unknown material {shown(name)}; defined: {known}")
     return name
 
 

@@ -56,10 +56,13 @@ from pathlib import Path
 from collections.abc import Collection, Iterable, Mapping
 from typing import Any
 
-from ._scene_checks import BLACK, SceneError, vector
+from ._scene_checks import BLACK, SceneError, shown, vector
 from .scene import MATERIAL_KINDS, Camera, HalfSpace, Material, Quad, Scene, Sphere
 
-__all__ = ["load_scene", "scene_from_dict"]
+__all__ = ["MAX_SCENE_BYTES", "load_scene", "scene_from_dict"]
+
+MAX_SCENE_BYTES = 16 * 2**20
+"""Largest scene file :func:`load_scene` reads (16 MiB); a scene is a short text."""
 
 # The parameters each kind takes, in a file: (file key, attribute, default)
 _KIND_KEYS = {
@@ -84,8 +87,9 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     FileNotFoundError
         If *path* does not exist.
     ValueError
-        If the file is not valid TOML/JSON or not a valid scene; the message
-        is ``scene file '<path>': <field> ...``.
+        (:class:`~symsphere.render.SceneError`) If the file is not valid TOML/JSON
+        (or is larger than :data:`MAX_SCENE_BYTES`, or nested too deeply) or not a
+        valid scene; the message is ``scene file '<path>': <field> ...``.
 
     Examples
     --------
@@ -105,13 +109,18 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     suffix = path.suffix.lower()
     if suffix not in (".toml", ".json"):
         raise ValueError(f"{where}: the suffix must be .toml or .json, got {path.suffix!r}")
-    raw = path.read_bytes()
+    with open(path, "rb") as handle:
+        raw = handle.read(MAX_SCENE_BYTES + 1)
+    if len(raw) > MAX_SCENE_BYTES:
+        raise SceneError(f"{where}: larger than {MAX_SCENE_BYTES // 2**20} MiB; a scene file is a short text")
     try:
         data = tomllib.loads(raw.decode("utf-8")) if suffix == ".toml" else json.loads(raw.decode("utf-8"))
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{where}: not UTF-8 text ({exc})") from None
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{where}: not valid {suffix[1:].upper()}: {exc}") from None
+        raise SceneError(f"{where}: not UTF-8 text ({exc})") from None
+    except RecursionError:  # arrays or tables nested thousands deep: the parsers recurse
+        raise SceneError(f"{where}: nested too deeply to be a scene") from None
+    except ValueError as exc:  # TOMLDecodeError, JSONDecodeError, and integers beyond the digit limit
+        raise SceneError(f"{where}: not valid {suffix[1:].upper()}: {exc}") from None
     return scene_from_dict(data, source=str(path), default_name=path.stem)
 
 
@@ -132,7 +141,10 @@ def scene_from_dict(data: Mapping[str, Any], *, source: str | None = None, defau
     """
     where = f"scene file {source!r}" if source else "scene"
     try:
-        return _from_dict(data, source, default_name)
+        try:
+            return _from_dict(data, source, default_name)
+        except RecursionError:  # a value nested thousands deep (its repr recurses)
+            raise SceneError("a value is nested too deeply") from None
     except SceneError as exc:
         message = str(exc)
         raise SceneError(message if message.startswith(where) else f"{where}: {message}") from None
@@ -192,10 +204,10 @@ def _from_dict(data: Any, source: str | None, default_name: str) -> Scene:
 
 def _material_from_dict(value: Any, where: str) -> Material:
     if not isinstance(value, Mapping):
-        raise SceneError(f"{where} must be a table, got {value!r}")
+        raise SceneError(f"{where} must be a table, got {shown(value)}")
     kind = value.get("type")
     if kind not in MATERIAL_KINDS:
-        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {kind!r}")
+        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {shown(kind)}")
     parameters = _KIND_KEYS[kind]
     allowed = {"type", "emission"} | {key for key, _, _ in parameters}
     _table(value, where, allowed)
@@ -215,7 +227,7 @@ def _table(
     if allowed is not None:
         unknown = sorted(set(value) - set(allowed))
         if unknown:
-            raise SceneError(f"unknown key {unknown[0]!r} in {where}; allowed: {_join(sorted(allowed))}")
+            raise SceneError(f"unknown key {shown(unknown[0])} in {where}; allowed: {_join(sorted(allowed))}")
     missing = sorted(set(required) - set(value))
     if missing:
         raise SceneError(f"{where}.{missing[0]} is missing")
