@@ -55,7 +55,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Domain, FloatArray, MapMethod
-from ._validation import check_choice, check_directions, check_uv
+from . import sampling
+from ._validation import check_choice, check_unit_directions, check_uv
 from .maps import get_map
 from .symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold
 
@@ -198,7 +199,7 @@ def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area")
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 24`` for z >= 0, 0 below.
+        ``triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
 
     Examples
     --------
@@ -316,18 +317,12 @@ def _forward(uv: npt.ArrayLike, method: MapMethod, maps: npt.NDArray[np.float64]
 
 
 def _pdf(d: npt.ArrayLike, method: MapMethod, count: int) -> FloatArray:
-    d = check_directions(d, "d")
-    triangle_map = get_map(method)
-    d64 = d.astype(np.float64)
-    _, base = fold(d64)
-    density = triangle_map.pdf(base.astype(np.float64, copy=False)) / count
-    if count == 24:
-        density = np.where(d64[..., 2] >= 0, density, 0.0)
-    return np.asarray(density).astype(d.dtype, copy=False)
+    # The warp's density is the scheme's: a strip of 1/count of the square onto one triangle.
+    return sampling.sphere_pdf(d, method) if count == 48 else sampling.hemisphere_pdf(d, method)
 
 
 def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
-    d = check_directions(d, "d")
+    d = check_unit_directions(d, "d")
     triangle_map = get_map(method)
     count = 48 if domain == "sphere" else 24
     d64 = d.astype(np.float64)
