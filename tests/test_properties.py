@@ -86,6 +86,9 @@ OVERRIDES = {
     "get_peer": dict(name="classic"),
     "integrate": dict(normal=None),
     "concentric_disk_to_square": dict(p=np.array([[0.3, 0.2]])),
+    "sample_lebedev": dict(n=50),
+    "lebedev_weights": dict(n=50),
+    "interlace_digits": dict(x=np.array([[0.3, 0.6, 0.2, 0.9]]), factor=2),
 }
 # Documented to return inf (a density that diverges at a vertex of the paper's maps): finite elsewhere.
 MAY_BE_INF = {"triangle_pdf", "sphere_pdf", "hemisphere_pdf"}

@@ -182,9 +182,9 @@ def test_bad_input(sampler, kwargs, error, match):
 
 def test_n_not_multiple_names_nearest_sizes():
     # The streaming samplers work in whole orbits (sample_sphere and sample_hemisphere take any n).
-    with pytest.raises(ValueError, match=r"'n'=100 is not a multiple of 48; the nearest valid sizes are 96 or 144"):
+    with pytest.raises(ValueError, match=r"'n_total'=100 is not a multiple of 48; the nearest valid sizes are 96 or 144"):
         iter_sphere(100)
-    with pytest.raises(ValueError, match=r"'n'=10 is not a multiple of 24; the nearest valid sizes are 24"):
+    with pytest.raises(ValueError, match=r"'n_total'=10 is not a multiple of 24; the nearest valid sizes are 24"):
         iter_hemisphere(10)
 
 

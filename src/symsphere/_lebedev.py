@@ -59,6 +59,7 @@ def lebedev_size(n: int, *, randomize: bool = False) -> int:
     (974, 5810, 17430)
     """
     n = check_count(n, "n")
+    randomize = _check_randomize(randomize)
     if n < LEBEDEV_SIZES[0]:
         raise ValueError(f"'n' must be at least {LEBEDEV_SIZES[0]} (the smallest Lebedev rule), got {n}")
     if randomize and n >= 2 * LEBEDEV_SIZES[-1]:
@@ -103,15 +104,13 @@ def sample_lebedev(
     >>> d = sample_lebedev(2 * 5810, randomize=True, rng=1)   # two rotated copies of the order-131 rule
     >>> a = np.array([0.3, -0.5, 0.6])
     >>> exact = 4 * np.pi * np.sinh(np.linalg.norm(a)) / np.linalg.norm(a)
-    >>> bool(abs(np.sum(lebedev_weights(2 * 5810) * np.exp(d @ a)) / exact - 1) < 1e-12)
+    >>> bool(abs(np.sum(lebedev_weights(2 * 5810, randomize=True) * np.exp(d @ a)) / exact - 1) < 1e-12)
     True
     """
     n = check_count(n, "n")
     dtype = check_dtype(dtype)
     rng = check_rng(rng)
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise TypeError(f"'randomize' must be a bool, got {type(randomize).__name__}")
-    copies, size = _layout(n, bool(randomize))
+    copies, size = _layout(n, _check_randomize(randomize))
     nodes, _ = _rule(size)
     if not randomize:
         out: FloatArray = nodes.astype(dtype)
@@ -143,9 +142,15 @@ def lebedev_weights(n: int, *, randomize: bool = False) -> Float64Array:
     >>> bool(np.allclose(w, 4 * np.pi / 6))
     True
     """
-    copies, size = _layout(check_count(n, "n"), randomize)
+    copies, size = _layout(check_count(n, "n"), _check_randomize(randomize))
     _, weights = _rule(size)
     return np.tile(weights / copies, copies)
+
+
+def _check_randomize(randomize: object) -> bool:
+    if not isinstance(randomize, (bool, np.bool_)):
+        raise TypeError(f"'randomize' must be a bool, got {type(randomize).__name__}")
+    return bool(randomize)
 
 
 def _layout(n: int, randomize: bool) -> tuple[int, int]:

@@ -311,7 +311,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     >>> check_unit_directions([0.0, 0.0, 2.0])
     Traceback (most recent call last):
         ...
-    ValueError: 'd' must be unit vectors (norm 1 within 0.001); got a norm of 2.0
+    ValueError: 'd' must be unit vectors (norm 1 within 0.001); got a norm of 2
     """
     arr = check_directions(d, name)
     if arr.size:

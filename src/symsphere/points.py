@@ -39,7 +39,7 @@ from numba import njit, prange
 
 from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
-from ._validation import check_choice, check_count, check_rng, check_sobol_size
+from ._validation import as_float_array, check_choice, check_count, check_rng, check_sobol_size
 
 if TYPE_CHECKING:
     from scipy.stats.qmc import QMCEngine
@@ -235,10 +235,8 @@ def interlace_digits(x: npt.ArrayLike, factor: int) -> Float64Array:
     >>> y.round(6)
     array([[0.5625, 0.625 ]])
     """
-    if isinstance(factor, bool) or not isinstance(factor, (int, np.integer)) or not 1 <= factor <= 8:
-        raise ValueError(f"'factor' must be an integer in [1, 8], got {factor!r}")
-    factor = int(factor)
-    x = np.asarray(x, dtype=np.float64)
+    factor = check_count(factor, "factor", maximum=8)
+    x = as_float_array(x, "x").astype(np.float64, copy=False)
     if x.ndim != 2 or x.shape[1] % factor or x.shape[1] == 0:
         raise ValueError(f"'x' must have shape (m, s * factor) with factor={factor}, got {x.shape}")
     if np.any(~((x >= 0) & (x < 1))):

@@ -18,7 +18,7 @@ unbiased and converges to the same image.
 See docs/rendering.md.
 """
 
-from .image import linear_to_srgb, load_pfm, save_image, save_npy, save_pfm, save_png, tonemap
+from .image import linear_to_srgb, load_pfm, save_image, save_image_set, save_npy, save_pfm, save_png, tonemap
 from .renderer import (
     FILTERS,
     INTEGRATORS,
@@ -77,6 +77,7 @@ __all__ = [
     "render",
     "render_passes",
     "save_image",
+    "save_image_set",
     "save_npy",
     "save_pfm",
     "save_png",
