@@ -183,7 +183,7 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     paths = save_image_set([pathlib.Path(folder) / name for name in ("x.png", "x.pfm")], np.zeros((1, 1, 3)))
     ...     sorted(p.name for p in pathlib.Path(folder).iterdir())
-    ['x.png', 'x.pfm']
+    ['x.pfm', 'x.png']
     """
     if isinstance(paths, (str, bytes, os.PathLike)) or not hasattr(paths, "__iter__"):
         raise TypeError(f"'paths' must be a list of file names, got {type(paths).__name__}")
