@@ -2,15 +2,17 @@
 
 For each size, the calls for n and for the multiple m * 48 are interleaved (a, b, a, b, ...), so that a
 busy machine's noise hits both alike; the ratio ``time(n) / time(48 m)`` of the medians (and of the
-minima) is printed for fresh output and for ``out=``.  Target: every ratio <= 1.10.
+minima) is printed for fresh output and for ``out=``, in float64 and float32.  Target: every ratio of
+medians <= 1.10.  The load average before and after is printed: on a shared machine, run it twice.
 
-    python benchmarks/bench_any_size.py [--repeats 400] [--json results/....json]
+    python benchmarks/bench_any_size.py [--repeats 400] [--dtype float64 float32] [--json results/....json]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import time
 from pathlib import Path
@@ -37,39 +39,53 @@ def interleaved(call_a, call_b, repeats):
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer for the largest)")
+    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer, at least 40, for the largest)")
+    parser.add_argument("--dtype", nargs="+", default=["float64", "float32"], choices=["float64", "float32"])
     parser.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
     args = parser.parse_args()
-    print(f"symsphere {symsphere.__version__}, numpy {np.__version__}, {platform.processor() or platform.machine()}")
+    print(f"symsphere {symsphere.__version__}, numpy {np.__version__}, {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} cores, load average {_load()}")
     print("medians over interleaved calls; ratio = time(n) / time(multiple of 48) (of the minima); target <= 1.10\n")
-    print("| multiple | n | fresh: µs, multiple | n | ratio (min) | out=: µs, multiple | n | ratio (min) |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| dtype | multiple | n | fresh: µs, multiple | n | ratio (min) | out=: µs, multiple | n | ratio (min) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     rows = []
-    for multiple in MULTIPLES:
-        repeats = max(10, args.repeats // (1 + multiple // 50_000))
-        for offset in OFFSETS:
-            n = multiple + offset
-            symsphere.sample_sphere(n, rng=1)  # compile / warm up
-            fresh = interleaved(lambda: symsphere.sample_sphere(multiple, rng=1), lambda: symsphere.sample_sphere(n, rng=1), repeats)
-            out_a, out_b = np.empty((multiple, 3)), np.empty((n, 3))
-            given = interleaved(
-                lambda: symsphere.sample_sphere(multiple, rng=1, out=out_a),
-                lambda: symsphere.sample_sphere(n, rng=1, out=out_b),
-                repeats,
-            )
-            row = dict(multiple=multiple, n=n, fresh=fresh, out=given)
-            rows.append(row)
-            print(
-                f"| {multiple} | {n} | {fresh[0] * 1e6:.0f} | {fresh[1] * 1e6:.0f} | {fresh[1] / fresh[0]:.3f} "
-                f"({fresh[3] / fresh[2]:.3f}) | {given[0] * 1e6:.0f} | {given[1] * 1e6:.0f} | "
-                f"{given[1] / given[0]:.3f} ({given[3] / given[2]:.3f}) |",
-                flush=True,
-            )
+    for dtype in args.dtype:
+        for multiple in MULTIPLES:
+            repeats = max(40, args.repeats // (1 + multiple // 50_000))
+            for offset in OFFSETS:
+                rows.append(_row(multiple, multiple + offset, np.dtype(dtype), repeats))
     worst = max(max(r["fresh"][1] / r["fresh"][0], r["out"][1] / r["out"][0]) for r in rows)
-    print(f"\nworst ratio of medians {worst:.3f}")
+    print(f"\nworst ratio of medians {worst:.3f}; load average {_load()}")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1), encoding="utf-8")
     return 0
+
+
+def _row(multiple, n, dtype, repeats):
+    """Time sample_sphere(multiple) against sample_sphere(n), fresh and into ``out=``; print a table row."""
+    symsphere.sample_sphere(n, rng=1, dtype=dtype)  # compile / warm up
+    fresh = interleaved(
+        lambda: symsphere.sample_sphere(multiple, rng=1, dtype=dtype),
+        lambda: symsphere.sample_sphere(n, rng=1, dtype=dtype),
+        repeats,
+    )
+    out_a, out_b = np.empty((multiple, 3), dtype), np.empty((n, 3), dtype)
+    given = interleaved(
+        lambda: symsphere.sample_sphere(multiple, rng=1, dtype=dtype, out=out_a),
+        lambda: symsphere.sample_sphere(n, rng=1, dtype=dtype, out=out_b),
+        repeats,
+    )
+    print(
+        f"| {dtype.name} | {multiple} | {n} | {fresh[0] * 1e6:.0f} | {fresh[1] * 1e6:.0f} | {fresh[1] / fresh[0]:.3f} "
+        f"({fresh[3] / fresh[2]:.3f}) | {given[0] * 1e6:.0f} | {given[1] * 1e6:.0f} | "
+        f"{given[1] / given[0]:.3f} ({given[3] / given[2]:.3f}) |",
+        flush=True,
+    )
+    return dict(dtype=dtype.name, multiple=multiple, n=n, fresh=fresh, out=given)
+
+
+def _load():
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 if __name__ == "__main__":

@@ -10,7 +10,9 @@ import warnings
 import numpy as np
 import pytest
 
-from symsphere import fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere import _kernels, fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere.frames import frame
+from symsphere.points import BasePoints
 from symsphere.stats import chi2_test, uniform_pdf
 
 SIGNIFICANCE = 0.01
@@ -50,14 +52,38 @@ def test_hemisphere_any_n(n):
     assert np.all(d @ np.array(normal) >= -1e-12)
 
 
+@pytest.mark.parametrize("n", [101, 48 * 400 + 5])
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_out_and_dtype_for_any_n(dtype):
-    out = np.full((101, 3), np.nan, dtype=dtype)
-    assert sample_sphere(101, rng=5, dtype=dtype, out=out) is out
-    assert np.array_equal(out, sample_sphere(101, rng=5, dtype=dtype))
+def test_out_and_dtype_for_any_n(dtype, n):
+    out = np.full((n, 3), np.nan, dtype=dtype)
+    assert sample_sphere(n, rng=5, dtype=dtype, out=out) is out
+    fresh = sample_sphere(n, rng=5, dtype=dtype)
+    assert np.array_equal(out, fresh) and fresh.base is None  # a fresh array of n rows, not a view of more
     assert np.all(np.isfinite(out))
     with pytest.raises(ValueError, match="'out' must have shape"):
         sample_sphere(101, out=np.empty((96, 3), dtype=dtype), dtype=dtype)
+
+
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+@pytest.mark.parametrize("rest, offset", [(1, 0), (5, 3), (5, -2), (-1, 7)])
+def test_cut_orbit_is_made_in_the_kernel_call(count, normal, rest, offset):
+    # The kernels cut the last orbit themselves (one call, no copy): the rows are those of the whole
+    # orbits, then members (offset + i) % count of the last one, bit for bit, whatever the number of parts.
+    rest, offset = rest % count, offset % count
+    m = 40  # points: more than one batch of the kernels per part
+    basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
+    source = BasePoints("random", 11, total=m + 3)
+    members = (m - 1) * count + (offset + np.arange(rest)) % count
+    for dtype in (np.float64, np.float32):
+        whole = _kernels.fill_random_orbits(source.seed_words, 3, m, "equal_area", count, basis, np.empty((m * count, 3), dtype))
+        expected = np.concatenate([whole[: (m - 1) * count], whole[members]])
+        for parts in (1, 2, 3, 7):
+            got = np.full(((m - 1) * count + rest, 3), np.nan, dtype)
+            _kernels.fill_random_orbits(source.seed_words, 3, m, "equal_area", count, basis, got, parts=parts, offset=offset)
+            assert np.array_equal(got, expected)
+            got[:] = np.nan
+            _kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
+            assert np.array_equal(got, expected)
 
 
 def test_stratified_needs_a_square_number_of_orbits():

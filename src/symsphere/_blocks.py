@@ -29,7 +29,7 @@ from .points import BasePoints
 from .symmetry import orbit
 
 __all__ = [
-    "CUT_ORBIT_KEY", "prepare", "fill_range", "fill_rows", "sample_rows", "cut_offset", "take_members",
+    "CUT_ORBIT_KEY", "prepare", "fill_range", "fill_rows", "cut_offset",
     "reference_orbits",
     "warn_at_caller",
 ]  # fmt: skip
@@ -74,10 +74,7 @@ def fill_range(
     source: BasePoints, start: int, stop: int, method: MapMethod, count: int, basis: Float64Array | None, out: FloatArray
 ) -> FloatArray:
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
-    if source.kind == "random":  # the kernel draws the points itself, in parallel
-        assert source.seed_words is not None  # random sources always have the stream's seed
-        return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out)
-    return fill_orbits(source.take(start, stop), method, count, basis, out)
+    return _fill(source, start, stop, method, count, basis, out, 0)
 
 
 def fill_rows(
@@ -85,46 +82,37 @@ def fill_rows(
 ) -> FloatArray:
     """Fill *out* (any number of rows) with the orbits of base points ``start, start + 1, ...``.
 
-    Whole orbits are written in place (:func:`fill_range`).  If ``len(out)`` is not a
-    multiple of *count*, the last orbit is made in a scratch block of *count* rows and
-    ``len(out) % count`` of its members are copied, from a random offset on
-    (:func:`cut_offset`): row k of a whole orbit always lies in triangle k, so the first
-    rows in table order would favour the first triangles; a random offset makes every row
-    of the cut orbit uniform (for a uniform map), and the mean of f over any n rows unbiased.
+    Whole orbits are written in place.  If ``len(out)`` is not a multiple of *count*, the
+    last ``len(out) % count`` rows are members of one more orbit, from a random offset on
+    (:func:`cut_offset`), made in the same kernel call: row k of a whole orbit always lies in
+    triangle k, so the first rows in table order would favour the first triangles; a random
+    offset makes every row of the cut orbit uniform (for a uniform map), and the mean of f over
+    any n rows unbiased.
     """
     whole, rest = divmod(len(out), count)
-    if rest and start == 0 and len(out) <= _ONE_CALL_ROWS:  # one kernel call and a copy beat two calls
-        out[:] = sample_rows(source, len(out), method, count, basis, out.dtype)
-        return out
-    if whole:
-        fill_range(source, start, start + whole, method, count, basis, out[: whole * count])
-    if rest:
-        scratch = np.empty((count, 3), dtype=out.dtype)
-        fill_range(source, start + whole, start + whole + 1, method, count, basis, scratch)
-        take_members(scratch, cut_offset(source, start + whole, count), rest, out[whole * count :])
-    return out
-
-
-def sample_rows(
-    source: BasePoints, n: int, method: MapMethod, count: int, basis: Float64Array | None, dtype: np.dtype[Any]
-) -> FloatArray:
-    """A new (n, 3) array as :func:`fill_rows` fills it from orbit 0, with one kernel call.
-
-    The ``ceil(n / count)`` orbits go into one buffer, the chosen members of the last
-    orbit are moved to its front, and the first n rows are returned (a view of the buffer: at most
-    ``count - 1`` rows more than asked for are allocated).
-    """
-    whole, rest = divmod(n, count)
     if not rest:
-        return fill_range(source, 0, whole, method, count, basis, np.empty((n, 3), dtype=dtype))
-    buffer = fill_range(source, 0, whole + 1, method, count, basis, np.empty(((whole + 1) * count, 3), dtype=dtype))
-    last = buffer[whole * count :]
-    take_members(last, cut_offset(source, whole, count), rest, last)
-    return buffer[:n]
+        return _fill(source, start, start + whole, method, count, basis, out, 0)
+    return _fill(source, start, start + whole + 1, method, count, basis, out, cut_offset(source, start + whole, count))
+
+
+def _fill(
+    source: BasePoints,
+    start: int,
+    stop: int,
+    method: MapMethod,
+    count: int,
+    basis: Float64Array | None,
+    out: FloatArray,
+    offset: int,
+) -> FloatArray:
+    """One kernel call: the orbits of points ``start ... stop - 1``, the last one cut to *out*'s rows."""
+    if source.kind == "random":  # the kernel draws the points itself, in parallel
+        assert source.seed_words is not None  # random sources always have the stream's seed
+        return fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out, offset=offset)
+    return fill_orbits(source.take(start, stop), method, count, basis, out, offset=offset)
 
 
 _MASK = (1 << 64) - 1
-_ONE_CALL_ROWS = 16384  # up to here, copying the rows costs less than a second kernel call (~20 us)
 
 
 def cut_offset(source: BasePoints, orbit_index: int, count: int) -> int:
@@ -134,7 +122,7 @@ def cut_offset(source: BasePoints, orbit_index: int, count: int) -> int:
     SplitMix64's finaliser (Steele et al. 2014) of a key made from the source's root
     entropy, :data:`CUT_ORBIT_KEY` and the orbit's index.  So each row of a cut orbit is a
     uniformly chosen member (uniform on the sphere for a uniform map), no member is taken
-    twice, and it costs about a microsecond: any n runs as fast as the next multiple of the
+    twice, and it costs about a microsecond: any n runs as fast as the nearest multiple of the
     orbit size.
     """
     w0, w1, w2, w3 = source.root_entropy
@@ -142,20 +130,6 @@ def cut_offset(source: BasePoints, orbit_index: int, count: int) -> int:
     key = ((key ^ (key >> 30)) * 0xBF58476D1CE4E5B9) & _MASK
     key = ((key ^ (key >> 27)) * 0x94D049BB133111EB) & _MASK
     return (key ^ (key >> 31)) % count
-
-
-def take_members(orbit: FloatArray, offset: int, rest: int, out: FloatArray) -> None:
-    """``out[i] = orbit[(offset + i) % len(orbit)]`` for ``i < rest``, by slices (*out* may be *orbit*'s front)."""
-    head = len(orbit) - offset
-    if head >= rest:  # no wrap: one slice (numpy buffers an overlapping copy)
-        if offset:
-            out[:rest] = orbit[offset : offset + rest]
-        elif out is not orbit:
-            out[:rest] = orbit[:rest]
-        return
-    tail = orbit[: rest - head].copy()  # before the front of *orbit* is overwritten
-    out[:head] = orbit[offset:]
-    out[head:rest] = tail
 
 
 def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:

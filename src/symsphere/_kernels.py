@@ -228,10 +228,19 @@ def _store_one(x, y, z, i, kind, weights, rows):
 
 
 @njit(inline="always")
-def _store_batch(base, first, stop, kind, weights, rows):
-    """Store the orbits of base[:, :stop - first] in rows first ... stop - 1."""
-    for j in range(stop - first):
-        _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
+def _store_cut(x, y, z, kind, weights, rows, tail, offset):
+    """Store members ``(offset + i) % count``, ``i < len(tail)``, of the orbit of (x, y, z) in tail's rows.
+
+    The orbit is stored whole into a one-row scratch of *tail*'s dtype by the same store as
+    every other orbit (so the members are bit for bit those of a whole orbit), then copied.
+    """
+    scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)
+    _store_one(x, y, z, 0, kind, weights, scratch)
+    count = rows.shape[1] // 3
+    for i in range(tail.shape[0]):
+        k = (offset + i) % count
+        for l in range(3):
+            tail[i, l] = scratch[0, 3 * k + l]
 
 
 @register_jitable
@@ -265,11 +274,15 @@ def part_count(m, parts):
     return max(1, min(parts, (m + _BATCH - 1) // _BATCH))
 
 
+# The kernels' output is *rows* (whole, 3 count): the whole orbits, one per row, and *tail*
+# (rest, 3): if rest > 0, the last of the m = whole + 1 points has its orbit cut to rest members
+# from *offset* on (_store_cut), in the same call (no second kernel launch, no copy of the output).
 @njit(parallel=True, **_OPTIONS)
-def _fill(uv, parts, code, kind, basis, rows):
+def _fill(uv, parts, code, kind, basis, rows, tail, offset):
     # One part per thread (not one prange step per batch): the batch buffers are allocated once
     # per part.
     m = uv.shape[0]
+    whole = rows.shape[0]
     weights = _rotated_weights(basis, rows.shape[1] // 3)
     count = part_count(m, parts)
     for part in prange(count):
@@ -283,17 +296,22 @@ def _fill(uv, parts, code, kind, basis, rows):
                 u[j] = uv[first + j, 0]
                 v[j] = uv[first + j, 1]
             _map_batch(u, v, code, base)
-            _store_batch(base, first, stop, kind, weights, rows)
+            for j in range(min(stop, whole) - first):
+                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
+            if stop > whole:  # the last point (of the last part), its orbit cut
+                j = whole - first
+                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset)
 
 
 @njit(parallel=True, **_OPTIONS)
-def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows):
+def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows, tail, offset):
     # As _fill, but each part draws its own points, u then v per point, from numpy's PCG64
     # stream seeded by *seed_words* and jumped ahead to the part's first point: no (m, 2) array
     # of base points, and the jumps and draws run in parallel.  The next batch's points are
     # drawn between the current batch's orbit stores, so that the generator's dependent chain
     # of 128-bit multiplications overlaps the stores instead of following them.
     start = pcg64_seeded(seed_words)
+    whole = rows.shape[0]
     weights = _rotated_weights(basis, rows.shape[1] // 3)
     count = part_count(m, parts)
     for part in prange(count):
@@ -309,11 +327,14 @@ def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows):
             stop = min(first + _BATCH, hi)
             _map_batch(u, v, code, base)
             upcoming = min(_BATCH, hi - stop)
-            for j in range(stop - first):
+            for j in range(min(stop, whole) - first):
                 _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
                 if j < upcoming:
                     u[j] = pcg64_random(stream)
                     v[j] = pcg64_random(stream)
+            if stop > whole:  # the last point (stop == hi == m: nothing more to draw), its orbit cut
+                j = whole - first
+                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset)
 
 
 _ready = False
@@ -328,17 +349,23 @@ def _prepare_kernels():
         _ready = True
 
 
-def fill_orbits(uv: FloatArray, method: str, count: int, basis: Float64Array | None, out: FloatArray, parts: int = 0) -> FloatArray:
+def fill_orbits(
+    uv: FloatArray, method: str, count: int, basis: Float64Array | None, out: FloatArray, parts: int = 0, offset: int = 0
+) -> FloatArray:
     """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
 
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
     (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
     C-contiguous float32 or float64.  *parts*: how many stretches to split the points
-    into (0: numba's thread count; the output does not depend on it).
+    into (0: numba's thread count; the output does not depend on it).  If *out* has
+    ``(m - 1) * count + rest`` rows, ``0 < rest < count``, the last point's orbit is cut:
+    the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
+    same kernel call.
     """
     _prepare_kernels()
     kind, frame = _store_kind(count, basis)
-    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, frame, out.reshape(len(uv), 3 * count))
+    rows, tail = _split(out, count)
+    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows, tail, offset)
     return out
 
 
@@ -351,16 +378,23 @@ def fill_random_orbits(
     basis: Float64Array | None,
     out: FloatArray,
     parts: int = 0,
+    offset: int = 0,
 ) -> FloatArray:
     """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
-    (:attr:`symsphere.points.BasePoints.seed_words`)."""
+    (:attr:`symsphere.points.BasePoints.seed_words`); the last orbit cut as there."""
     _prepare_kernels()
     kind, frame = _store_kind(count, basis)
-    rows = out.reshape(m, 3 * count)
-    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows)
+    rows, tail = _split(out, count)
+    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows, tail, offset)
     return out
+
+
+def _split(out, count):
+    """*out*'s whole orbits as rows of 3 count columns, and the rest (the cut orbit's rows, maybe none)."""
+    whole = len(out) // count * count
+    return out[:whole].reshape(-1, 3 * count), out[whole:]
 
 
 # The same batch map, batch size and image weights for the fused integration kernels

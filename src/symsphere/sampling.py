@@ -307,8 +307,9 @@ def _sample(
 ) -> FloatArray:
     n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype, any_size=True)
     if out is None:
-        return _blocks.sample_rows(source, n, method, count, basis, dtype)
-    check_out(out, (n, 3), dtype)
+        out = np.empty((n, 3), dtype=dtype)
+    else:
+        check_out(out, (n, 3), dtype)
     return _blocks.fill_rows(source, 0, method, count, basis, out)
 
 
