@@ -5,7 +5,9 @@ warm pip cache) for the wheel's dependencies.  Checks, each with a clear failure
 
 1. ``python -m build`` makes a wheel and an sdist without setuptools' deprecation warnings
    (issue 13, defect 6); both carry LICENSE, the sdist also CHANGELOG.md; the wheel's metadata has
-   the SPDX license expression, the project URLs and the version of ``symsphere.__version__``.
+   the SPDX license expression, the project URLs and the version of ``symsphere.__version__``; its
+   long description (README.md) renders as PyPI renders it (``readme_renderer``, as ``twine check``),
+   with no relative link or image (they break on PyPI).
 2. In a fresh venv with nothing but ``pip install <wheel>`` (no extras):
    ``symsphere --version`` agrees with ``symsphere.__version__``; the README's example runs;
    ``symsphere sample --n 480`` writes its file; ``symsphere integrate ... --workers 2`` exits 2 with
@@ -59,6 +61,20 @@ def readme_example() -> str:
     return block[1]
 
 
+def check_long_description(metadata: str) -> None:
+    """The wheel's long description renders as on PyPI (readme_renderer, GFM), with absolute links only."""
+    try:
+        from readme_renderer.markdown import render
+    except ImportError:
+        sys.exit("check_wheel: readme_renderer is missing: pip install -e '.[test]'")
+    header, _, body = metadata.partition("\n\n")
+    check("Description-Content-Type: text/markdown" in header, "the long description is not declared Markdown")
+    html = render(body, variant="GFM")
+    check(html is not None and "<h1" in html, "the long description does not render (readme_renderer)")
+    relative = sorted({t for t in re.findall(r'(?:src|href)="([^"]+)"', html) if not re.match(r"https?://|#", t)})
+    check(not relative, f"the long description has relative links, broken on PyPI: {relative[:5]}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--demo", action="store_true", help="run `symsphere demo --n 480` too (slow: compiles the renderer)")
@@ -83,6 +99,7 @@ def main() -> int:
         check(any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the wheel has no LICENSE")
         check("License-Expression: BSD-3-Clause" in metadata, "no License-Expression in the wheel's METADATA")
         check("Project-URL: Source" in metadata and "Author: symsphere developers" in metadata, "no URLs/author")
+        check_long_description(metadata)
         with tarfile.open(sdist) as archive:
             members = {Path(m).name for m in archive.getnames()}
         check({"LICENSE", "CHANGELOG.md", "README.md"} <= members, f"the sdist lacks LICENSE or CHANGELOG.md: {sorted(members)[:20]}")
