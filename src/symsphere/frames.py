@@ -66,7 +66,7 @@ def frame(normal: npt.ArrayLike) -> Float64Array:
     >>> bool(np.allclose(basis @ basis.T, np.eye(3))), round(float(np.linalg.det(basis)), 12)
     (True, 1.0)
     """
-    nx, ny, nz = (float(c) for c in normal)
+    nx, ny, nz = (float(c) for c in np.asarray(normal, dtype=np.float64))
     t, b = frame_rows(nx, ny, nz)
     return np.array([t, b, (nx, ny, nz)])
 

@@ -25,17 +25,22 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from .. import __version__
+from .._typing import Float64Array, FloatArray, MapMethod
 from .._validation import check_count, check_seed
 from ..io import atomic_directory
 from ..maps import METHODS, get_map, triangle_pdf
 from ..sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
 from ..symmetry import fold
 from ._format import format_p
+
+if TYPE_CHECKING:  # scipy.stats loads only when a demo runs (see run_demo)
+    from ..stats import Chi2Result
 
 __all__ = ["run_demo", "DEMO_FILES", "FAMILY_SIGNIFICANCE"]
 
@@ -54,12 +59,12 @@ class _Test:
     domain: str
     method: str
     reference: str  # 'uniform' or the method's own name
-    samples: np.ndarray
-    pdf: Callable[[np.ndarray], np.ndarray]
+    samples: FloatArray
+    pdf: Callable[[FloatArray], FloatArray]
 
 
 def run_demo(
-    out_dir: str | os.PathLike = "symsphere-demo", n: int = 48 * 2**14, seed: int = 0, progress: bool = True
+    out_dir: str | os.PathLike[str] = "symsphere-demo", n: int = 48 * 2**14, seed: int = 0, progress: bool = True
 ) -> Path:
     """Test every map for uniformity and write ``report.md``, ``figure.png`` and ``render.png``.
 
@@ -115,7 +120,8 @@ def run_demo(
     choice_rng = np.random.default_rng(seed_sequence.spawn(1)[0])
 
     with atomic_directory(out_dir, replaceable=DEMO_FILES) as build_dir:
-        tests, scatter = [], {}
+        tests: list[_Test] = []
+        scatter: dict[str, FloatArray] = {}
         for index, method in enumerate(METHODS):
             sphere = sample_sphere(n, method=method, rng=sampling_seeds[2 * index])
             hemisphere = sample_hemisphere(n, method=method, rng=sampling_seeds[2 * index + 1])
@@ -149,7 +155,7 @@ def run_demo(
 # --- private ------------------------------------------------------------------
 
 
-def _tests_of(method, sphere, hemisphere):
+def _tests_of(method: MapMethod, sphere: FloatArray, hemisphere: FloatArray) -> list[_Test]:
     from ..stats import uniform_pdf  # function-level: scipy.stats (see run_demo)
 
     _, base = fold(sphere)  # the whole orbit folds to the same point of T0
@@ -167,27 +173,27 @@ def _tests_of(method, sphere, hemisphere):
     return tests
 
 
-def _reference_name(test):
+def _reference_name(test: _Test) -> str:
     if test.reference == "uniform":
         return "uniform"
     own = {"sphere": "sphere_pdf", "hemisphere": "hemisphere_pdf", "triangle": "triangle_pdf"}[test.domain]
     return f"own: `{own}(·, '{test.method}')`"
 
 
-def _format_range(low, high):
+def _format_range(low: float, high: float) -> str:
     return "n/a" if math.isnan(low) else f"{low:.2f}–{high:.2f}"
 
 
-def _p_equals(p):
+def _p_equals(p: float) -> str:
     return "p < 1e-300" if p == 0 else f"p = {format_p(p)}"
 
 
-def _join(words):
-    words = list(words)
-    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
+def _join(words: Iterable[str]) -> str:
+    listed = list(words)
+    return listed[0] if len(listed) == 1 else ", ".join(listed[:-1]) + " and " + listed[-1]
 
 
-def _report(tests, results, n, seed, shown):
+def _report(tests: list[_Test], results: list[Chi2Result], n: int, seed: int, shown: int) -> str:
     threshold = results[0].threshold
     lines = [
         "# symsphere demo: are the maps uniform?",
@@ -227,7 +233,7 @@ def _report(tests, results, n, seed, shown):
     return "\n".join(lines)
 
 
-def _render(path, seed):
+def _render(path: Path, seed: int) -> str:
     """A small render of smallpt's Cornell box with the paper's scheme; the report's closing section."""
     from ..render import render, save_png  # function-level: ~0.3 s to import, and numba kernels
 
@@ -248,7 +254,7 @@ def _render(path, seed):
     )
 
 
-def _verdict(method, tests, results):
+def _verdict(method: MapMethod, tests: list[_Test], results: list[Chi2Result]) -> str:
     """One sentence per map, from the measured results (never assumed)."""
     mine = [(t, r) for t, r in zip(tests, results) if t.method == method and _testable(r)]
     uniform = [(t, r) for t, r in mine if t.reference == "uniform"]
@@ -295,18 +301,20 @@ def _verdict(method, tests, results):
     return sentence
 
 
-def _testable(result):
+def _testable(result: Chi2Result) -> bool:
     """False if too few samples left a test with nothing to compare (p-value NaN)."""
     return not math.isnan(result.p_value)
 
 
-def _result_word(result):
+def _result_word(result: Chi2Result) -> str:
     if not _testable(result):
         return "too few samples"
     return "pass" if result.passed else "**FAIL**"
 
 
-def _write_figure(path, tests, results, scatter):
+def _write_figure(
+    path: Path, tests: list[_Test], results: list[Chi2Result], scatter: dict[str, FloatArray]
+) -> None:
     # The object-oriented API with an Agg canvas: no pyplot state, no GUI backend.  Function-level:
     # matplotlib and scipy.stats load only when a figure is drawn.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -318,7 +326,7 @@ def _write_figure(path, tests, results, scatter):
     triangle = {
         t.method: r for t, r in zip(tests, results) if t.domain == "triangle" and t.reference == "uniform"
     }
-    ratios = {}
+    ratios: dict[str, Float64Array] = {}
     for method, result in triangle.items():
         ratio = np.full(result.expected.shape, np.nan)
         inside = result.expected > 0  # bins of the bounding rectangle that meet T0
@@ -361,6 +369,7 @@ def _write_figure(path, tests, results, scatter):
         axes.grid(True, lw=0.3)
         axes.set_xticklabels([])  # longitude labels would cover the equator, where the paper's maps cluster
         axes.tick_params(labelsize=6)
+    assert image is not None  # METHODS is not empty
     figure.colorbar(image, ax=figure.axes[::2], label="observed / expected (uniform)", shrink=0.9)
     figure.suptitle("Folded samples relative to the uniform density (top) and sphere samples (bottom)")
     figure.savefig(path, dpi=110)

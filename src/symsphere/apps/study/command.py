@@ -14,7 +14,7 @@ from .run import run_study
 __all__ = ["add_study_parser", "run_study_command"]
 
 
-def add_study_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_study_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
     """Add the ``study`` verb to the ``symsphere`` command's sub-parsers.
 
     Parameters

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -131,18 +132,18 @@ class StudyConfig:
     k_min: int = 2
     k_max: int = 14
     repetitions: int = 32
-    integrands: tuple = _FULL_INTEGRANDS
-    scheme_methods: tuple = METHODS
-    scheme_points: tuple = _CLASSIC_POINTS
-    sphere_peers: tuple = _PEER_SPHERE
-    hemisphere_peers: tuple = _PEER_HEMISPHERE
+    integrands: tuple[str, ...] = _FULL_INTEGRANDS
+    scheme_methods: tuple[str, ...] = METHODS
+    scheme_points: tuple[str, ...] = _CLASSIC_POINTS
+    sphere_peers: tuple[tuple[str, str], ...] = _PEER_SPHERE
+    hemisphere_peers: tuple[tuple[str, str], ...] = _PEER_HEMISPHERE
     discrepancy_k_max: int = 8
     discrepancy_repetitions: int = 8
     chi2_samples: int = 2**16
     density_samples: int = 48 * 2**15
     warp_samples: int = 2**17
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"'name' must be a non-empty string, got {self.name!r}")
         for name in ("k_min", "k_max", "repetitions", "discrepancy_k_max", "discrepancy_repetitions",
@@ -173,7 +174,7 @@ class StudyConfig:
         if self.warp_samples < 1000:
             raise ValueError(f"'warp_samples' must be >= 1000, got {self.warp_samples}")
 
-        def names(field_name, allowed):
+        def names(field_name: str, allowed: tuple[str, ...]) -> None:
             value = getattr(self, field_name)
             if isinstance(value, str) or not isinstance(value, (tuple, list)) or not value:
                 raise ValueError(f"'{field_name}' must be a non-empty tuple of names, got {value!r}")
@@ -190,11 +191,11 @@ class StudyConfig:
         names("scheme_methods", METHODS)
         names("scheme_points", POINT_SETS)
 
-        def pairs(field_name, domain):
+        def pairs(field_name: str, domain: str) -> None:
             value = getattr(self, field_name)
             if isinstance(value, str) or not isinstance(value, (tuple, list)):
                 raise ValueError(f"'{field_name}' must be a tuple of (peer, points) pairs, got {value!r}")
-            out = []
+            out: list[tuple[str, str]] = []
             for item in value:
                 if not (isinstance(item, (tuple, list)) and len(item) == 2):
                     raise ValueError(f"'{field_name}' must hold (peer, points) pairs, got {item!r}")
@@ -202,11 +203,11 @@ class StudyConfig:
                 if peer not in PEERS or PEERS[peer].domain != domain:
                     allowed = ", ".join(p.name for p in PEERS.values() if p.domain == domain)
                     raise ValueError(f"'{field_name}' has peer {peer!r}; peers of the {domain}: {allowed}")
-                allowed = PEERS[peer].point_sets
-                if points not in allowed:
+                point_sets = PEERS[peer].point_sets
+                if points not in point_sets:
                     raise ValueError(
                         f"'{field_name}' has points {points!r} for {peer!r}; "
-                        + ("use 'random'" if allowed == ("random",) else f"use one of {', '.join(allowed)}")
+                        + ("use 'random'" if point_sets == ("random",) else f"use one of {', '.join(point_sets)}")
                     )
                 out.append((peer, points))
             if len(set(out)) != len(out):
@@ -235,7 +236,7 @@ class StudyConfig:
         """The size exponents k_min ... discrepancy_k_max of the discrepancy runs."""
         return tuple(range(self.k_min, self.discrepancy_k_max + 1))
 
-    def replace(self, **changes) -> StudyConfig:
+    def replace(self, **changes: Any) -> StudyConfig:
         """A copy with *changes* (validated again).
 
         Examples

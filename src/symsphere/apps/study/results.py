@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import zlib
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -66,13 +67,13 @@ class Results:
 
     config: StudyConfig
     seed: int
-    convergence: list = field(default_factory=list)
-    summary: list = field(default_factory=list)
-    discrepancy: list = field(default_factory=list)
-    discrepancy_fits: list = field(default_factory=list)
-    chi2: list = field(default_factory=list)
-    stage_seconds: dict = field(default_factory=dict)
-    warp_chi2: dict = field(default_factory=dict)
+    convergence: list[dict[str, Any]] = field(default_factory=list)  # rows: column name -> value
+    summary: list[dict[str, Any]] = field(default_factory=list)
+    discrepancy: list[dict[str, Any]] = field(default_factory=list)
+    discrepancy_fits: list[dict[str, Any]] = field(default_factory=list)
+    chi2: list[dict[str, Any]] = field(default_factory=list)
+    stage_seconds: dict[str, float] = field(default_factory=dict)
+    warp_chi2: dict[str, float] = field(default_factory=dict)  # warp name -> p-value
 
     def seed_sequence(self, *spawn_key: int) -> np.random.SeedSequence:
         """The seed of one random choice, identified by *spawn_key* (a stage number, then :func:`key` s)."""
