@@ -39,7 +39,7 @@ def interleaved(call_a, call_b, repeats):
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer, at least 40, for the largest)")
+    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer, at least 100, for the largest)")
     parser.add_argument("--dtype", nargs="+", default=["float64", "float32"], choices=["float64", "float32"])
     parser.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
     args = parser.parse_args()
@@ -51,7 +51,7 @@ def main() -> int:
     rows = []
     for dtype in args.dtype:
         for multiple in MULTIPLES:
-            repeats = max(40, args.repeats // (1 + multiple // 50_000))
+            repeats = max(100, args.repeats // (1 + multiple // 50_000))
             for offset in OFFSETS:
                 rows.append(_row(multiple, multiple + offset, np.dtype(dtype), repeats))
     worst = max(max(r["fresh"][1] / r["fresh"][0], r["out"][1] / r["out"][0]) for r in rows)
