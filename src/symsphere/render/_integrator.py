@@ -68,7 +68,9 @@ orbit member, i.i.d.; ``SYMMETRIC`` the paper's pattern inside a pixel with
 random base points; ``SYMMETRIC_SOBOL`` the same with Owen-scrambled Sobol'
 base points; ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` the same
 pattern with the 8 signed permutations that keep z (16 with the side through
-transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4.  See
+transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4;
+``SYMMETRIC_SOBOL_INTERLACED2/3`` and ``SYMMETRIC_COSINE_SOBOL_INTERLACED2/3``
+the two patterns with interlaced (higher-order) scrambled Sobol' base points.  See
 :func:`sample_local` for the exact mapping of (sample, vertex) to (group,
 member, base point).
 """
@@ -88,9 +90,11 @@ from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
 from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
-from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
+from ._random import below, mix64, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
+SYMMETRIC_SOBOL_INTERLACED2, SYMMETRIC_SOBOL_INTERLACED3 = 7, 8
+SYMMETRIC_COSINE_SOBOL_INTERLACED2, SYMMETRIC_COSINE_SOBOL_INTERLACED3 = 9, 10
 PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
@@ -117,6 +121,15 @@ _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _ODD = np.uint64(0xD6E8FEB86659FD93)
 _ONE = np.uint64(1)
+
+
+@register_jitable
+def _is_cosine(sampler):
+    """The symmetric cosine samplers and the i.i.d. cosine sampler: pdf cos / pi (sphere |cos| / (2 pi))."""
+    return (
+        sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
+        or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED3
+    )  # fmt: skip
 
 
 @register_jitable
@@ -150,7 +163,9 @@ def sample_local(sampler, code, full, key, s, depth, state):
     sample s in group ``g = s // n``.  At vertex *depth* the group shares one
     base point B(g, depth) (``SYMMETRIC``: two hashes of (pixel, depth, n,
     g); ``SYMMETRIC_SOBOL``: point g of the Owen-scrambled, index-shuffled
-    Sobol' sequence seeded by (pixel, depth, n)) and one offset o(g, depth)
+    Sobol' sequence seeded by (pixel, depth, n); ``..._INTERLACED2/3``: point g
+    of the interlaced one, :func:`~symsphere.render._random.owen_sobol_interlaced`)
+    and one offset o(g, depth)
     uniform in 0..n-1 (a third hash), and sample s takes orbit member
     ``(s mod n + o) mod n``.  The n
     samples of a complete group take all n members of B in turn; each sample
@@ -187,7 +202,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
                 z = -z
             return x, y, z, 2.0, abs(z) * INV_2PI, state
         return x, y, z, 1.0, z * _INV_PI, state
-    cosine = sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
+    cosine = _is_cosine(sampler)
     if cosine:
         n = 16 if full else 8
     else:
@@ -212,8 +227,11 @@ def sample_local(sampler, code, full, key, s, depth, state):
         if sampler == SYMMETRIC or sampler == SYMMETRIC_COSINE:
             u = u01(mix64(h ^ _BASE_U))
             v = u01(mix64(h ^ _BASE_V))
-        else:  # point `group` of the sequence scrambled for this (pixel, vertex, orbit size)
-            u, v = owen_sobol2(group, vertex_key)
+        elif sampler == SYMMETRIC_SOBOL or sampler == SYMMETRIC_COSINE_SOBOL:
+            u, v = owen_sobol2(group, vertex_key)  # point `group` of the sequence scrambled for this (pixel, vertex, n)
+        else:  # the same, interlaced
+            factor = 2 if sampler == SYMMETRIC_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 else 3
+            u, v = owen_sobol_interlaced(group, vertex_key, factor)
     if cosine:
         bx, by, bz = cosine_wedge_point(u, v)
         x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
@@ -243,7 +261,7 @@ def bsdf_pdf(sampler, code, full, x, y, z):
     """
     if sampler == UNIFORM:
         return _INV_4PI if full else INV_2PI
-    if sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL:
+    if _is_cosine(sampler):
         return abs(z) * INV_2PI if full else z * _INV_PI
     a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
     if a < b:
