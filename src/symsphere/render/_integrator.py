@@ -294,6 +294,22 @@ def _film_offset(pixel_filter, state):
 
 
 @register_jitable(inline="always")
+def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
+    """smallpt's quadratic for the ray o + t d and the sphere (centre c, radius^2 r2): (det, near, far).
+
+    b = (c - o) . d, det = b^2 - |c - o|^2 + r^2, roots b -+ sqrt(max(det, 0)) (valid if det >= 0).
+    Scalar, inlined into both sphere loops of :func:`intersect` (numba IR): no call, the loops still vectorise.
+    """
+    px = cx - ox
+    py = cy - oy
+    pz = cz - oz
+    b = px * dx + py * dy + pz * dz
+    det = b * b - (px * px + py * py + pz * pz) + r2
+    root = math.sqrt(max(det, 0.0))
+    return det, b - root, b + root
+
+
+@register_jitable(inline="always")
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -317,24 +333,15 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max
     n = spheres.shape[1]
     if n > 0:
         for i in range(plain):  # (2D indexing, no row views: views would cost reference counting)
-            px = spheres[0, i] - ox
-            py = spheres[1, i] - oy
-            pz = spheres[2, i] - oz
-            b = px * dx + py * dy + pz * dz
-            det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
-            root = math.sqrt(max(det, 0.0))
-            near = b - root
-            t = near if near > eps else b + root
+            det, near, far = _sphere_roots(
+                spheres[0, i], spheres[1, i], spheres[2, i], spheres[4, i], ox, oy, oz, dx, dy, dz
+            )
+            t = near if near > eps else far
             scratch[i] = t if (det >= 0.0 and t > eps) else np.inf
         for i in range(plain, n):  # clipped spheres: keep a root only if its point is in the half-space
-            px = spheres[0, i] - ox
-            py = spheres[1, i] - oy
-            pz = spheres[2, i] - oz
-            b = px * dx + py * dy + pz * dz
-            det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
-            root = math.sqrt(max(det, 0.0))
-            near = b - root
-            far = b + root
+            det, near, far = _sphere_roots(
+                spheres[0, i], spheres[1, i], spheres[2, i], spheres[4, i], ox, oy, oz, dx, dy, dz
+            )
             ax, ay, az = spheres[5, i], spheres[6, i], spheres[7, i]
             side = (ax * ox + ay * oy + az * oz) - spheres[8, i]
             slope = ax * dx + ay * dy + az * dz
