@@ -10,6 +10,8 @@ Usage (from the repository root, package installed)::
     python benchmarks/bench_render.py paths-vs-mitsuba         # paths/s, ours (cosine, both integrators) vs Mitsuba 3
     python benchmarks/bench_render.py equal-time --budgets 0.2 0.4 --equal-spp 8 --reference-spp 256 \\
         --mitsuba-reference-spp 128 --width 64 --height 48 --seeds 1 --no-images   # a quick check
+    python benchmarks/bench_render.py equal-time --no-mitsuba --integrators path --baseline symmetric_sobol \\
+        --samplers symmetric_sobol symmetric_sobol_interlaced2 symmetric_sobol_interlaced3   # base points only
 
 ``speed``
     Every sampler renders ``cornell`` at 256 x 192 with ``--spp`` samples per
@@ -63,7 +65,9 @@ Usage (from the repository root, package installed)::
     Mitsuba renders of more than 64 spp are split into passes).  Writes
     ``docs/images/equal_time_<scene>.png`` (the images at the largest budget,
     seed 1) and a JSON file in ``benchmarks/results/`` with every number and
-    the Markdown tables, which are also printed.
+    the Markdown tables, which are also printed.  ``--integrators`` restricts the
+    integrators; the closing table compares every other symmetric sampler with
+    ``--baseline`` (default ``cosine``), seed by seed.
 """
 
 from __future__ import annotations
@@ -625,6 +629,13 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
 
 def equal_time(args):
     integrators, default_integrator = _integrator_choices()
+    if args.integrators:
+        if integrators == (None,):
+            raise SystemExit("--integrators: this render() has no integrator parameter")
+        integrators = tuple(args.integrators)
+        default_integrator = default_integrator if default_integrator in integrators else integrators[0]
+    if args.samplers and args.baseline not in args.samplers:  # the closing table needs it
+        args.samplers = [*args.samplers, args.baseline]
     mitsuba_ok, mitsuba_reason = _mitsuba_status(args.no_mitsuba)
     print(f"integrators: {integrators} (default {default_integrator}); samplers: {args.samplers or SAMPLERS}; "
           f"Mitsuba: {mitsuba_reason if mitsuba_ok else 'skipped: ' + mitsuba_reason}", file=sys.stderr)  # fmt: skip
@@ -641,6 +652,7 @@ def equal_time(args):
         integrators=[i or "bsdf (render() has no integrator parameter)" for i in integrators],
         default_integrator=default_integrator,
         samplers=list(args.samplers or SAMPLERS),
+        baseline=args.baseline,
         relmse="mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), minus the reference's own (from its halves)",
         flip="LDR FLIP (flip-evaluator) of tonemap(image) (exposure 1, clip, sRGB, 8 bits) against tonemap(reference)",
         timing="ours: RenderResult.seconds (after compilation); Mitsuba: wall time of mi.render + conversion to numpy, "
@@ -667,18 +679,20 @@ def equal_time(args):
 
 
 def _equal_time_answer(results):
-    """Each symmetric sampler against i.i.d. cosine sampling, with the default (NEE) integrator when there is one."""
+    """Each symmetric sampler against the baseline (i.i.d. cosine sampling), with the default (NEE) integrator."""
     integrator = results["default_integrator"] or "bsdf"
-    base_key = f"cosine/{integrator}"
+    baseline = results.get("baseline", "cosine")
+    base_key = f"{baseline}/{integrator}"
     budgets = [str(b) for b in results["budgets"]]
     lines = [
-        f"Symmetric samplers against `cosine`, integrator `{integrator}`: relMSE ratio at {results['equal_spp']} spp "
-        "(below 1: the symmetric sampler is better; ± from the seed-to-seed spread) and efficiency ratio at each "
-        "budget (above 1: better at equal time):",
+        f"Symmetric samplers against `{baseline}`, integrator `{integrator}`: relMSE ratio at {results['equal_spp']} "
+        "spp (below 1: the symmetric sampler is better; ± from the seed-to-seed spread; paired: the mean over seeds "
+        "of the per-seed ratio ± its standard error) and efficiency ratio at each budget (above 1: better at equal "
+        "time):",
         "",
-        "| scene | sampler | relMSE / cosine's, equal spp | " + " | ".join(f"efficiency × cosine's, {b} s" for b in budgets)
-        + " |",
-        "|---|---|---:|" + "---:|" * len(budgets),
+        f"| scene | sampler | relMSE / {baseline}'s, equal spp | paired | "
+        + " | ".join(f"efficiency × {baseline}'s, {b} s" for b in budgets) + " |",
+        "|---|---|---:|---:|" + "---:|" * len(budgets),
     ]  # fmt: skip
     for scene in results["scenes"]:
         records = scene["strategies"]
@@ -687,15 +701,19 @@ def _equal_time_answer(results):
         base = records[base_key]
         for key, record in records.items():
             sampler = key.split("/")[0]
-            if not key.endswith(f"/{integrator}") or not sampler.startswith("symmetric"):
+            if not key.endswith(f"/{integrator}") or not sampler.startswith("symmetric") or key == base_key:
                 continue
             a, b = record["equal_spp_summary"], base["equal_spp_summary"]
             ratio = a["rel_mse"] / b["rel_mse"]
             error = ""
             if a["rel_mse_se"] is not None and b["rel_mse_se"] is not None:
                 error = f" ± {ratio * math.hypot(a['rel_mse_se'] / a['rel_mse'], b['rel_mse_se'] / b['rel_mse']):.2f}"
+            per_seed = [r["rel_mse"] / q["rel_mse"] for r, q in zip(record["equal_spp"], base["equal_spp"])]
+            paired = f"{statistics.fmean(per_seed):.3f}"
+            if len(per_seed) > 1:
+                paired += f" ± {statistics.stdev(per_seed) / math.sqrt(len(per_seed)):.3f}"
             efficiency = [record["budgets"][x]["efficiency"] / base["budgets"][x]["efficiency"] for x in budgets]
-            lines.append(f"| {scene['scene']} | `{sampler}` | {ratio:.2f}{error} | "
+            lines.append(f"| {scene['scene']} | `{sampler}` | {ratio:.2f}{error} | {paired} | "
                          + " | ".join(f"{e:.2f}" for e in efficiency) + " |")  # fmt: skip
     text = "\n".join(lines)
     results["answer_markdown"] = text
@@ -801,6 +819,9 @@ def main():
     e.add_argument("--width", type=int, default=256)
     e.add_argument("--height", type=int, default=192)
     e.add_argument("--samplers", nargs="+", choices=SAMPLERS, help="default: all of SAMPLERS")
+    e.add_argument("--integrators", nargs="+", choices=("path", "bsdf"), help="default: both")
+    e.add_argument("--baseline", choices=SAMPLERS, default="cosine",
+                   help="the closing table's reference sampler (default: %(default)s)")
     e.add_argument("--budgets", nargs="+", type=float, default=[1.0, 2.0], help="seconds per render")
     e.add_argument("--equal-spp", type=int, default=24)
     e.add_argument("--seeds", type=int, default=3)

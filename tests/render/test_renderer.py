@@ -41,7 +41,9 @@ def test_cornell_renders_like_smallpt():
 
 
 @pytest.mark.parametrize("integrator", INTEGRATORS)
-@pytest.mark.parametrize("sampler", ["symmetric_sobol", "equal_area", "symmetric_cosine_sobol"])
+@pytest.mark.parametrize(
+    "sampler", ["symmetric_sobol", "equal_area", "symmetric_cosine_sobol", "symmetric_sobol_interlaced2"]
+)
 def test_same_seed_same_image_for_any_thread_count(sampler, integrator):
     arguments = dict(width=24, height=16, spp=30, sampler=sampler, integrator=integrator)
     previous = numba.get_num_threads()
@@ -100,6 +102,8 @@ def test_render_result_fields():
         (dict(threads=0), "threads"),
         (dict(integrator="nee"), "integrator"),
         (dict(sampler="symmetric_cosine", method="equal_area"), "method"),
+        (dict(sampler="symmetric_cosine_sobol_interlaced2", method="paper1"), "method"),
+        (dict(sampler="symmetric_sobol_interlaced3", method="nope"), "method"),
     ],
 )
 def test_render_rejects_bad_arguments(kwargs, named):
@@ -166,7 +170,8 @@ def test_render_verb_names_a_bad_scene_file(tmp_path, capsys):
 def test_samplers_listed():
     assert set(SAMPLERS) == {
         "symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine",
-        "symmetric_cosine", "symmetric_cosine_sobol",
+        "symmetric_cosine", "symmetric_cosine_sobol", "symmetric_sobol_interlaced2", "symmetric_sobol_interlaced3",
+        "symmetric_cosine_sobol_interlaced2", "symmetric_cosine_sobol_interlaced3",
     }  # fmt: skip
     assert INTEGRATORS == ("path", "bsdf")
     assert math.isclose(2 * math.tan(math.radians(cornell().camera.fov) / 2), 0.5135, rel_tol=1e-15)

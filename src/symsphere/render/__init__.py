@@ -5,10 +5,10 @@ A path tracer (numba, all cores) with two estimators -- ``integrator="path"``
 sampling, the default) and ``integrator="bsdf"`` (BSDF sampling only,
 smallpt's) -- whose direction sampling at diffuse vertices is a parameter: the
 paper's symmetric scheme (orbits of 24 directions on the hemisphere, 48 on the
-sphere for Lambertian transmission) with random or Owen-scrambled Sobol' base
-points, the i.i.d. orbit samplers of each map, the classic uniform and
-cosine-weighted references, and the symmetric cosine-weighted samplers (the 8
-signed permutations that keep z).  Every (integrator, sampler) pair is
+sphere for Lambertian transmission) with random, Owen-scrambled Sobol' or
+interlaced (higher-order) scrambled Sobol' base points, the i.i.d. orbit
+samplers of each map, the classic uniform and cosine-weighted references, and
+the symmetric cosine-weighted samplers (the 8 signed permutations that keep z).  Every (integrator, sampler) pair is
 unbiased and converges to the same image.
 
 >>> from symsphere.render import render, write_outputs

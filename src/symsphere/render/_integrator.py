@@ -68,7 +68,9 @@ orbit member, i.i.d.; ``SYMMETRIC`` the paper's pattern inside a pixel with
 random base points; ``SYMMETRIC_SOBOL`` the same with Owen-scrambled Sobol'
 base points; ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` the same
 pattern with the 8 signed permutations that keep z (16 with the side through
-transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4.  See
+transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4;
+``SYMMETRIC_SOBOL_INTERLACED2/3`` and ``SYMMETRIC_COSINE_SOBOL_INTERLACED2/3``
+the two patterns with interlaced (higher-order) scrambled Sobol' base points.  See
 :func:`sample_local` for the exact mapping of (sample, vertex) to (group,
 member, base point).
 """
@@ -88,9 +90,11 @@ from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
 from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
-from ._random import below, mix64, next_u64, owen_sobol2, path_state, pixel_key, u01
+from ._random import below, mix64, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
+SYMMETRIC_SOBOL_INTERLACED2, SYMMETRIC_SOBOL_INTERLACED3 = 7, 8
+SYMMETRIC_COSINE_SOBOL_INTERLACED2, SYMMETRIC_COSINE_SOBOL_INTERLACED3 = 9, 10
 PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
@@ -117,6 +121,15 @@ _BASE_V = np.uint64(0x5851F42D4C957F2D)
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _ODD = np.uint64(0xD6E8FEB86659FD93)
 _ONE = np.uint64(1)
+
+
+@register_jitable
+def _is_cosine(sampler):
+    """The symmetric cosine samplers and the i.i.d. cosine sampler: pdf cos / pi (sphere |cos| / (2 pi))."""
+    return (
+        sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
+        or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED3
+    )  # fmt: skip
 
 
 @register_jitable
@@ -150,7 +163,9 @@ def sample_local(sampler, code, full, key, s, depth, state):
     sample s in group ``g = s // n``.  At vertex *depth* the group shares one
     base point B(g, depth) (``SYMMETRIC``: two hashes of (pixel, depth, n,
     g); ``SYMMETRIC_SOBOL``: point g of the Owen-scrambled, index-shuffled
-    Sobol' sequence seeded by (pixel, depth, n)) and one offset o(g, depth)
+    Sobol' sequence seeded by (pixel, depth, n); ``..._INTERLACED2/3``: point g
+    of the interlaced one, :func:`~symsphere.render._random.owen_sobol_interlaced`)
+    and one offset o(g, depth)
     uniform in 0..n-1 (a third hash), and sample s takes orbit member
     ``(s mod n + o) mod n``.  The n
     samples of a complete group take all n members of B in turn; each sample
@@ -187,7 +202,7 @@ def sample_local(sampler, code, full, key, s, depth, state):
                 z = -z
             return x, y, z, 2.0, abs(z) * INV_2PI, state
         return x, y, z, 1.0, z * _INV_PI, state
-    cosine = sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
+    cosine = _is_cosine(sampler)
     if cosine:
         n = 16 if full else 8
     else:
@@ -212,8 +227,11 @@ def sample_local(sampler, code, full, key, s, depth, state):
         if sampler == SYMMETRIC or sampler == SYMMETRIC_COSINE:
             u = u01(mix64(h ^ _BASE_U))
             v = u01(mix64(h ^ _BASE_V))
-        else:  # point `group` of the sequence scrambled for this (pixel, vertex, orbit size)
-            u, v = owen_sobol2(group, vertex_key)
+        elif sampler == SYMMETRIC_SOBOL or sampler == SYMMETRIC_COSINE_SOBOL:
+            u, v = owen_sobol2(group, vertex_key)  # point `group` of the sequence scrambled for this (pixel, vertex, n)
+        else:  # the same, interlaced
+            factor = 2 if sampler == SYMMETRIC_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 else 3
+            u, v = owen_sobol_interlaced(group, vertex_key, factor)
     if cosine:
         bx, by, bz = cosine_wedge_point(u, v)
         x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
@@ -243,7 +261,7 @@ def bsdf_pdf(sampler, code, full, x, y, z):
     """
     if sampler == UNIFORM:
         return _INV_4PI if full else INV_2PI
-    if sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL:
+    if _is_cosine(sampler):
         return abs(z) * INV_2PI if full else z * _INV_PI
     a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
     if a < b:
@@ -276,6 +294,22 @@ def _film_offset(pixel_filter, state):
 
 
 @register_jitable(inline="always")
+def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
+    """smallpt's quadratic for the ray o + t d and the sphere (centre c, radius^2 r2): (det, near, far).
+
+    b = (c - o) . d, det = b^2 - |c - o|^2 + r^2, roots b -+ sqrt(max(det, 0)) (valid if det >= 0).
+    Scalar, inlined into both sphere loops of :func:`intersect` (numba IR): no call, the loops still vectorise.
+    """
+    px = cx - ox
+    py = cy - oy
+    pz = cz - oz
+    b = px * dx + py * dy + pz * dz
+    det = b * b - (px * px + py * py + pz * pz) + r2
+    root = math.sqrt(max(det, 0.0))
+    return det, b - root, b + root
+
+
+@register_jitable(inline="always")
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -299,24 +333,15 @@ def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max
     n = spheres.shape[1]
     if n > 0:
         for i in range(plain):  # (2D indexing, no row views: views would cost reference counting)
-            px = spheres[0, i] - ox
-            py = spheres[1, i] - oy
-            pz = spheres[2, i] - oz
-            b = px * dx + py * dy + pz * dz
-            det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
-            root = math.sqrt(max(det, 0.0))
-            near = b - root
-            t = near if near > eps else b + root
+            det, near, far = _sphere_roots(
+                spheres[0, i], spheres[1, i], spheres[2, i], spheres[4, i], ox, oy, oz, dx, dy, dz
+            )
+            t = near if near > eps else far
             scratch[i] = t if (det >= 0.0 and t > eps) else np.inf
         for i in range(plain, n):  # clipped spheres: keep a root only if its point is in the half-space
-            px = spheres[0, i] - ox
-            py = spheres[1, i] - oy
-            pz = spheres[2, i] - oz
-            b = px * dx + py * dy + pz * dz
-            det = b * b - (px * px + py * py + pz * pz) + spheres[4, i]
-            root = math.sqrt(max(det, 0.0))
-            near = b - root
-            far = b + root
+            det, near, far = _sphere_roots(
+                spheres[0, i], spheres[1, i], spheres[2, i], spheres[4, i], ox, oy, oz, dx, dy, dz
+            )
             ax, ay, az = spheres[5, i], spheres[6, i], spheres[7, i]
             side = (ax * ox + ay * oy + az * oz) - spheres[8, i]
             slope = ax * dx + ay * dy + az * dz

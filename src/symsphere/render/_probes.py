@@ -6,7 +6,8 @@ Each runs one inlined function of the path tracer -- the samplers
 (:func:`~symsphere.render._integrator.intersect`), the emitters
 (:func:`~symsphere.render._emitters.sample_emitter`,
 :func:`~symsphere.render._emitters.emitter_pdf`) and the Sobol' points
-(:func:`~symsphere.render._random.owen_sobol2`) -- over many inputs, so that
+(:func:`~symsphere.render._random.owen_sobol2`,
+:func:`~symsphere.render._random.owen_sobol_interlaced`) -- over many inputs, so that
 the tests see exactly what the kernel computes.  Call :func:`prepare_kernels`
 before the first of them runs.
 """
@@ -20,13 +21,14 @@ from .._numba_cache import invalidate_if_changed
 from . import _integrator
 from ._emitters import emitter_pdf, sample_emitter
 from ._integrator import KERNEL_OPTIONS, bsdf_pdf, intersect, plain_spheres, sample_local
-from ._random import owen_sobol2, path_state, pixel_key
+from ._random import interlace_fractions, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, sobol_coordinate
 
 __all__ = [
     "bsdf_pdfs",
     "emitter_pdfs",
     "emitter_samples",
     "first_hits",
+    "interlaced_points",
     "pattern_directions",
     "prepare_kernels",
     "sobol_points",
@@ -111,6 +113,29 @@ def sobol_points(count, key):
     out = np.empty((count, 2))
     for i in range(count):
         out[i, 0], out[i, 1] = owen_sobol2(i, key)
+    return out
+
+
+@njit(**KERNEL_OPTIONS)
+def interlaced_points(count, key, factor, scrambled):
+    """The first *count* interlaced Sobol' points (factor 2 or 3): scrambled with *key*, or not (key unused).
+
+    Scrambled: :func:`~symsphere.render._random.owen_sobol_interlaced`, as the
+    kernel draws them.  Unscrambled: the reference, natural-order points
+    ``interlace_fractions(sobol_coordinate(i, 0), ...)``.
+    """
+    out = np.empty((count, 2))
+    for i in range(count):
+        if scrambled:
+            out[i, 0], out[i, 1] = owen_sobol_interlaced(i, key, factor)
+        else:
+            x = [sobol_coordinate(i, d) for d in range(6)]
+            if factor == 2:
+                out[i, 0] = interlace_fractions(x[0], x[1], x[1], 2)
+                out[i, 1] = interlace_fractions(x[2], x[3], x[3], 2)
+            else:
+                out[i, 0] = interlace_fractions(x[0], x[1], x[2], 3)
+                out[i, 1] = interlace_fractions(x[3], x[4], x[5], 3)
     return out
 
 

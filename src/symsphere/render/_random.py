@@ -28,6 +28,17 @@ Such a scramble maps every (0, m, 2)-net in base 2 onto a (0, m, 2)-net.
 For padding, the sample *index* is shuffled by the same nested scramble
 (with its own seed) before the Sobol' point is taken: the first 2^m indices
 go to the 2^m indices of one aligned block, which is again a net.
+
+Interlaced (higher-order) Sobol'
+--------------------------------
+:func:`owen_sobol_interlaced` is the renderer's form of the library's point
+sets ``'sobol_interlaced2'`` and ``'sobol_interlaced3'`` (:mod:`symsphere.points`;
+Dick 2011): the first 2 x factor Sobol' dimensions, with scipy's direction numbers
+(Joe & Kuo 2008; dimensions 0 and 1 are the two above), each Owen-scrambled as
+above with its own seed after one shared index shuffle, and then interlaced digit
+by digit, *factor* coordinates at a time, exactly as
+:func:`symsphere.points.interlace_digits` (the leading ``53 // factor`` digits of
+each, the centre of the cell).  Its tables are in the same bit-reversed form.
 """
 
 from __future__ import annotations
@@ -46,6 +57,9 @@ __all__ = [
     "nested_uniform_scramble",
     "sobol2",
     "owen_sobol2",
+    "sobol_coordinate",
+    "interlace_fractions",
+    "owen_sobol_interlaced",
 ]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -61,6 +75,8 @@ _ONE = np.uint64(1)
 _M32 = np.uint64(0xFFFFFFFF)
 _TWO_M53 = 2.0**-53
 _TWO_M32 = 2.0**-32
+_TWO_M52 = 2.0**-52
+_TWO_M51 = 2.0**-51
 
 # Laine–Karras permutation constants (Burley 2020, listing 2): all even.
 _LK = np.array([0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6], dtype=np.uint64)
@@ -77,6 +93,33 @@ def _pascal_direction_numbers():
 
 _SOBOL2 = _pascal_direction_numbers()
 _SOBOL2.setflags(write=False)
+
+# Joe & Kuo, "Constructing Sobol' sequences with better two-dimensional projections", SIAM J. Sci.
+# Comput. 30 (2008) 2635-2654, file new-joe-kuo-6.21201 (the direction numbers of scipy.stats.qmc.Sobol):
+# (degree s, coefficients a, initial m_1 ... m_s) of its dimensions 3 ... 6, which are the Sobol'
+# dimensions 2 ... 5 counted from 0 (0: van der Corput, 1: the Pascal dimension above).  A test derives
+# all 6 x 32 direction numbers from scipy's unscrambled points.
+_JOE_KUO = ((2, 1, (1, 3)), (3, 1, (1, 3, 1)), (3, 2, (1, 1, 1)), (4, 1, (1, 1, 3, 3)))
+
+
+def _sobol_direction_numbers():
+    v = np.zeros((6, 32), dtype=np.uint64)
+    v[0] = [1 << (31 - k) for k in range(32)]
+    v[1] = _SOBOL2
+    for d, (degree, a, initial) in enumerate(_JOE_KUO, start=2):
+        m = list(initial)  # m_k = m_{k-s} ^ (m_{k-s} << s) ^ xor_j a_j (m_{k-j} << j), a_j bit s-1-j of a
+        for k in range(degree, 32):
+            new = m[k - degree] ^ (m[k - degree] << degree)
+            for j in range(1, degree):
+                if (a >> (degree - 1 - j)) & 1:
+                    new ^= m[k - j] << j
+            m.append(new)
+        v[d] = [m[k] << (31 - k) for k in range(32)]  # v_k = m_k / 2^(k+1), as a 32-bit fraction
+    v.setflags(write=False)
+    return v
+
+
+_SOBOL6 = _sobol_direction_numbers()
 
 
 @register_jitable
@@ -192,6 +235,100 @@ def owen_sobol2(index, key):
     return np.float64(x) * _TWO_M32, np.float64(y) * _TWO_M32
 
 
+@register_jitable
+def sobol_coordinate(index, dim):
+    """Coordinate *dim* (0 ... 5) of the unscrambled Sobol' point *index* (< 2**32), a 32-bit fraction.
+
+    The reference (a loop over the bits of the index), natural order: point i
+    is the xor of the direction numbers of the set bits of i (scipy's points
+    are in Gray-code order: its point n is this point n ^ (n >> 1)).
+    """
+    value = np.uint64(0)
+    index = np.uint64(index)
+    i = 0
+    while index != 0:
+        if index & _ONE:
+            value = value ^ _SOBOL6[dim, i]
+        index = index >> _ONE
+        i += 1
+    return value
+
+
+@register_jitable
+def _spread(d, factor):
+    # The bits of d (< 2^32 for factor 2, < 2^21 for 3) spread out: bit b -> bit factor * b (Morton codes).
+    if factor == 2:
+        d = (d | (d << _S16)) & np.uint64(0x0000FFFF0000FFFF)
+        d = (d | (d << _S8)) & np.uint64(0x00FF00FF00FF00FF)
+        d = (d | (d << np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+        d = (d | (d << np.uint64(2))) & np.uint64(0x3333333333333333)
+        return (d | (d << _ONE)) & np.uint64(0x5555555555555555)
+    d = (d | (d << _S32)) & np.uint64(0x001F00000000FFFF)
+    d = (d | (d << _S16)) & np.uint64(0x001F0000FF0000FF)
+    d = (d | (d << _S8)) & np.uint64(0x100F00F00F00F00F)
+    d = (d | (d << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+    return (d | (d << np.uint64(2))) & np.uint64(0x1249249249249249)
+
+
+@register_jitable
+def interlace_fractions(a, b, c, factor):
+    """Interlace the digits of the 32-bit fractions a, b (factor 2) or a, b, c (factor 3) into a double.
+
+    As :func:`symsphere.points.interlace_digits`: digit k of the result is digit
+    ceil(k / factor) of source (k - 1) mod factor, from the leading 26 (factor 2)
+    or 17 (factor 3) digits of each; the result is the centre of its cell of side
+    2^-52 or 2^-51, in (0, 1).  (c is ignored for factor 2.)
+    """
+    if factor == 2:  # the leading 26 digits of each
+        s = np.uint64(6)
+        return (np.float64((_spread(a >> s, 2) << _ONE) | _spread(b >> s, 2)) + 0.5) * _TWO_M52
+    s = np.uint64(15)  # the leading 17 digits of each
+    value = (_spread(a >> s, 3) << np.uint64(2)) | (_spread(b >> s, 3) << _ONE) | _spread(c >> s, 3)
+    return (np.float64(value) + 0.5) * _TWO_M51
+
+
+@register_jitable
+def _scrambled_coordinate(i, dim, seed):
+    """Coordinate *dim* of Sobol' point i, nested-uniform scrambled with *seed*: reverse(LK(reverse(x)))."""
+    r = (
+        _SOBOL6_REV[dim, 0, i & _B255]
+        ^ _SOBOL6_REV[dim, 1, (i >> _S8) & _B255]
+        ^ _SOBOL6_REV[dim, 2, (i >> _S16) & _B255]
+        ^ _SOBOL6_REV[dim, 3, i >> _S24]
+    )  # reverse(x) = xor of reverse(v_j) over the set bits j of i
+    return _reverse_fast(_laine_karras(r, seed))
+
+
+@register_jitable
+def owen_sobol_interlaced(index, key, factor):
+    """Point *index* of the Owen-scrambled, index-shuffled, interlaced Sobol' sequence with 64-bit *key*.
+
+    *factor* 2 or 3: Sobol' dimensions 0 ... 3 or 0 ... 5.  Returns two
+    doubles in (0, 1).  Seeds (32 bits each, from *key*): one shuffles the
+    index, one scrambles each dimension.  Equal to::
+
+        i = nested_uniform_scramble(index, s)
+        x_d = nested_uniform_scramble(sobol_coordinate(i, d), s_d)     d = 0 ... 2 factor - 1
+        interlace_fractions(x_0, ..., x_{factor-1}), interlace_fractions(x_factor, ...)
+
+    (pinned by a test), with the dimensions' xor over the bits of i done by byte tables.
+    """
+    h1 = mix64(key ^ _GOLDEN)
+    h2 = mix64(key ^ _MIX1)
+    h3 = mix64(key ^ _MIX2)
+    i = _reverse_fast(_laine_karras(_reverse_fast(np.uint64(index) & _M32), h1 & _M32))
+    x0 = _scrambled_coordinate(i, 0, h1 >> _S32)
+    x1 = _scrambled_coordinate(i, 1, h2 & _M32)
+    x2 = _scrambled_coordinate(i, 2, h2 >> _S32)
+    x3 = _scrambled_coordinate(i, 3, h3 & _M32)
+    if factor == 2:
+        return interlace_fractions(x0, x1, x1, 2), interlace_fractions(x2, x3, x3, 2)
+    h4 = mix64(key ^ _ODD)
+    x4 = _scrambled_coordinate(i, 4, h3 >> _S32)
+    x5 = _scrambled_coordinate(i, 5, h4 & _M32)
+    return interlace_fractions(x0, x1, x2, 3), interlace_fractions(x3, x4, x5, 3)
+
+
 def _tables():
     def reverse(x, bits):
         return int(format(x, f"0{bits}b")[::-1], 2)
@@ -206,12 +343,20 @@ def _tables():
                 if value >> bit & 1:
                     acc ^= w[8 * byte + bit]
             yrev[byte, value] = acc
+    sobol6_rev = np.zeros((6, 4, 256), dtype=np.uint64)
+    for dim in range(6):
+        w = [reverse(int(_SOBOL6[dim, j]), 32) for j in range(32)]
+        for byte in range(4):
+            for bit in range(8):  # entries with highest set bit `bit` from the smaller ones: 256 xors
+                step = 1 << bit
+                sobol6_rev[dim, byte, step : 2 * step] = sobol6_rev[dim, byte, :step] ^ np.uint64(w[8 * byte + bit])
     rev8.setflags(write=False)
     yrev.setflags(write=False)
-    return rev8, yrev
+    sobol6_rev.setflags(write=False)
+    return rev8, yrev, sobol6_rev
 
 
-_REV8, _YREV = _tables()
+_REV8, _YREV, _SOBOL6_REV = _tables()
 _B255 = np.uint64(255)
 _S8 = np.uint64(8)
 _S16 = np.uint64(16)

@@ -42,6 +42,10 @@ SAMPLERS = (
     "cosine",
     "symmetric_cosine",
     "symmetric_cosine_sobol",
+    "symmetric_sobol_interlaced2",
+    "symmetric_sobol_interlaced3",
+    "symmetric_cosine_sobol_interlaced2",
+    "symmetric_cosine_sobol_interlaced3",
 )
 """Direction samplers at diffuse vertices (see docs/rendering.md):
 
@@ -60,14 +64,21 @@ SAMPLERS = (
                      transmission) samples share a base point of a cosine-weighted
                      map onto the wedge 0 <= phi <= pi/4 and take its images under
                      the 8 signed permutations that keep z (x {z, -z}) in turn;
-                     random or Owen-scrambled Sobol' base points.
+                     random or Owen-scrambled Sobol' base points;
+``symmetric_sobol_interlaced2``, ``symmetric_sobol_interlaced3``,
+``symmetric_cosine_sobol_interlaced2``, ``symmetric_cosine_sobol_interlaced3``
+                     ``symmetric_sobol`` and ``symmetric_cosine_sobol`` with the
+                     base points of the point sets ``'sobol_interlaced2'`` and
+                     ``'sobol_interlaced3'`` of :mod:`symsphere.points`: 4 or 6
+                     Sobol' dimensions, each Owen-scrambled, interlaced digit by
+                     digit into 2 (higher-order digital nets, Dick 2011).
 """
 
 INTEGRATORS = ("path", "bsdf")
 """``path``: next-event estimation + BSDF sampling, combined by MIS (power heuristic);
 ``bsdf``: BSDF sampling only (smallpt's estimator)."""
 
-SYMMETRIC_SAMPLERS = ("symmetric", "symmetric_sobol")
+SYMMETRIC_SAMPLERS = ("symmetric", "symmetric_sobol", "symmetric_sobol_interlaced2", "symmetric_sobol_interlaced3")
 """The samplers that take a ``method`` (the map onto T0)."""
 FILTERS = ("box", "tent")
 """Pixel filters: ``box`` (uniform in the pixel) and ``tent`` (smallpt's 2 x 2 subpixel tent)."""
@@ -81,6 +92,10 @@ _SAMPLER_CODES = {
     "cosine": _k.COSINE,
     "symmetric_cosine": _k.SYMMETRIC_COSINE,
     "symmetric_cosine_sobol": _k.SYMMETRIC_COSINE_SOBOL,
+    "symmetric_sobol_interlaced2": _k.SYMMETRIC_SOBOL_INTERLACED2,
+    "symmetric_sobol_interlaced3": _k.SYMMETRIC_SOBOL_INTERLACED3,
+    "symmetric_cosine_sobol_interlaced2": _k.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
+    "symmetric_cosine_sobol_interlaced3": _k.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
 }
 _INTEGRATOR_CODES = {"path": _k.PATH, "bsdf": _k.BSDF}
 _PATHS_PER_PASS = 200_000  # progress granularity: a kernel call per ~0.1 s
@@ -154,7 +169,8 @@ def render(
     spp: int = 96,
     sampler: Literal[
         "symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine",
-        "symmetric_cosine", "symmetric_cosine_sobol",
+        "symmetric_cosine", "symmetric_cosine_sobol", "symmetric_sobol_interlaced2", "symmetric_sobol_interlaced3",
+        "symmetric_cosine_sobol_interlaced2", "symmetric_cosine_sobol_interlaced3",
     ] = "symmetric_sobol",
     method: Literal["equal_area", "paper1", "paper2"] | None = None,
     pixel_filter: Literal["box", "tent"] = "box",
