@@ -497,14 +497,14 @@ def _run_integrate(args) -> int:
     client = _cluster_client(args)
     try:
         if client is None:
-            _print_estimate(integrand.f, kwargs)
+            _print_estimate(integrand, kwargs)  # the integrand's compiled kernel: the fused path
             with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
                 warnings.filterwarnings("ignore", message="integrate: the tolerance")
-                result = integrate(integrand.f, **kwargs)
+                result = integrate(integrand, **kwargs)
         else:
             from .. import distributed  # function-level: dask is slow to import and optional
 
-            result = distributed.integrate(integrand.f, client=client, progress=True, **kwargs)
+            result = distributed.integrate(integrand, client=client, progress=True, **kwargs)
     finally:
         _close_client(client)
     elapsed = time.perf_counter() - start
