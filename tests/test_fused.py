@@ -159,7 +159,7 @@ def test_specialised_kernel_equals_generic(name, points):
     g = INTEGRANDS[name]
     generic = njit(error_model="numpy")(g.kernel.py_func)  # no symsphere_source: the generic kernel
     count = 48 if g.domain == "sphere" else 24
-    orbits = 65**2 if points == "stratified" else BLOCK + 3  # per replicate: more than one block
+    orbits = {"stratified": 65**2, "sobol": 2 * BLOCK}.get(points, BLOCK + 3)  # per replicate: more than one block
     kwargs = dict(domain=g.domain, n=count * 8 * orbits, points=points, rng=4)
     assert integrate(g, **kwargs) == integrate(generic, **kwargs)
 
