@@ -361,7 +361,7 @@ def _kernel(expression: str, **constants: float) -> Any:
     namespace: dict[str, Any] = {"vexp": vexp}
     exec(compile(source, "<symsphere.integrands kernel>", "exec"), namespace)  # noqa: S102 - our own template
     dispatcher = njit(error_model="numpy")(namespace["kernel"])
-    dispatcher.symsphere_source = source  # integrate() writes it into a cached specialised kernel (symsphere._fused)
+    setattr(dispatcher, "symsphere_source", source)  # integrate() writes it into a cached specialised kernel (symsphere._fused)
     return dispatcher
 
 
