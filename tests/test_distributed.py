@@ -4,9 +4,11 @@ import os
 import signal
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
+from numba import njit
 
 import symsphere
 from symsphere.points import BLOCK
@@ -50,6 +52,51 @@ def test_integrate_equals_single_process(client, kwargs):
     single = symsphere.integrate(exp_dot, **kwargs)
     for chunk_blocks in (1, 2, 7):
         assert _same(ss_distributed.integrate(exp_dot, client=client, chunk_blocks=chunk_blocks, **kwargs), single)
+
+
+def _same_run(a, b):
+    return _same(a, b) and (a.n_evaluations, a.n_stages, a.converged, a.tolerance, a.confidence_interval) == (
+        b.n_evaluations, b.n_stages, b.converged, b.tolerance, b.confidence_interval)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(rtol=3e-5, rng=1),  # random: the n**-0.5 jump, several blocks per stage
+        dict(rtol=1e-7, points="sobol", replicates=4, rng=2),  # doubling, blocks reused
+        dict(rtol=1e-5, points="stratified", replicates=2, rng=3, method="paper1"),  # a new grid per stage
+        dict(atol=1e-9, n_max=48 * 2**13, domain="hemisphere", normal=[0.2, 0.3, -0.9], rng=4),  # n_max: warns
+    ],
+)
+def test_integrate_to_tolerance_equals_single_process(client, kwargs):
+    """Each stage's new blocks as tasks: bit for bit the in-process tolerance run (stages, n, interval)."""
+    with warnings.catch_warnings(record=True) as single_warnings:
+        warnings.simplefilter("always")
+        single = symsphere.integrate(exp_dot, **kwargs)
+    assert single.n_stages > 1
+    for chunk_blocks in (1, 3):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = ss_distributed.integrate(exp_dot, client=client, chunk_blocks=chunk_blocks, **kwargs)
+        assert _same_run(result, single)
+        assert [str(w.message) for w in caught if "tolerance" in str(w.message)] == [
+            str(w.message) for w in single_warnings if "tolerance" in str(w.message)]
+
+
+@njit
+def exp_xyz(x, y, z):
+    return np.exp(0.7 * x - 0.4 * y + 0.5 * z)
+
+
+@pytest.mark.slow
+def test_tolerance_ships_a_compiled_integrand(client):
+    """A numba f(x, y, z) cannot run on the numpy path: equal bits mean the workers ran it fused."""
+    from symsphere.integrands import INTEGRANDS
+
+    for f in (exp_xyz, INTEGRANDS["exp"]):
+        kwargs = dict(rtol=1e-5, points="sobol", rng=5)
+        single = symsphere.integrate(f, **kwargs)
+        assert _same_run(ss_distributed.integrate(f, client=client, chunk_blocks=2, **kwargs), single)
 
 
 def test_dask_array_equals_sample_sphere(client):
@@ -96,6 +143,8 @@ def test_unreachable_scheduler_fails_fast():
         (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, chunk_blocks=0), ValueError, "'chunk_blocks' must be positive"),
         (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, colour="red"), TypeError, "unexpected keyword arguments"),
         (lambda: ss_distributed.integrate(exp_dot, client=object()), TypeError, "missing required keyword argument 'n'"),
+        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, n_max=96), ValueError, "'n_max' is only valid"),
+        (lambda: ss_distributed.integrate(exp_dot, client=object(), rtol=-1.0), ValueError, "'rtol' must be"),
     ],
 )
 def test_bad_input(call, error, match):

@@ -151,3 +151,42 @@ def test_distributed_ships_the_fused_kernel():
         assert result == integrate(INTEGRANDS["exp"], **kwargs)
     finally:
         distributed.close_client(client)
+
+
+@pytest.mark.parametrize("name, points", [("exp", "random"), ("cap", "sobol"), ("exp_hemisphere", "stratified")])
+def test_specialised_kernel_equals_generic(name, points):
+    """A suite integrand runs the specialised (cached) kernel; the generic one gives the same bits."""
+    g = INTEGRANDS[name]
+    generic = njit(error_model="numpy")(g.kernel.py_func)  # no symsphere_source: the generic kernel
+    count = 48 if g.domain == "sphere" else 24
+    orbits = {"stratified": 65**2, "sobol": 2 * BLOCK}.get(points, BLOCK + 3)  # per replicate: more than one block
+    kwargs = dict(domain=g.domain, n=count * 8 * orbits, points=points, rng=4)
+    assert integrate(g, **kwargs) == integrate(generic, **kwargs)
+
+
+CACHED_RUN = """
+import symsphere, symsphere._fused as fused
+from symsphere.integrands import INTEGRANDS
+result = symsphere.integrate(INTEGRANDS["exp"], n=48 * 100, rng=1)
+(kernel,) = fused._specialised_kernels.values()
+print(result.integral, sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
+"""
+
+
+@pytest.mark.slow
+def test_suite_kernel_cached_across_processes(tmp_path):
+    """The suite's fused kernel is compiled once, then loaded from numba's disk cache by a new process."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    runs = []
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", CACHED_RUN], env=env, capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr
+        runs.append(out.stdout.split())
+    (first_value, first_hits, first_misses), (second_value, second_hits, second_misses) = runs
+    assert first_value == second_value
+    assert (first_hits, first_misses) == ("0", "1") and (second_hits, second_misses) == ("1", "0")
+    assert len(list((tmp_path / "symsphere-fused").glob("symsphere_fused_*.py"))) == 1

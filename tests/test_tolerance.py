@@ -123,7 +123,6 @@ def test_cli_rtol(capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["--rtol", "1e-3", "--workers", "2"], "--rtol/--atol run in one process"),
         ([], "--n is required unless --rtol or --atol is given"),
         (["--n", "480", "--n-max", "960"], "--n-max is only valid with --rtol or --atol"),
         (["--rtol", "-1"], "'rtol' must be >= 0"),

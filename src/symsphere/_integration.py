@@ -8,6 +8,7 @@ update), so the result does not depend on how the work is split.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from . import frames
 from ._blocks import fill_range, warn_at_caller
 from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
-from ._validation import check_choice, check_count, check_normal, check_real_values, check_rng, short_repr
+from ._validation import check_choice, check_count, check_nonnegative, check_normal, check_real_values, check_rng, short_repr
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
@@ -30,6 +31,8 @@ Integrand = Callable[[Float64Array], npt.ArrayLike]
 """What ``f`` is: directions (m, 3) to values (m,) or (m, k)."""
 Partial = tuple[int, Float64Array, Float64Array]
 """A block's (orbits, sum of orbit estimates, sum of squared deviations from their mean)."""
+Compute = Callable[["Plan", Sequence[tuple[int, int, int]]], list[list[Partial]]]
+"""Sums blocks: (plan, [(replicate, first block, stop block), ...]) -> one list of partials per request."""
 
 __all__ = [
     "DEFAULT_REPLICATES",
@@ -41,6 +44,9 @@ __all__ = [
     "evaluate",
     "combine",
     "finish",
+    "Compute",
+    "compute_here",
+    "to_tolerance",
 ]
 
 DEFAULT_REPLICATES = 8
@@ -318,9 +324,9 @@ def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResu
         variance = estimates.var(axis=0, ddof=1) if units > 1 else np.full_like(integral, np.nan)
     standard_error = np.sqrt(variance / units)
     if units > 1:
-        from scipy import stats as _scipy_stats  # not at import: it costs 0.3 s
+        from scipy import special  # not at import; scipy.stats (whose t.ppf is this function) costs 2x more
 
-        t = _scipy_stats.t.ppf(0.5 + plan.confidence_level / 2, df=units - 1)
+        t = special.stdtrit(units - 1, 0.5 + plan.confidence_level / 2)
     else:
         t = np.nan
     squeeze = (lambda a: float(a[0])) if integral.shape == (1,) else (lambda a: a)
@@ -336,3 +342,126 @@ def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResu
         method=plan.method,
         points=plan.points_name,
     )
+
+
+def compute_here(work: Plan, requests: Sequence[tuple[int, int, int]]) -> list[list[Partial]]:
+    """The partials of each (replicate, first, stop) request, in this process."""
+    return [block_partials(work, replicate, first, stop) for replicate, first, stop in requests]
+
+
+def to_tolerance(
+    f: Integrand,
+    domain: str,
+    n: int | None,
+    method: MapMethod,
+    points: PointsLike,
+    normal: npt.ArrayLike | None,
+    rng: RNGLike,
+    replicates: int | None,
+    confidence_level: float,
+    atol: float | None,
+    rtol: float | None,
+    n_max: int | None,
+    compute: Compute | None = None,
+) -> IntegrationResult:
+    """Double n, reusing the blocks already summed, until the half-width meets the tolerance.
+
+    *compute* sums the new blocks of a stage: ``compute(plan, [(replicate, first, stop), ...])`` gives
+    one list of partials per request (default: here, :func:`block_partials`;
+    :func:`symsphere.distributed.integrate` passes one that runs them as Dask tasks).  The stages,
+    the reuse and so the result do not depend on it.
+    """
+    atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
+    rtol = 0.0 if rtol is None else check_nonnegative(rtol, "rtol")
+    if atol == 0 and rtol == 0:
+        raise ValueError("'atol' or 'rtol' must be positive")
+    count = 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
+    if check_points(points) is not None:
+        raise ValueError(
+            "'atol' and 'rtol' need an error estimate, which a QMCEngine does not give "
+            "(its replicates cannot be made independent); use points='sobol' or 'halton' (scrambled replicates)"
+        )
+    stratified = points == "stratified"
+    if points != "random":
+        replicates = DEFAULT_REPLICATES if replicates is None else check_count(replicates, "replicates")
+        if replicates < 2:
+            raise ValueError(f"'replicates' must be at least 2 with 'atol' or 'rtol' (an error estimate), got {replicates}")
+    unit = count * (replicates or 1)
+    n = unit * (16**2 if stratified else 256) if n is None else check_count(n, "n", multiple=unit)
+    n_max = count * 2**24 if n_max is None else check_count(n_max, "n_max", multiple=count)
+    if n_max < n:
+        raise ValueError(f"'n_max' must be at least n={n}, got {n_max}")
+    growth = 4 if stratified else 2
+    largest_n = n
+    while largest_n * growth <= n_max:
+        largest_n *= growth
+    # One plan for the largest stage: its point sources address every stage's points by index.
+    # 'stratified' grids are not nested (a finer grid is other points), so each stage plans anew.
+    largest = plan(f, domain, largest_n, method, points, normal, rng, replicates, confidence_level)
+    kept: dict[tuple[int, int], Partial] = {}  # (replicate, block) -> the partial of a whole block
+    alpha = 1.0 - largest.confidence_level
+    stage, n_stage = 1, n
+    while True:
+        level = 1.0 - alpha / (stage * (stage + 1))
+        if stratified:
+            work = plan(f, domain, n_stage, method, points, normal, rng, replicates, level)
+            kept.clear()
+        else:
+            orbits = n_stage // unit
+            work = dataclasses.replace(
+                largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK), confidence_level=level
+            )
+        result = _stage_result(work, kept, stage, atol, rtol, compute or compute_here)
+        if result.converged or n_stage == largest_n:
+            break
+        factor = growth
+        if points == "random":  # the error falls as n**-0.5 exactly: jump to the n predicted for the next level
+            factor = max(2, _predicted_factor(result, alpha / ((stage + 1) * (stage + 2))))
+        while n_stage * factor > largest_n:
+            factor //= 2
+        stage, n_stage = stage + 1, n_stage * factor
+    if not result.converged:
+        low, high = result.confidence_interval
+        warnings.warn(
+            f"integrate: the tolerance {result.tolerance:.3g} was not reached by n_max={n_max}: at n={n_stage} the "
+            f"half-width of the {100 * result.confidence_level:.4g}% interval is {np.max((high - low) / 2):.3g}",
+            UserWarning,  # as scipy's IntegrationWarning
+            stacklevel=3,  # the caller of integrate
+        )
+    return result
+
+
+def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
+    """The power of 2 by which n must grow for the next stage's half-width to meet the tolerance,
+    if the standard error falls as n**-0.5 (random points: exactly, in expectation)."""
+    from scipy import special  # not at import: the t quantile, as scipy.stats.t.ppf computes it
+
+    assert result.tolerance is not None
+    t = special.stdtrit(result.n_units - 1, 1 - next_alpha / 2)
+    ratio = float(np.max(t * np.asarray(result.standard_error))) / result.tolerance if result.tolerance > 0 else np.inf
+    if not np.isfinite(ratio):
+        return 2
+    return int(2 ** max(1, int(np.ceil(np.log2(max(ratio * ratio, 1.0))))))
+
+
+def _stage_result(
+    work: Plan, kept: dict[tuple[int, int], Partial], stage: int, atol: float, rtol: float, compute: Compute
+) -> IntegrationResult:
+    """The result at one stage: whole blocks from *kept*, the rest summed now (and whole ones kept)."""
+    partials = []
+    requests = []
+    for replicate in range(work.replicates):
+        reused = 0
+        while (replicate, reused) in kept and reused < work.blocks_per_replicate:
+            reused += 1
+        requests.append((replicate, reused, work.blocks_per_replicate))
+    for (replicate, reused, _), fresh in zip(requests, compute(work, requests)):
+        for block, partial in enumerate(fresh, start=reused):
+            if partial[0] == BLOCK:
+                kept[(replicate, block)] = partial
+        partials.append([kept[(replicate, b)] for b in range(reused)] + fresh)
+    result = finish(work, partials)
+    low, high = result.confidence_interval
+    tolerance = np.maximum(atol, rtol * np.abs(result.integral))
+    converged = bool(np.all((np.asarray(high) - np.asarray(low)) / 2 <= tolerance))
+    return dataclasses.replace(result, tolerance=float(np.min(tolerance)), n_stages=stage, converged=converged)

@@ -32,7 +32,7 @@ import numpy as np
 
 from ._validation import MAX_TASKS, check_count, check_positive_real
 from ._blocks import fill_range, prepare
-from ._integration import block_partials, finish, plan
+from ._integration import block_partials, finish, plan, to_tolerance
 from ._threads import start_threads
 from .points import BLOCK
 
@@ -126,12 +126,15 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
         Show a progress bar over the tasks as they complete.
     **kwargs
         As for :func:`symsphere.integrate` (domain, n, method, points, normal,
-        rng, replicates, confidence_level).
+        rng, replicates, confidence_level, atol, rtol, n_max).  With ``atol``/``rtol`` the
+        stages run one after the other, each stage's new blocks as tasks; the blocks summed
+        in earlier stages are kept on the client and reused, as in one process.
 
     Returns
     -------
     symsphere.IntegrationResult
-        Equal, bit for bit, to ``symsphere.integrate(f, **kwargs)``.
+        Equal, bit for bit, to ``symsphere.integrate(f, **kwargs)`` (to a tolerance too: the same
+        stages, the same n, the same interval).
 
     Examples
     --------
@@ -142,31 +145,64 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     >>> result = integrate(f, client=client, n=48 * 4, rng=1)
     >>> result == symsphere.integrate(f, n=48 * 4, rng=1)          # bit for bit
     True
+
+    To a tolerance, with a compiled integrand (fused on the workers too):
+
+    >>> from symsphere.integrands import INTEGRANDS
+    >>> result = integrate(INTEGRANDS["exp"], client=client, rtol=1e-4, rng=2)
+    >>> result == symsphere.integrate(INTEGRANDS["exp"], rtol=1e-4, rng=2)
+    True
+    >>> result.converged, result.n_stages
+    (True, 2)
     >>> close_client(client)
     """
     from distributed import as_completed
 
-    work = plan(f, **_integrate_arguments(kwargs))
+    arguments = _integrate_arguments(kwargs)
     chunk_blocks = check_count(chunk_blocks, "chunk_blocks")
+    if {"atol", "rtol", "n_max"} & set(arguments):
+        tolerance = {k: arguments.pop(k, None) for k in ("atol", "rtol", "n_max")}
+        n = arguments.pop("n", None)
+        with contextlib.ExitStack() as stack:
+            clients = []  # opened at the first stage, after the arguments are checked
+
+            def compute(work, requests):
+                if not clients:
+                    _check_client(client)
+                    clients.append(stack.enter_context(_client_or_local(client)))
+                return _compute_on(clients[0], work, requests, chunk_blocks, progress, as_completed)
+
+            return to_tolerance(f, n=n, **arguments, **tolerance, compute=compute)
+    work = plan(f, **arguments)
+    requests = [(replicate, 0, work.blocks_per_replicate) for replicate in range(work.replicates)]
     _check_tasks(work.replicates * -(-work.blocks_per_replicate // chunk_blocks), "chunk_blocks",
                  f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}")
     _check_client(client)  # after the arguments of the run, before any work
-    tasks = [
-        (replicate, first, min(first + chunk_blocks, work.blocks_per_replicate))
-        for replicate in range(work.replicates)
-        for first in range(0, work.blocks_per_replicate, chunk_blocks)
-    ]
     with _client_or_local(client) as active:
-        plan_future = active.scatter(work, broadcast=True, hash=False)  # a fresh key: no clash with a release in flight
-        futures = [active.submit(_partials_task, plan_future, *task, pure=False) for task in tasks]
-        index_of = {future.key: index for index, future in enumerate(futures)}
-        results = {}
-        for future in _progress(as_completed(futures), len(futures), progress, "integrating"):
-            results[index_of[future.key]] = future.result()
-    partials = [[] for _ in range(work.replicates)]
-    for index, (replicate, _, _) in enumerate(tasks):
-        partials[replicate].extend(results[index])
+        partials = _compute_on(active, work, requests, chunk_blocks, progress, as_completed)
     return finish(work, partials)
+
+
+def _compute_on(active, work, requests, chunk_blocks, progress, as_completed):
+    """The partials of each (replicate, first, stop) request, as tasks of at most chunk_blocks blocks."""
+    tasks = [
+        (index, replicate, first, min(first + chunk_blocks, stop))
+        for index, (replicate, start, stop) in enumerate(requests)
+        for first in range(start, stop, chunk_blocks)
+    ]
+    _check_tasks(len(tasks), "chunk_blocks", f"{len(requests)} replicates' blocks in tasks of {chunk_blocks}")
+    partials = [[] for _ in requests]
+    if not tasks:
+        return partials
+    plan_future = active.scatter(work, broadcast=True, hash=False)  # a fresh key: no clash with a release in flight
+    futures = [active.submit(_partials_task, plan_future, *task[1:], pure=False) for task in tasks]
+    index_of = {future.key: index for index, future in enumerate(futures)}
+    results = {}
+    for future in _progress(as_completed(futures), len(futures), progress, "integrating"):
+        results[index_of[future.key]] = future.result()
+    for number, task in enumerate(tasks):  # in task order: block order within each request
+        partials[task[0]].extend(results[number])
+    return partials
 
 
 def render(
@@ -356,15 +392,19 @@ def close_client(client):
 
 
 def _integrate_arguments(kwargs):
-    allowed = {"domain", "n", "method", "points", "normal", "rng", "replicates", "confidence_level"}
+    allowed = {"domain", "n", "method", "points", "normal", "rng", "replicates", "confidence_level", "atol", "rtol", "n_max"}
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise TypeError(f"integrate() got unexpected keyword arguments {unknown}; allowed: {sorted(allowed)}")
     defaults = dict(domain="sphere", method="equal_area", points="random", normal=None, rng=None, replicates=None)
     defaults["confidence_level"] = 0.95
-    if "n" not in kwargs:
-        raise TypeError("integrate() missing required keyword argument 'n'")
-    return {**defaults, **kwargs}
+    tolerance = {k: v for k, v in kwargs.items() if k in ("atol", "rtol", "n_max") and v is not None}
+    kwargs = {k: v for k, v in kwargs.items() if k not in ("atol", "rtol", "n_max")}
+    if "n_max" in tolerance and not ({"atol", "rtol"} & set(tolerance)):
+        raise ValueError("'n_max' is only valid with 'atol' or 'rtol'")
+    if "n" not in kwargs and not tolerance:
+        raise TypeError("integrate() missing required keyword argument 'n' (or give 'atol' or 'rtol')")
+    return {**defaults, **kwargs, **tolerance}
 
 
 def _partials_task(work, replicate, first, stop):

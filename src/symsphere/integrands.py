@@ -348,7 +348,9 @@ def _kernel(expression: str, **constants: float) -> Any:
     """A numba function ``kernel(x, y, z) = expression``, the constants written in as exact literals.
 
     Generated source rather than a closure, so that numba sees plain constants (and can
-    fold and vectorise) and the integrand needs no state; ``vexp`` is a libm-free exp.
+    fold and vectorise) and the integrand needs no state; ``vexp`` is a libm-free exp.  The
+    source is kept as ``kernel.symsphere_source``: :func:`symsphere.integrate` writes it into a
+    module file with the fused kernel, so that numba caches the pair on disk.
     """
     from numba import njit
 
@@ -358,7 +360,9 @@ def _kernel(expression: str, **constants: float) -> Any:
     source = "def kernel(x, y, z):\n" + "\n".join(lines + [f"    return {expression}"]) + "\n"
     namespace: dict[str, Any] = {"vexp": vexp}
     exec(compile(source, "<symsphere.integrands kernel>", "exec"), namespace)  # noqa: S102 - our own template
-    return njit(error_model="numpy")(namespace["kernel"])
+    dispatcher = njit(error_model="numpy")(namespace["kernel"])
+    setattr(dispatcher, "symsphere_source", source)  # integrate() writes it into a cached specialised kernel (symsphere._fused)
+    return dispatcher
 
 
 def _polynomial_kernel(coeffs: Mapping[tuple[int, int, int], float | Fraction], shift: float = 0.0) -> Any:

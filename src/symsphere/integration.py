@@ -38,17 +38,10 @@ combined in block order, so the result does not depend on how the work is split
 
 from __future__ import annotations
 
-import dataclasses
-import warnings
-
-import numpy as np
 import numpy.typing as npt
 
-from ._integration import DEFAULT_REPLICATES, IntegrationResult, Integrand, Partial, Plan, block_partials, finish, plan
+from ._integration import IntegrationResult, Integrand, block_partials, finish, plan, to_tolerance
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
-from ._validation import check_choice, check_count, check_nonnegative
-from .points import BLOCK, check_points
-from .symmetry import DOMAINS
 
 __all__ = ["IntegrationResult", "integrate"]
 
@@ -151,111 +144,4 @@ def integrate(
         work = plan(f, domain, n, method, points, normal, rng, replicates, confidence_level)
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
-    return _to_tolerance(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
-
-
-def _to_tolerance(
-    f: Integrand,
-    domain: Domain,
-    n: int | None,
-    method: MapMethod,
-    points: PointsLike,
-    normal: npt.ArrayLike | None,
-    rng: RNGLike,
-    replicates: int | None,
-    confidence_level: float,
-    atol: float | None,
-    rtol: float | None,
-    n_max: int | None,
-) -> IntegrationResult:
-    """Double n, reusing the blocks already summed, until the half-width meets the tolerance."""
-    atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
-    rtol = 0.0 if rtol is None else check_nonnegative(rtol, "rtol")
-    if atol == 0 and rtol == 0:
-        raise ValueError("'atol' or 'rtol' must be positive")
-    count = 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
-    if check_points(points) is not None:
-        raise ValueError(
-            "'atol' and 'rtol' need an error estimate, which a QMCEngine does not give "
-            "(its replicates cannot be made independent); use points='sobol' or 'halton' (scrambled replicates)"
-        )
-    stratified = points == "stratified"
-    if points != "random":
-        replicates = DEFAULT_REPLICATES if replicates is None else check_count(replicates, "replicates")
-        if replicates < 2:
-            raise ValueError(f"'replicates' must be at least 2 with 'atol' or 'rtol' (an error estimate), got {replicates}")
-    unit = count * (replicates or 1)
-    n = unit * (16**2 if stratified else 256) if n is None else check_count(n, "n", multiple=unit)
-    n_max = count * 2**24 if n_max is None else check_count(n_max, "n_max", multiple=count)
-    if n_max < n:
-        raise ValueError(f"'n_max' must be at least n={n}, got {n_max}")
-    growth = 4 if stratified else 2
-    largest_n = n
-    while largest_n * growth <= n_max:
-        largest_n *= growth
-    # One plan for the largest stage: its point sources address every stage's points by index.
-    # 'stratified' grids are not nested (a finer grid is other points), so each stage plans anew.
-    largest = plan(f, domain, largest_n, method, points, normal, rng, replicates, confidence_level)
-    kept: dict[tuple[int, int], Partial] = {}  # (replicate, block) -> the partial of a whole block
-    alpha = 1.0 - largest.confidence_level
-    stage, n_stage = 1, n
-    while True:
-        level = 1.0 - alpha / (stage * (stage + 1))
-        if stratified:
-            work = plan(f, domain, n_stage, method, points, normal, rng, replicates, level)
-            kept.clear()
-        else:
-            orbits = n_stage // unit
-            work = dataclasses.replace(
-                largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK), confidence_level=level
-            )
-        result = _stage_result(work, kept, stage, atol, rtol)
-        if result.converged or n_stage == largest_n:
-            break
-        factor = growth
-        if points == "random":  # the error falls as n**-0.5 exactly: jump to the n predicted for the next level
-            factor = max(2, _predicted_factor(result, alpha / ((stage + 1) * (stage + 2))))
-        while n_stage * factor > largest_n:
-            factor //= 2
-        stage, n_stage = stage + 1, n_stage * factor
-    if not result.converged:
-        low, high = result.confidence_interval
-        warnings.warn(
-            f"integrate: the tolerance {result.tolerance:.3g} was not reached by n_max={n_max}: at n={n_stage} the "
-            f"half-width of the {100 * result.confidence_level:.4g}% interval is {np.max((high - low) / 2):.3g}",
-            UserWarning,  # as scipy's IntegrationWarning
-            stacklevel=3,  # the caller of integrate
-        )
-    return result
-
-
-def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
-    """The power of 2 by which n must grow for the next stage's half-width to meet the tolerance,
-    if the standard error falls as n**-0.5 (random points: exactly, in expectation)."""
-    from scipy import stats as _scipy_stats  # not at import: it costs 0.3 s
-
-    assert result.tolerance is not None
-    t = _scipy_stats.t.ppf(1 - next_alpha / 2, df=result.n_units - 1)
-    ratio = float(np.max(t * np.asarray(result.standard_error))) / result.tolerance if result.tolerance > 0 else np.inf
-    if not np.isfinite(ratio):
-        return 2
-    return int(2 ** max(1, int(np.ceil(np.log2(max(ratio * ratio, 1.0))))))
-
-
-def _stage_result(work: Plan, kept: dict[tuple[int, int], Partial], stage: int, atol: float, rtol: float) -> IntegrationResult:
-    """The result at one stage: whole blocks from *kept*, the rest summed now (and whole ones kept)."""
-    partials = []
-    for replicate in range(work.replicates):
-        reused = 0
-        while (replicate, reused) in kept and reused < work.blocks_per_replicate:
-            reused += 1
-        fresh = block_partials(work, replicate, reused, work.blocks_per_replicate)
-        for block, partial in enumerate(fresh, start=reused):
-            if partial[0] == BLOCK:
-                kept[(replicate, block)] = partial
-        partials.append([kept[(replicate, b)] for b in range(reused)] + fresh)
-    result = finish(work, partials)
-    low, high = result.confidence_interval
-    tolerance = np.maximum(atol, rtol * np.abs(result.integral))
-    converged = bool(np.all((np.asarray(high) - np.asarray(low)) / 2 <= tolerance))
-    return dataclasses.replace(result, tolerance=float(np.min(tolerance)), n_stages=stage, converged=converged)
+    return to_tolerance(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)

@@ -199,6 +199,17 @@ def test_integrate_on_local_cluster_is_identical(capsys):
     assert single == clustered and single
 
 
+def test_integrate_to_tolerance_on_local_cluster_is_identical(capsys):
+    """--rtol with --workers: the stages' blocks as tasks, the in-process result (the fused path)."""
+    pytest.importorskip("distributed")
+    args = ["integrate", "--integrand", "exp", "--rtol", "1e-4", "--seed", "4"]
+    assert main(args) == 0
+    single = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line or "tolerance" in line]
+    assert main(args + ["--workers", "2"]) == 0
+    clustered = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line or "tolerance" in line]
+    assert single == clustered and len(single) == 2
+
+
 @pytest.mark.parametrize(
     "args, match",
     [

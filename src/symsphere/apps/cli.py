@@ -487,8 +487,6 @@ def _run_integrate(args) -> int:
     to_tolerance = args.rtol is not None or args.atol is not None
     if to_tolerance:
         kwargs.update(rtol=args.rtol, atol=args.atol, n_max=args.n_max)
-        if args.workers is not None or args.scheduler is not None:
-            raise _UsageError("--rtol/--atol run in one process; drop --workers/--scheduler")
     elif args.n is None:
         raise _UsageError("--n is required unless --rtol or --atol is given")
     elif args.n_max is not None:
@@ -496,15 +494,15 @@ def _run_integrate(args) -> int:
     start = time.perf_counter()
     client = _cluster_client(args)
     try:
-        if client is None:
-            _print_estimate(integrand.f, kwargs)
-            with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
-                warnings.filterwarnings("ignore", message="integrate: the tolerance")
-                result = integrate(integrand.f, **kwargs)
-        else:
-            from .. import distributed  # function-level: dask is slow to import and optional
+        with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
+            warnings.filterwarnings("ignore", message="integrate: the tolerance")
+            if client is None:
+                _print_estimate(integrand, kwargs)  # the integrand's compiled kernel: the fused path
+                result = integrate(integrand, **kwargs)
+            else:
+                from .. import distributed  # function-level: dask is slow to import and optional
 
-            result = distributed.integrate(integrand.f, client=client, progress=True, **kwargs)
+                result = distributed.integrate(integrand, client=client, progress=True, **kwargs)
     finally:
         _close_client(client)
     elapsed = time.perf_counter() - start
