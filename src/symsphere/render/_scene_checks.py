@@ -44,8 +44,10 @@ def shown(value: Any) -> str:
             return f"an integer of {len(str(abs(value)))} digits"
         except ValueError:  # beyond sys.get_int_max_str_digits()
             return "an integer of thousands of digits"
+    if isinstance(value, np.ndarray) and value.size > 12:
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
     try:
-        text = repr(value)
+        text = " ".join(repr(value).split())  # one line: an array's repr spans several
     except (ValueError, RecursionError):
         return f"a {type(value).__name__}"
     return text if len(text) <= 80 else text[:60] + "..."

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from .._validation import check_finite_array, check_path
 from ..io import atomic_paths
 
 __all__ = [
@@ -87,7 +88,26 @@ def _check_exposure(exposure: object) -> float:
 
 
 def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
-    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1].
+    """The sRGB transfer function (IEC 61966-2-1) of linear values, elementwise, as float64.
+
+    Parameters
+    ----------
+    c : array_like of real numbers, any shape
+        Linear values; [0, 1] is the displayable range.  Values outside it follow the
+        formula (negative values stay linear, values above 1 go above 1): clip first
+        for 8-bit output, as :func:`tonemap` does.
+
+    Returns
+    -------
+    ndarray of float64, the shape of *c*
+
+    Raises
+    ------
+    ValueError
+        If *c* holds NaN or inf (a NaN has no colour: :func:`tonemap` maps NaN to 0
+        and inf to 1 itself).
+    TypeError
+        If *c* is not an array of real numbers.
 
     Examples
     --------
@@ -95,8 +115,12 @@ def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
     >>> linear_to_srgb([0.0, 0.001, 1.0]).round(6)
     array([0.     , 0.01292, 1.     ])
     """
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
+    return _srgb(check_finite_array(c, "c").astype(np.float64))
+
+
+def _srgb(c: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore"):  # finite input: c ** (1/2.4) cannot overflow
+        return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
 
 
 def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
@@ -115,7 +139,7 @@ def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
     exposure = _check_exposure(exposure)
     with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are handled next
         scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
-    return np.rint(255.0 * linear_to_srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
+    return np.rint(255.0 * _srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
 
 
 def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
@@ -211,7 +235,7 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
     ...     load_pfm(save_pfm(pathlib.Path(folder) / "x.pfm", np.full((2, 3, 3), 0.25))).shape
     (2, 3, 3)
     """
-    with open(path, "rb") as handle:
+    with open(check_path(path, "path"), "rb") as handle:
         raw = handle.read()
     tokens, position = [], 0
     while len(tokens) < 4:  # magic, width, height, scale; then exactly one whitespace byte
