@@ -349,6 +349,23 @@ def check_callable(value: object, name: str, optional: bool = False) -> None:
         raise TypeError(f"'{name}' must be {allowed}; got {type(value).__name__} {_short(value)}")
 
 
+def check_index(value: object, name: str, low: int, high: int) -> int:
+    """*value* as an int in [*low*, *high*]: TypeError if it is not an integer (bools are not), ValueError
+    if out of range, naming *name*.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_index
+    >>> check_index(2, "first_pass", 0, 4)
+    2
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"'{name}' must be an integer; got {type(value).__name__} {_short(value)}")
+    if not low <= value <= high:
+        raise ValueError(f"'{name}' must be in [{low}, {high}]; got {_short(value)}")
+    return int(value)
+
+
 UNIT_TOLERANCE = 1e-3
 """How far from 1 the norm of a direction given to a density or an inverse map may be (float32 rounding
 and user normalisation pass; a zero, a non-normalised or a mistyped vector does not)."""

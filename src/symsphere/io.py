@@ -148,6 +148,9 @@ def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]
 @contextlib.contextmanager
 def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
     targets = [Path(os.path.realpath(path)) for path in paths]  # through symbolic links
+    for path, target in zip(paths, targets):
+        if target.is_dir():  # "/" has not even a name to put a temporary beside
+            raise IsADirectoryError(errno.EISDIR, f"'{name}' names a directory, not a file", str(path))
     if len(set(targets)) != len(targets):
         raise ValueError(f"'{name}' must name distinct files; got {[str(t) for t in targets]}")
     temporaries: list[Path] = []

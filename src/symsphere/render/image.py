@@ -14,13 +14,14 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
-from .._validation import check_finite_array, check_path
+from .._validation import check_finite_array, check_path, short_repr
 from ..io import atomic_paths
 
 __all__ = [
@@ -82,9 +83,13 @@ def _write(suffix: str, temporary: Path, image: np.ndarray, exposure: float) -> 
 def _check_exposure(exposure: object) -> float:
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.integer, np.floating)):
         raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
-    if not (np.isfinite(exposure) and exposure > 0):
-        raise ValueError(f"'exposure' must be a positive finite number, got {exposure!r}")
-    return float(exposure)
+    try:
+        value = float(exposure)
+    except OverflowError:  # an int beyond float64
+        value = math.inf
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"'exposure' must be a positive finite number, got {short_repr(exposure)}")
+    return value
 
 
 def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
