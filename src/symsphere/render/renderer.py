@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._validation import MAX_PATHS, check_count, check_seed, check_size, short_repr
+from .._validation import MAX_PATHS, check_count, check_index, check_seed, check_size, short_repr
 from . import _integrator as _k
 from .image import save_image_set
 from .scene import Scene
@@ -381,6 +381,10 @@ def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.
     >>> len(render_passes(plan, 0, 1))
     1
     """
+    if not isinstance(plan, RenderPlan):
+        raise TypeError(f"'plan' must be a RenderPlan (see plan_passes); got {type(plan).__name__}")
+    first_pass = check_index(first_pass, "first_pass", 0, plan.passes)
+    stop_pass = check_index(stop_pass, "stop_pass", first_pass, plan.passes)
     images = []
     for index in range(first_pass, stop_pass):
         image = np.zeros((plan.height, plan.width, 3))
