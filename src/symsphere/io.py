@@ -283,12 +283,7 @@ def atomic_directory(
     FileExistsError: ... holds files this program did not write (report.md); refusing to replace it: ...
     """
     target = check_path(path, "path")
-    if replaceable is not None and (
-        isinstance(replaceable, (str, bytes)) or not hasattr(replaceable, "__iter__")
-        or not all(isinstance(entry, str) for entry in replaceable)
-    ):  # fmt: skip
-        raise TypeError(f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}")
-    allowed = set() if replaceable is None else set(replaceable)
+    allowed = _names(replaceable)
     _check_replaceable(target, allowed)
     temporary = _temporary_name(target, "tmp")
     temporary.mkdir()
@@ -305,6 +300,21 @@ def atomic_directory(
     except BaseException:
         shutil.rmtree(temporary, ignore_errors=True)
         raise
+
+
+def _names(replaceable: object) -> set[str]:
+    """*replaceable* (None or a collection of str) as a set; TypeError naming 'replaceable' otherwise."""
+    if replaceable is None:
+        return set()
+    try:
+        if isinstance(replaceable, (str, bytes)):
+            raise TypeError
+        names = list(replaceable)  # type: ignore[call-overload]
+    except TypeError:
+        names = [None]
+    if not all(isinstance(entry, str) for entry in names):
+        raise TypeError(f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}")
+    return set(names)
 
 
 def _check_replaceable(target: Path, allowed: set[str]) -> None:
