@@ -361,9 +361,10 @@ def check_index(value: object, name: str, low: int, high: int) -> int:
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"'{name}' must be an integer; got {type(value).__name__} {_short(value)}")
-    if not low <= value <= high:
+    index = int(value)
+    if not low <= index <= high:
         raise ValueError(f"'{name}' must be in [{low}, {high}]; got {_short(value)}")
-    return int(value)
+    return index
 
 
 UNIT_TOLERANCE = 1e-3
