@@ -69,8 +69,9 @@ PATHS = st.sampled_from(["", ".", "/", "missing/x.png", "x.txt", "x", "x.PNG", p
 IMAGE = np.full((3, 4, 3), 0.25)
 
 
-# A Material's fields have the names of the scene files in messages (as a scene file's user reads them).
-ALIASES = {"kind": ("kind", "type"), "color": ("color", "albedo", "reflectance", "tint"), "data": ("data", "top level")}
+# A Material's fields have the names of the scene files in messages (as a scene file's user reads them);
+# a SceneError about scene_from_dict's data names the field of the data ("scene file 'x': missing [camera]").
+ALIASES = {"kind": ("kind", "type"), "color": ("color", "albedo", "reflectance", "tint"), "data": ("data", "scene file")}
 
 
 def _contract(name, call, arguments, replaced, allow=(), allow_inf=False):

@@ -80,6 +80,15 @@ def _write(suffix: str, temporary: Path, image: np.ndarray, exposure: float) -> 
             np.save(handle, image)
 
 
+def _check_float32_range(image: np.ndarray) -> None:
+    """A PFM holds float32: finite values beyond its range would turn into inf (NaN and inf are kept)."""
+    finite = image[np.isfinite(image)]
+    largest = float(np.max(np.abs(finite))) if finite.size else 0.0
+    limit = float(np.finfo(np.float32).max)
+    if largest > limit:
+        raise ValueError(f"'image' has values up to {largest:.3g}, beyond float32's {limit:.3g}, which a PFM cannot hold")
+
+
 def _check_exposure(exposure: object) -> float:
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.integer, np.floating)):
         raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
@@ -220,6 +229,8 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     suffixes = [_check_suffix(path, IMAGE_SUFFIXES, "paths") for path in paths]
     image = _check_image(image)
     exposure = _check_exposure(exposure)
+    if ".pfm" in suffixes:
+        _check_float32_range(image)
     with atomic_paths(paths) as temporaries:
         for suffix, temporary, path in zip(suffixes, temporaries, paths):
             try:

@@ -466,7 +466,10 @@ def _check_clip(clip, center, radius, where) -> HalfSpace | None:
     axis = _unit(normal)
     lowest = float(axis @ (np.array(point) - np.array(center)))  # the cap keeps a . (p - c) >= lowest
     if not lowest < radius * (1 - 1e-12):
-        raise SceneError(f"{where} keeps nothing of the sphere (the plane is {lowest - radius:g} beyond it)")
+        raise SceneError(
+            f"{where} keeps nothing of the sphere (the plane is {lowest - radius:g} beyond it): "
+            "move its point or turn its normal"
+        )
     return HalfSpace(point, normal)
 
 
