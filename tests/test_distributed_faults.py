@@ -2,8 +2,13 @@
 the lost tasks are rerun, and the results are bit-identical to an undisturbed run.
 
 The task announces that it has started by creating a file (atomically, ``O_EXCL``: only the first task
-to start does) holding its worker's process id, and then waits; the test kills exactly that process
-with SIGKILL.  A rerun finds the file and does not wait.
+to start does) holding its worker's process id, and then waits until it is killed (or released by the
+test, should the test fail first); the test kills exactly that process with SIGKILL.  A rerun finds the
+file and does not wait.
+
+Under load (a shared CI machine: the workers start, import and compile slowly) the waits scale with the
+load average, and the workers compile their kernels before the run, so that the first task starts soon
+and stays inside the task until the kill: what is checked does not depend on timing.
 """
 
 from __future__ import annotations
@@ -25,9 +30,16 @@ from symsphere import distributed as ss_distributed  # noqa: E402
 A = np.array([0.7, -0.4, 0.5])
 
 
+def _scaled(seconds):
+    """*seconds* stretched by how overloaded the machine is (1-minute load average per core, at least 1)."""
+    return seconds * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+
+
 def _announcing(marker):
     """A function for the workers (a closure: cloudpickle sends it by value) that the first caller
-    announces in *marker* and then blocks in for up to a minute; later callers pass straight through."""
+    announces in *marker* and then blocks in until it is killed, or until the test creates
+    ``marker + '.release'`` (a failing test), or for 15 minutes; later callers pass straight through."""
+    release = marker + ".release"
 
     def announce_and_wait():
         try:
@@ -36,15 +48,27 @@ def _announcing(marker):
             return
         os.write(descriptor, str(os.getpid()).encode())
         os.close(descriptor)
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:  # killed in here
+        deadline = time.monotonic() + 900
+        while time.monotonic() < deadline and not os.path.exists(release):  # killed in here
             time.sleep(0.01)
 
     return announce_and_wait
 
 
-def _wait_for_pid(marker, runner, outcome, timeout=120.0):
-    deadline = time.monotonic() + timeout
+def _warm_up():
+    """Import and compile (or load from the cache) the kernels the tasks use, in a worker."""
+    import symsphere
+
+    for dtype in (np.float32, np.float64):
+        symsphere.sample_sphere(48, rng=1, dtype=dtype)
+    symsphere.integrate(lambda d: d[:, 0], n=48, rng=1)
+    return os.getpid()
+
+
+def _wait_for_pid(marker, runner, outcome, timeout=180.0):
+    started = time.monotonic()
+    timeout = _scaled(timeout)
+    deadline = started + timeout
     while time.monotonic() < deadline:
         if not runner.is_alive():
             raise AssertionError(f"the run ended before a task announced itself: {outcome}")
@@ -55,7 +79,9 @@ def _wait_for_pid(marker, runner, outcome, timeout=120.0):
         if text:
             return int(text)
         time.sleep(0.01)
-    raise AssertionError("no task started")
+    raise AssertionError(
+        f"no task started within {timeout:.0f} s (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
+    )
 
 
 def _worker_pids(client):
@@ -73,18 +99,21 @@ def _run_while_killing(client, marker, work):
             outcome["error"] = exc
 
     before = _worker_pids(client)
-    runner = threading.Thread(target=target)
+    runner = threading.Thread(target=target, daemon=True)
     runner.start()
-    pid = _wait_for_pid(marker, runner, outcome)
-    assert pid in before  # a worker process, inside a task
-    os.kill(pid, signal.SIGKILL)
-    runner.join(timeout=300)
+    try:
+        pid = _wait_for_pid(marker, runner, outcome)
+        assert pid in before  # a worker process, inside a task
+        os.kill(pid, signal.SIGKILL)
+    finally:
+        open(f"{marker}.release", "w").close()  # no task waits any longer (a rerun would not wait anyway)
+    runner.join(timeout=_scaled(300))
     assert not runner.is_alive()
     if "error" in outcome:
         raise outcome["error"]
     with pytest.raises(ProcessLookupError):
         os.kill(pid, 0)  # it died
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + _scaled(120)
     while len(_worker_pids(client)) < len(before) and time.monotonic() < deadline:
         time.sleep(0.1)
     after = _worker_pids(client)
@@ -95,6 +124,7 @@ def _run_while_killing(client, marker, work):
 @pytest.fixture
 def client():
     client = ss_distributed.local_client(2)
+    client.run(_warm_up)  # every worker compiles before the run: the first task starts soon
     yield client
     ss_distributed.close_client(client)
 

@@ -34,6 +34,7 @@ from hypothesis.extra import numpy as hnp  # noqa: E402
 
 import symsphere  # noqa: E402
 from symsphere import frames, harmonics, integrands, maps, peers, quality, sampling, stats, symmetry, wedge  # noqa: E402
+from symsphere import bins, integration, spherical_triangles, square_warps, warps  # noqa: E402
 from symsphere import points as points_module  # noqa: E402
 
 _COMMON = dict(
@@ -95,8 +96,10 @@ MAY_BE_INF = {"triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas and
 # the frame helpers used by the kernels.  Their valid inputs are still checked for finite output.
 TRUSTED = {"frame", "frame_rows", "to_world", "to_local", "cosine_wedge_point", "cosine_wedge_density",
-           "cosine_wedge_uv", "get_map", "get_peer", "check_points", "suite", "uniform_pdf"}  # fmt: skip
-MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module)
+           "cosine_wedge_uv", "get_map", "get_peer", "check_points", "suite", "uniform_pdf",
+           "uniform_sphere_point", "uniform_hemisphere_point", "concentric_disk_point", "cosine_hemisphere_point"}  # fmt: skip
+MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module,
+           bins, integration, spherical_triangles, square_warps, warps)  # fmt: skip
 
 
 @pytest.fixture(autouse=True, scope="module")

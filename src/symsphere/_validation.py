@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any, TypeVar, cast, overload
 
 import numpy as np
@@ -294,6 +296,77 @@ def check_directions(d: object, name: str = "d") -> FloatArray:
     return arr
 
 
+def check_finite_array(a: object, name: str) -> FloatArray:
+    """*a* as a float array of any shape (at most :data:`MAX_DIMENSIONS`) without NaN or inf.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_finite_array
+    >>> check_finite_array([1, 2], "c")
+    array([1., 2.])
+    >>> check_finite_array([0.5, float("nan")], "c")
+    Traceback (most recent call last):
+        ...
+    ValueError: 'c' must be finite (no NaN or inf); got [0.5, nan]
+    """
+    arr = as_float_array(a, name)
+    check_dimensions(arr, name)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"'{name}' must be finite (no NaN or inf); got {_short(a)}")
+    return arr
+
+
+def check_path(path: object, name: str = "path") -> Path:
+    """*path* (a str or os.PathLike naming a file) as a Path; TypeError or ValueError naming *name*.
+
+    Bytes, integers (which ``open`` would take as a file descriptor: 0 is standard input) and other
+    types are TypeErrors; an empty name or one with a NUL character is a ValueError.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_path
+    >>> check_path("out.npy")
+    PosixPath('out.npy')
+    >>> check_path(0)
+    Traceback (most recent call last):
+        ...
+    TypeError: 'path' must be a str or os.PathLike file name; got int 0
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"'{name}' must be a str or os.PathLike file name; got {type(path).__name__} {_short(path)}")
+    text = os.fspath(path)
+    if not isinstance(text, str):
+        raise TypeError(f"'{name}' must be a str or os.PathLike file name; got {type(text).__name__} {_short(text)}")
+    if not text or "\0" in text:
+        raise ValueError(f"'{name}' must be a non-empty file name without NUL characters; got {_short(text)}")
+    return Path(text)
+
+
+def check_callable(value: object, name: str, optional: bool = False) -> None:
+    """TypeError naming *name* unless *value* is callable (or None, if *optional*)."""
+    if not (callable(value) or (optional and value is None)):
+        allowed = "a callable or None" if optional else "a callable"
+        raise TypeError(f"'{name}' must be {allowed}; got {type(value).__name__} {_short(value)}")
+
+
+def check_index(value: object, name: str, low: int, high: int) -> int:
+    """*value* as an int in [*low*, *high*]: TypeError if it is not an integer (bools are not), ValueError
+    if out of range, naming *name*.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_index
+    >>> check_index(2, "first_pass", 0, 4)
+    2
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"'{name}' must be an integer; got {type(value).__name__} {_short(value)}")
+    index = int(value)
+    if not low <= index <= high:
+        raise ValueError(f"'{name}' must be in [{low}, {high}]; got {_short(value)}")
+    return index
+
+
 UNIT_TOLERANCE = 1e-3
 """How far from 1 the norm of a direction given to a density or an inverse map may be (float32 rounding
 and user normalisation pass; a zero, a non-normalised or a mistyped vector does not)."""
@@ -395,7 +468,10 @@ def check_real(value: object, name: str) -> float:
     """Return *value* as a finite float: TypeError if it is not a real number, ValueError if not finite."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"'{name}' must be a real number, got {type(value).__name__}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an int beyond float64
+        raise ValueError(f"'{name}' must be finite, got {_short(value)}") from None
     if not math.isfinite(value):
         raise ValueError(f"'{name}' must be finite, got {value}")
     return value

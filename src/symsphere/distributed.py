@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from ._validation import MAX_TASKS, check_count, check_positive_real
+from ._validation import MAX_TASKS, check_count, check_positive_real, short_repr
 from ._blocks import fill_range, prepare
 from ._integration import block_partials, finish, plan, to_tolerance
 from ._threads import start_threads
@@ -177,6 +177,7 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
     requests = [(replicate, 0, work.blocks_per_replicate) for replicate in range(work.replicates)]
     _check_tasks(work.replicates * -(-work.blocks_per_replicate // chunk_blocks), "chunk_blocks",
                  f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}")
+    _check_progress(progress)
     _check_client(client)  # after the arguments of the run, before any work
     with _client_or_local(client) as active:
         partials = _compute_on(active, work, requests, chunk_blocks, progress, as_completed)
@@ -260,6 +261,7 @@ def render(
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     passes_per_task = check_count(passes_per_task, "passes_per_task")
     _check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
+    _check_progress(progress)
     _check_client(client)
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
     with _client_or_local(client) as active:
@@ -317,7 +319,7 @@ def connect(address, *, timeout=10):
 
     if not isinstance(address, str) or not address:
         raise TypeError(
-            f"'address' must be the scheduler's address as a string (tcp://HOST:8786), got {address!r}; "
+            f"'address' must be the scheduler's address as a string (tcp://HOST:8786), got {short_repr(address)}; "
             "for a cluster on this machine use local_client()"
         )
     timeout = check_positive_real(timeout, "timeout")
@@ -463,6 +465,11 @@ def _check_tasks(tasks, name, what):
             f"{what} make {tasks} Dask tasks, more than the {MAX_TASKS} a graph may have: "
             f"raise '{name}', or split the run"
         )
+
+
+def _check_progress(progress):
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"'progress' must be True or False, got {type(progress).__name__}")
 
 
 def _check_client(client):

@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import FloatArray
+from ._validation import check_callable, check_count, check_directions, check_dtype, check_path, short_repr
 
 __all__ = [
     "DIRECTION_SUFFIXES",
@@ -90,7 +91,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     >>> open(target).read()
     'done'
     """
-    with atomic_paths([path]) as (temporary,):
+    with _atomic_paths([check_path(path, "path")], "path") as (temporary,):
         yield temporary
 
 
@@ -138,9 +139,20 @@ def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]
     >>> open(targets[0]).read(), sorted(os.listdir(folder))        # nothing changed, nothing left over
     ('first', ['a.txt', 'b.txt'])
     """
+    if isinstance(paths, (str, bytes, os.PathLike)) or not hasattr(paths, "__iter__"):
+        raise TypeError(f"'paths' must be an iterable of file names; got {type(paths).__name__} {short_repr(paths)}")
+    with _atomic_paths([check_path(path, "paths") for path in paths], "paths") as temporaries:
+        yield temporaries
+
+
+@contextlib.contextmanager
+def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
     targets = [Path(os.path.realpath(path)) for path in paths]  # through symbolic links
+    for path, target in zip(paths, targets):
+        if target.is_dir():  # "/" has not even a name to put a temporary beside
+            raise IsADirectoryError(errno.EISDIR, f"'{name}' names a directory, not a file", str(path))
     if len(set(targets)) != len(targets):
-        raise ValueError(f"the output files must be distinct, got {[str(t) for t in targets]}")
+        raise ValueError(f"'{name}' must name distinct files; got {[str(t) for t in targets]}")
     temporaries: list[Path] = []
     try:
         for target in targets:
@@ -270,8 +282,8 @@ def atomic_directory(
         ...
     FileExistsError: ... holds files this program did not write (report.md); refusing to replace it: ...
     """
-    target = Path(path)
-    allowed = set(replaceable or ())
+    target = check_path(path, "path")
+    allowed = _names(replaceable)
     _check_replaceable(target, allowed)
     temporary = _temporary_name(target, "tmp")
     temporary.mkdir()
@@ -288,6 +300,21 @@ def atomic_directory(
     except BaseException:
         shutil.rmtree(temporary, ignore_errors=True)
         raise
+
+
+def _names(replaceable: object) -> set[str]:
+    """*replaceable* (None or a collection of str) as a set; TypeError naming 'replaceable' otherwise."""
+    if replaceable is None:
+        return set()
+    try:
+        if isinstance(replaceable, (str, bytes)):
+            raise TypeError
+        names = list(replaceable)  # type: ignore[call-overload]
+    except TypeError:
+        names = [None]
+    if not all(isinstance(entry, str) for entry in names):
+        raise TypeError(f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}")
+    return set(names)
 
 
 def _check_replaceable(target: Path, allowed: set[str]) -> None:
@@ -321,7 +348,10 @@ def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, 
     Raises
     ------
     ValueError
-        If the suffix is neither ``.npy`` nor ``.csv``, or *directions* is not (n, 3).
+        If the suffix is neither ``.npy`` nor ``.csv``, or *directions* is not a finite
+        (n, 3) array with n >= 1.
+    TypeError
+        If *path* is not a file name or *directions* not an array of real numbers.
 
     Examples
     --------
@@ -334,9 +364,12 @@ def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, 
     x,y,z
     0,0.59999999999999998,0.80000000000000004
     """
-    directions = np.asarray(directions)
-    if directions.ndim != 2 or directions.shape[1] != 3:
-        raise ValueError(f"directions must have shape (n, 3), got {directions.shape}")
+    check_suffix(path, name)
+    directions = check_directions(directions, "directions")
+    if directions.dtype not in (np.float32, np.float64):  # float16 and other floats: written as float64
+        directions = directions.astype(np.float64)
+    if directions.ndim != 2 or len(directions) == 0:
+        raise ValueError(f"'directions' must have shape (n, 3) with n >= 1; got {directions.shape}")
     stream_directions(path, len(directions), directions.dtype, lambda out: [directions], name=name)
 
 
@@ -370,7 +403,9 @@ def check_suffix(path: str | os.PathLike[str], name: str = "path") -> str:
         ...
     ValueError: '--out' must end in one of .npy, .csv, got 'directions.txt'
     """
-    suffix = Path(path).suffix.lower()
+    if not isinstance(name, str):
+        raise TypeError(f"'name' must be a str; got {type(name).__name__} {short_repr(name)}")
+    suffix = check_path(path, name).suffix.lower()
     if suffix not in DIRECTION_SUFFIXES:
         allowed = ", ".join(DIRECTION_SUFFIXES)
         raise ValueError(f"'{name}' must end in one of {allowed}, got {str(path)!r}")
@@ -410,6 +445,9 @@ def stream_directions(
         If the file cannot be written; for ``.npy`` a full disk is found before any
         block is computed (the file's space is reserved first where the file system
         supports it), else at the write that fails.  No file is left behind.
+    ValueError, TypeError
+        For a bad argument (named), or if *blocks* gives other than (m, 3) arrays
+        of *n* directions in all (then, too, no file is left behind).
 
     Notes
     -----
@@ -434,7 +472,10 @@ def stream_directions(
     True
     """
     suffix = check_suffix(path, name)
-    dtype = np.dtype(dtype)
+    n = check_count(n, "n")
+    dtype = check_dtype(dtype)
+    check_callable(blocks, "blocks")
+    check_callable(progress, "progress", optional=True)
     written = 0
     with atomic_path(Path(path)) as temporary:
         if suffix == ".npy":
@@ -445,10 +486,8 @@ def stream_directions(
                 handle.flush()
                 _reserve(handle.fileno(), handle.tell() + n * 3 * file_dtype.itemsize)
                 pages = _PageDropper(handle.fileno())
-                for block in blocks(None):
-                    data = np.ascontiguousarray(block, dtype=file_dtype)
-                    if data.ndim != 2 or data.shape[1] != 3 or written + len(data) > n:
-                        raise RuntimeError(f"expected {n} directions in blocks of shape (m, 3), got {data.shape}")
+                for block in _iterate(blocks):
+                    data = _checked_block(block, file_dtype, n - written)
                     handle.write(data.data.cast("B"))
                     written += len(data)
                     pages.written(handle)
@@ -458,13 +497,36 @@ def stream_directions(
             fmt = _CSV_FORMATS.get(dtype, "%.17g")
             with open(temporary, "w", encoding="ascii", newline="\n") as handle:
                 handle.write("x,y,z\n")
-                for block in blocks(None):
+                for block in _iterate(blocks):
+                    block = _checked_block(block, dtype, n - written)
                     np.savetxt(handle, block, fmt=fmt, delimiter=",")
                     written += len(block)
                     if progress is not None:
                         progress(len(block))
         if written != n:
-            raise RuntimeError(f"expected {n} directions, got {written}")
+            raise ValueError(f"'blocks' must give n={n} directions in all; got {written}")
+
+
+def _iterate(blocks: Callable[[FloatArray | None], Iterable[FloatArray]]) -> Iterator[Any]:
+    produced = blocks(None)
+    if not hasattr(produced, "__iter__"):
+        raise TypeError(f"'blocks' must return an iterable of (m, 3) arrays; got {type(produced).__name__}")
+    yield from produced
+
+
+def _checked_block(block: Any, dtype: np.dtype[Any], room: int) -> Any:
+    """One block as a C-contiguous (m, 3) array of *dtype*; ValueError/TypeError naming 'blocks'."""
+    try:
+        data = np.asarray(block)
+    except (TypeError, ValueError):
+        data = np.asarray(None)
+    if data.dtype.kind not in "biuf":
+        raise TypeError(f"'blocks' must give arrays of real numbers of shape (m, 3); got {short_repr(block)}")
+    data = np.ascontiguousarray(data, dtype=dtype)
+    if data.ndim != 2 or data.shape[1] != 3 or len(data) > room:
+        raise ValueError(f"'blocks' must give (m, 3) arrays of n directions in all; got one of shape {data.shape}"
+                         f" with {room} directions left")
+    return data
 
 
 def _reserve(descriptor: int, size: int) -> None:

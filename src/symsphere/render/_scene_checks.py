@@ -44,8 +44,10 @@ def shown(value: Any) -> str:
             return f"an integer of {len(str(abs(value)))} digits"
         except ValueError:  # beyond sys.get_int_max_str_digits()
             return "an integer of thousands of digits"
+    if isinstance(value, np.ndarray) and value.size > 12:
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
     try:
-        text = repr(value)
+        text = " ".join(repr(value).split())  # one line: an array's repr spans several
     except (ValueError, RecursionError):
         return f"a {type(value).__name__}"
     return text if len(text) <= 80 else text[:60] + "..."
@@ -125,6 +127,14 @@ def integer(value: Any, where: str, minimum: int, maximum: int = MAX_DEPTH) -> i
     return int(value)
 
 
+def _length(value: Any) -> int | None:
+    """len(value), or None for what has no length (a number, a 0-d array)."""
+    try:
+        return len(value)
+    except TypeError:
+        return None
+
+
 def vector(value: Any, where: str) -> tuple[float, ...]:
     """*value*, 3 finite numbers, as a tuple of floats.
 
@@ -134,7 +144,7 @@ def vector(value: Any, where: str) -> tuple[float, ...]:
     >>> vector([0, 1, 5], "camera.position")
     (0.0, 1.0, 5.0)
     """
-    if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
+    if isinstance(value, (str, bytes, Mapping)) or _length(value) != 3:
         raise SceneError(f"{where} must be 3 numbers [x, y, z], got {shown(value)}")
     return tuple(number(c, f"{where}[{i}]") for i, c in enumerate(value))
 
@@ -150,7 +160,7 @@ def color(value: Any, where: str, upper: float | None) -> tuple[float, ...]:
     """
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         value = (value, value, value)
-    elif isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__") or len(value) != 3:
+    elif isinstance(value, (str, bytes, Mapping)) or _length(value) != 3:
         raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {shown(value)}")
     rgb = tuple(number(c, where) for c in value)
     for c in rgb:

@@ -14,12 +14,14 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
+from .._validation import check_finite_array, check_path, short_repr
 from ..io import atomic_paths
 
 __all__ = [
@@ -78,16 +80,48 @@ def _write(suffix: str, temporary: Path, image: np.ndarray, exposure: float) -> 
             np.save(handle, image)
 
 
+def _check_float32_range(image: np.ndarray) -> None:
+    """A PFM holds float32: finite values beyond its range would turn into inf (NaN and inf are kept)."""
+    finite = image[np.isfinite(image)]
+    largest = float(np.max(np.abs(finite))) if finite.size else 0.0
+    limit = float(np.finfo(np.float32).max)
+    if largest > limit:
+        raise ValueError(f"'image' has values up to {largest:.3g}, beyond float32's {limit:.3g}, which a PFM cannot hold")
+
+
 def _check_exposure(exposure: object) -> float:
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.integer, np.floating)):
         raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
-    if not (np.isfinite(exposure) and exposure > 0):
-        raise ValueError(f"'exposure' must be a positive finite number, got {exposure!r}")
-    return float(exposure)
+    try:
+        value = float(exposure)
+    except OverflowError:  # an int beyond float64
+        value = math.inf
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"'exposure' must be a positive finite number, got {short_repr(exposure)}")
+    return value
 
 
 def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
-    """The sRGB transfer function (IEC 61966-2-1) of linear values in [0, 1].
+    """The sRGB transfer function (IEC 61966-2-1) of linear values, elementwise, as float64.
+
+    Parameters
+    ----------
+    c : array_like of real numbers, any shape
+        Linear values; [0, 1] is the displayable range.  Values outside it follow the
+        formula (negative values stay linear, values above 1 go above 1): clip first
+        for 8-bit output, as :func:`tonemap` does.
+
+    Returns
+    -------
+    ndarray of float64, the shape of *c*
+
+    Raises
+    ------
+    ValueError
+        If *c* holds NaN or inf (a NaN has no colour: :func:`tonemap` maps NaN to 0
+        and inf to 1 itself).
+    TypeError
+        If *c* is not an array of real numbers.
 
     Examples
     --------
@@ -95,8 +129,12 @@ def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
     >>> linear_to_srgb([0.0, 0.001, 1.0]).round(6)
     array([0.     , 0.01292, 1.     ])
     """
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
+    return _srgb(check_finite_array(c, "c").astype(np.float64))
+
+
+def _srgb(c: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore"):  # finite input: c ** (1/2.4) cannot overflow
+        return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
 
 
 def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
@@ -115,7 +153,7 @@ def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
     exposure = _check_exposure(exposure)
     with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are handled next
         scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
-    return np.rint(255.0 * linear_to_srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
+    return np.rint(255.0 * _srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
 
 
 def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
@@ -191,6 +229,8 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     suffixes = [_check_suffix(path, IMAGE_SUFFIXES, "paths") for path in paths]
     image = _check_image(image)
     exposure = _check_exposure(exposure)
+    if ".pfm" in suffixes:
+        _check_float32_range(image)
     with atomic_paths(paths) as temporaries:
         for suffix, temporary, path in zip(suffixes, temporaries, paths):
             try:
@@ -211,7 +251,7 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
     ...     load_pfm(save_pfm(pathlib.Path(folder) / "x.pfm", np.full((2, 3, 3), 0.25))).shape
     (2, 3, 3)
     """
-    with open(path, "rb") as handle:
+    with open(check_path(path, "path"), "rb") as handle:
         raw = handle.read()
     tokens, position = [], 0
     while len(tokens) < 4:  # magic, width, height, scale; then exactly one whitespace byte

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._validation import MAX_PATHS, check_count, check_size
+from .._validation import MAX_PATHS, check_count, check_index, check_seed, check_size, short_repr
 from . import _integrator as _k
 from .image import save_image_set
 from .scene import Scene
@@ -225,6 +225,8 @@ def render(
     'bsdf'
     """
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"'progress' must be True or False; got {short_repr(progress)}")
     if threads is not None:
         threads = check_count(threads, "threads")
         if threads > numba.config.NUMBA_NUM_THREADS:
@@ -340,10 +342,12 @@ def plan_passes(
     height = check_count(height, "height")
     spp = check_count(spp, "spp")
     check_size(spp, "spp", MAX_PATHS // (width * height), f"for {width}x{height} pixels (paths are counted in int64)")
-    if sampler not in SAMPLERS:
-        raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
-    if integrator not in INTEGRATORS:
-        raise ValueError(f"'integrator' must be one of {', '.join(INTEGRATORS)}; got {integrator!r}")
+    if not isinstance(sampler, str) or sampler not in SAMPLERS:
+        raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {short_repr(sampler)}")
+    if not isinstance(integrator, str) or integrator not in INTEGRATORS:
+        raise ValueError(f"'integrator' must be one of {', '.join(INTEGRATORS)}; got {short_repr(integrator)}")
+    if method is not None and not isinstance(method, str):
+        raise TypeError(f"'method' must be a str or None; got {short_repr(method)}")
     if method is not None and sampler not in SYMMETRIC_SAMPLERS:
         raise ValueError(
             f"'method' applies only to the samplers {', '.join(SYMMETRIC_SAMPLERS)}; "
@@ -352,17 +356,15 @@ def plan_passes(
     if sampler in SYMMETRIC_SAMPLERS:
         method = "equal_area" if method is None else method
         if method not in METHOD_CODES:
-            raise ValueError(f"'method' must be one of {', '.join(METHOD_CODES)}; got {method!r}")
+            raise ValueError(f"'method' must be one of {', '.join(METHOD_CODES)}; got {short_repr(method)}")
         code = METHOD_CODES[method]
     else:
         code = METHOD_CODES.get(sampler, 0)
-    if pixel_filter not in FILTERS:
-        raise ValueError(f"'pixel_filter' must be one of {', '.join(FILTERS)}; got {pixel_filter!r}")
+    if not isinstance(pixel_filter, str) or pixel_filter not in FILTERS:
+        raise ValueError(f"'pixel_filter' must be one of {', '.join(FILTERS)}; got {short_repr(pixel_filter)}")
     if seed is None:
         seed = int(np.random.SeedSequence().entropy)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"'seed' must be a non-negative integer, got {seed!r}")
-    seed = int(seed)
+    seed = check_seed(seed)
     a = scene.arrays(width, height)
     key = np.random.SeedSequence(seed).generate_state(1, dtype=np.uint64)[0]
     arguments = (
@@ -395,6 +397,10 @@ def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.
     >>> len(render_passes(plan, 0, 1))
     1
     """
+    if not isinstance(plan, RenderPlan):
+        raise TypeError(f"'plan' must be a RenderPlan (see plan_passes); got {type(plan).__name__}")
+    first_pass = check_index(first_pass, "first_pass", 0, plan.passes)
+    stop_pass = check_index(stop_pass, "stop_pass", first_pass, plan.passes)
     images = []
     for index in range(first_pass, stop_pass):
         image = np.zeros((plan.height, plan.width, 3))

@@ -104,7 +104,7 @@ def diffuse(albedo: npt.ArrayLike, emission: npt.ArrayLike = 0.0) -> Material:
     >>> diffuse(0.5, emission=[1, 2, 3]).emission
     (1.0, 2.0, 3.0)
     """
-    return Material("diffuse", _rgb(albedo, "albedo"), emission=_rgb(emission, "emission"))
+    return Material("diffuse", _rgb(albedo, "'albedo'"), emission=_rgb(emission, "'emission'"))
 
 
 def translucent(reflectance: npt.ArrayLike, transmittance: npt.ArrayLike, emission: npt.ArrayLike = 0.0) -> Material:
@@ -118,9 +118,9 @@ def translucent(reflectance: npt.ArrayLike, transmittance: npt.ArrayLike, emissi
     """
     return Material(
         "translucent",
-        _rgb(reflectance, "reflectance"),
-        _rgb(transmittance, "transmittance"),
-        emission=_rgb(emission, "emission"),
+        _rgb(reflectance, "'reflectance'"),
+        _rgb(transmittance, "'transmittance'"),
+        emission=_rgb(emission, "'emission'"),
     )
 
 
@@ -133,7 +133,7 @@ def mirror(reflectance: npt.ArrayLike = 1.0) -> Material:
     >>> mirror(0.9).color
     (0.9, 0.9, 0.9)
     """
-    return Material("mirror", _rgb(reflectance, "reflectance"))
+    return Material("mirror", _rgb(reflectance, "'reflectance'"))
 
 
 def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
@@ -146,12 +146,12 @@ def dielectric(ior: float = 1.5, tint: npt.ArrayLike = 1.0) -> Material:
     1.33
     """
     try:
-        index = number(ior, "ior")
+        index = number(ior, "'ior'")
     except SceneError as exc:
         raise ValueError(str(exc)) from None
     if not index > 0:
-        raise ValueError(f"ior must be positive, got {index!r}")
-    return Material("dielectric", _rgb(tint, "tint"), ior=index)
+        raise ValueError(f"'ior' must be positive, got {index!r}")
+    return Material("dielectric", _rgb(tint, "'tint'"), ior=index)
 
 
 @dataclass(frozen=True)
@@ -466,14 +466,17 @@ def _check_clip(clip, center, radius, where) -> HalfSpace | None:
     axis = _unit(normal)
     lowest = float(axis @ (np.array(point) - np.array(center)))  # the cap keeps a . (p - c) >= lowest
     if not lowest < radius * (1 - 1e-12):
-        raise SceneError(f"{where} keeps nothing of the sphere (the plane is {lowest - radius:g} beyond it)")
+        raise SceneError(
+            f"{where} keeps nothing of the sphere (the plane is {lowest - radius:g} beyond it): "
+            "move its point or turn its normal"
+        )
     return HalfSpace(point, normal)
 
 
 def _check_material(material, where) -> Material:
     if not isinstance(material, Material):
         raise SceneError(f"{where} must be a Material, got {type(material).__name__}")
-    if material.kind not in MATERIAL_KINDS:
+    if not isinstance(material.kind, str) or material.kind not in MATERIAL_KINDS:
         raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {shown(material.kind)}")
     color_name = {"diffuse": "albedo", "dielectric": "tint"}.get(material.kind, "reflectance")
     rgb = color(material.color, f"{where}.{color_name}", upper=1.0)

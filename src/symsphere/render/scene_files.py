@@ -56,6 +56,7 @@ from pathlib import Path
 from collections.abc import Collection, Iterable, Mapping
 from typing import Any
 
+from .._validation import check_path, short_repr
 from ._scene_checks import BLACK, SceneError, shown, vector
 from .scene import MATERIAL_KINDS, Camera, HalfSpace, Material, Quad, Scene, Sphere
 
@@ -104,7 +105,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     ...     load_scene(path).name
     'ball'
     """
-    path = Path(path)
+    path = check_path(path, "path")
     where = f"scene file {str(path)!r}"
     suffix = path.suffix.lower()
     if suffix not in (".toml", ".json"):
@@ -139,6 +140,10 @@ def scene_from_dict(data: Mapping[str, Any], *, source: str | None = None, defau
     >>> scene.spheres[0].clip.normal
     (0.0, 0.0, 1.0)
     """
+    if source is not None and not isinstance(source, str):
+        raise TypeError(f"'source' must be a str or None, got {short_repr(source)}")
+    if not isinstance(default_name, str) or not default_name:
+        raise TypeError(f"'default_name' must be a non-empty str, got {short_repr(default_name)}")
     where = f"scene file {source!r}" if source else "scene"
     try:
         try:

@@ -11,7 +11,10 @@ import math
 import os
 from pathlib import Path
 
-from ._scene_checks import BLACK
+import numpy as np
+
+from .._validation import check_real, short_repr
+from ._scene_checks import BLACK, MAX_MAGNITUDE
 from .scene import Camera, HalfSpace, Material, Quad, Scene, Sphere, dielectric, diffuse, mirror, translucent
 from .scene_files import load_scene
 
@@ -95,10 +98,15 @@ def furnace(albedo: float = 0.5, emission: float = 1.0, translucent: bool = Fals
     >>> bool(abs(image.mean() - 2.0) < 0.1)   # Le / (1 - rho) = 2
     True
     """
-    rho = float(albedo)
+    rho = check_real(albedo, "albedo")
     if not 0 <= rho < 1:
         raise ValueError(f"'albedo' must be in [0, 1), got {albedo!r}")
-    radiance = float(emission) / (1 - rho)
+    emission = check_real(emission, "emission")
+    if not 0 <= emission <= MAX_MAGNITUDE:
+        raise ValueError(f"'emission' must be in [0, {MAX_MAGNITUDE:g}], got {emission!r}")
+    if not isinstance(translucent, (bool, np.bool_)):
+        raise TypeError(f"'translucent' must be True or False, got {short_repr(translucent)}")
+    radiance = emission / (1 - rho)
     camera = Camera((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 90.0)
     if translucent:
         material = Material("translucent", (rho / 2,) * 3, (rho / 2,) * 3, emission=(float(emission),) * 3)
