@@ -60,3 +60,33 @@ def linear_triangle_pdf(d):
 
 def cmax(phi):
     return np.cos(phi) / np.sqrt(1 + np.cos(phi) ** 2)
+
+
+def net_t_value(x, m):
+    """The smallest t such that every elementary dyadic box of volume 2^-(m - t) holds 2^t of the 2^m points.
+
+    Brute force over every split of the m - t digits among the coordinates: the definition of a
+    (t, m, s)-net in base 2, independent of how the points were made.
+    """
+    n, s = x.shape
+    assert n == 2**m
+    cells = np.floor(x * 2.0**m).astype(np.int64)  # the leading m digits of each coordinate
+
+    def splits(total, parts):
+        if parts == 1:
+            yield (total,)
+            return
+        for first in range(total + 1):
+            for rest in splits(total - first, parts - 1):
+                yield (first,) + rest
+
+    def box_index(depths):
+        index = np.zeros(n, dtype=np.int64)
+        for j, k in enumerate(depths):
+            index = (index << k) | (cells[:, j] >> (m - k))
+        return index
+
+    for t in range(m + 1):
+        if all(np.all(np.bincount(box_index(d), minlength=2 ** (m - t)) == 2**t) for d in splits(m - t, s)):
+            return t
+    raise AssertionError("unreachable: t = m always holds")

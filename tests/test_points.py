@@ -7,6 +7,7 @@ scipy's own engines for Sobol' and Halton, and the definition of a jittered grid
 import numpy as np
 import pytest
 from scipy.stats import qmc
+from references import net_t_value
 
 from symsphere.points import BLOCK, POINT_SETS, BasePoints, check_points, interlace_digits, unit_square_points
 
@@ -72,40 +73,6 @@ def test_base_points_any_stretch():
 # --- interlaced Sobol' points (higher-order digital nets) -----------------------------------------
 
 
-def _t_value(x, m):
-    """The smallest t such that every elementary dyadic box of volume 2^-(m - t) holds 2^t of the 2^m points.
-
-    Brute force over every split of the m - t digits among the coordinates: the definition of a
-    (t, m, s)-net in base 2, independent of how the points were made.
-    """
-    n, s = x.shape
-    assert n == 2**m
-    cells = [np.floor(x[:, j] * 2.0**m).astype(np.int64) for j in range(s)]  # the leading m digits
-
-    def splits(total, parts):
-        if parts == 1:
-            yield (total,)
-            return
-        for first in range(total + 1):
-            for rest in splits(total - first, parts - 1):
-                yield (first,) + rest
-
-    for t in range(m + 1):
-        if all(
-            np.all(np.bincount(_box_index(cells, depths, m), minlength=2 ** (m - t)) == 2**t)
-            for depths in splits(m - t, s)
-        ):
-            return t
-    raise AssertionError("unreachable: t = m always holds")
-
-
-def _box_index(cells, depths, m):
-    index = np.zeros_like(cells[0])
-    for c, k in zip(cells, depths):
-        index = (index << k) | (c >> (m - k))
-    return index
-
-
 @pytest.mark.parametrize("factor", [2, 3])
 def test_interlaced_sobol_is_a_digital_net(factor):
     # Interlacing maps a (t, m, 2 factor)-net to a (t, m, 2)-net: the interlaced box with depths (k1, k2)
@@ -116,13 +83,13 @@ def test_interlaced_sobol_is_a_digital_net(factor):
     name = f"sobol_interlaced{factor}"
     for m in (6, 9):
         source = qmc.Sobol(d=2 * factor, scramble=False).random(2**m)
-        t_source = _t_value(source, m)
+        t_source = net_t_value(source, m)
         assert t_source <= 4  # measured t = 2, 3 (dimension 4) and 3, 4 (dimension 6) at m = 6, 9
-        assert _t_value(interlace_digits(source, factor), m) <= t_source
+        assert net_t_value(interlace_digits(source, factor), m) <= t_source
         for seed in (0, 1):
             scrambled = BasePoints(name, seed, total=2**m).take(0, 2**m)
             assert scrambled.shape == (2**m, 2) and np.all((scrambled > 0) & (scrambled < 1))
-            assert _t_value(scrambled, m) <= t_source
+            assert net_t_value(scrambled, m) <= t_source
 
 
 def test_interlace_digits_by_definition():

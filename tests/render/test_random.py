@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from references import net_t_value
 
 from symsphere.render import _probes as P
 from symsphere.render._random import nested_uniform_scramble, reverse_bits32, sobol2
@@ -144,37 +145,6 @@ def test_owen_sobol_interlaced_equals_its_definition():
                 assert tuple(points[i]) == definition(i, key, factor), (factor, key, i)
 
 
-def _t_value(x, m):
-    """The smallest t such that every elementary dyadic box of volume 2^-(m - t) holds 2^t of the 2^m points.
-
-    Brute force over every split of the m - t digits among the coordinates: the definition of a
-    (t, m, s)-net in base 2 (as tests/test_points.py).
-    """
-    s = x.shape[1]
-    cells = np.floor(x * 2.0**m).astype(np.int64)  # the leading m digits of each coordinate
-
-    def splits(total, parts):
-        if parts == 1:
-            yield (total,)
-            return
-        for first in range(total + 1):
-            for rest in splits(total - first, parts - 1):
-                yield (first,) + rest
-
-    for t in range(m + 1):
-        ok = True
-        for depths in splits(m - t, s):
-            index = np.zeros(len(x), dtype=np.int64)
-            for j, k in enumerate(depths):
-                index = (index << k) | (cells[:, j] >> (m - k))
-            if not np.all(np.bincount(index, minlength=2 ** (m - t)) == 2**t):
-                ok = False
-                break
-        if ok:
-            return t
-    raise AssertionError("unreachable: t = m always holds")
-
-
 @pytest.mark.parametrize("factor", [2, 3])
 @pytest.mark.parametrize("key", [0, 1, 2**63 + 12345])
 def test_owen_sobol_interlaced_prefixes_are_nets(factor, key):
@@ -194,9 +164,9 @@ def test_owen_sobol_interlaced_prefixes_are_nets(factor, key):
     assert np.all((points > 0) & (points < 1))
     for m in (4, 7, 10):
         source = qmc.Sobol(d=2 * factor, scramble=False).random(2**m)
-        t_reference = _t_value(interlace_digits(source, factor), m)
-        assert t_reference <= min(_t_value(source, m), 4)
-        assert _t_value(points[: 2**m], m) == t_reference, m
+        t_reference = net_t_value(interlace_digits(source, factor), m)
+        assert t_reference <= min(net_t_value(source, m), 4)
+        assert net_t_value(points[: 2**m], m) == t_reference, m
 
 
 def test_owen_sobol_interlaced_first_point_is_uniform():
