@@ -1,19 +1,15 @@
-"""The numba kernels against the numpy reference path; streaming; the generated orbit stores."""
+"""The numba kernels against the numpy reference path; streaming; the specialised kernels."""
 
 import numpy as np
 import pytest
 from numba import njit
 
 from symsphere import METHODS, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
-from symsphere import _codegen, _kernels
+from symsphere import _kernels
 from symsphere.frames import frame
 from symsphere.points import BLOCK, BasePoints
 from symsphere._blocks import reference_orbits
 from symsphere.symmetry import SPHERE_MAPS
-
-
-def test_generated_stores_are_up_to_date():
-    assert _codegen.TARGET.read_text() == _codegen.orbit_store_source()
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -93,6 +89,8 @@ def test_pcg64_seeding_and_jump_ahead_equal_numpys(seed):
         bit_generator = np.random.PCG64(sequence)
         bit_generator.advance(int(draws))
         assert _as_int128(jump(start, np.uint64(draws))) == _numpy_state(bit_generator)
+        # The kernels' parts start from pcg64_state (Python's integers seed, numpy's advance jumps).
+        assert _as_int128(_kernels.pcg64_state(words, int(draws))) == _numpy_state(bit_generator)
 
 
 def test_parts_cover_the_points_in_order():

@@ -1,35 +1,43 @@
-"""numba kernels: (draws +) map + orbit (+ frame) fused in one pass, parallel over all cores.
+"""numba kernels: (draws +) map + orbit (+ frame) fused in one pass, one part of the points per thread.
 
 The map formulas are the elementwise functions of :mod:`symsphere.maps`
-(``register_jitable``), the orbit stores are generated from the tables of
-:mod:`symsphere.symmetry` (:mod:`symsphere._codegen`; about a normal, a weights
-table built from the same tables), so nothing here restates a formula.  The
-numpy path (``maps.TriangleMap.forward`` + ``symmetry.orbit`` +
-``frames.to_world``) is the reference the tests compare against.  Random base
-points are drawn inside the kernel from numpy's PCG64 stream, seeded, jumped and
-stepped here exactly as numpy does it (tested bit for bit against numpy).
+(``register_jitable``), the orbit stores gather from the tables of
+:mod:`symsphere.symmetry`, and about a normal a weights table is built from the
+same tables, so nothing here restates a formula.  The numpy path
+(``maps.TriangleMap.forward`` + ``symmetry.orbit`` + ``frames.to_world``) is the
+reference the tests compare against.  Random base points are drawn inside the
+kernel from numpy's PCG64 stream: each part starts from the state numpy's own
+``PCG64.advance`` gives (:func:`pcg64_state`) and steps it as numpy does (tested
+bit for bit against numpy).
 
-Kernels compile lazily per output dtype and are cached on disk (``cache=True``),
-so a new process with a warm cache pays no compilation.
+Compile time.  A kernel is specialised at the Python level by (point source,
+map, store): :func:`_fill_kernel` makes one small serial function per case, the
+case's codes being constants of the function (closure cells, so that numba prunes
+the other cases' branches before typing them and caches each case on its own),
+and compiles it lazily per output dtype, cached on disk (``cache=True``).  A call
+compiles only its own case: ~1-2 s on an empty cache instead of one kernel holding
+every map and store.  The parts run on the threads of :mod:`symsphere._threads`
+(the kernels release the GIL), not in a numba ``prange``, whose parallel
+lowering more than doubled each kernel's compile time.  docs/benchmarks.md has
+the measurements.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 from llvmlite import ir
-from numba import get_num_threads, njit, prange, types
+from numba import get_num_threads, njit, types
 from numba.extending import intrinsic, register_jitable
 
 from ._numba_cache import invalidate_if_changed
-from ._threads import start_threads
-from ._typing import FloatArray
-from ._orbit_stores import store_orbit_24, store_orbit_48
+from ._threads import run_parts, start_threads
+from ._typing import Float64Array, FloatArray
 from .maps import METHODS, get_map
 from .symmetry import SIGNS, SOURCES
-
 
 __all__ = [
     "BATCH",
@@ -45,6 +53,7 @@ __all__ = [
     "pcg64_random",
     "pcg64_advanced",
     "pcg64_seeded",
+    "pcg64_state",
     "triangle_point",
     "triangle_density",
     "orbit_member",
@@ -58,6 +67,8 @@ _equal_area_point, _paper1_point, _paper2_point = _EQUAL_AREA.point, _PAPER1.poi
 _equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PAPER1.density, _PAPER2.density
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
+
+
 @register_jitable
 def triangle_point(u, v, code):
     """The map *code* of METHOD_CODES at (u, v): a point (x, y, z) of T0."""
@@ -101,6 +112,8 @@ _PCG64_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 _MUL_HI = np.uint64(_PCG64_MULTIPLIER >> 64)
 _MUL_LO = np.uint64(_PCG64_MULTIPLIER & (2**64 - 1))
 _U0, _U1, _U11, _U58, _U63, _U64 = (np.uint64(k) for k in (0, 1, 11, 58, 63, 64))
+_MASK64 = 2**64 - 1
+_MASK128 = 2**128 - 1
 
 
 @intrinsic
@@ -188,19 +201,49 @@ def pcg64_advanced(start, draws):
     return stream
 
 
+def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) -> npt.NDArray[np.uint64]:
+    """The stream (uint64[4]: state hi, lo; inc hi, lo) of numpy's ``PCG64(seed_sequence)`` after
+    *draws* draws, with *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``.
+
+    Python's integers do the seeding (O'Neill's ``pcg_setseq_128_srandom_r``, as numpy does it:
+    two steps of the LCG) and numpy's own ``PCG64.advance`` the jump, so the kernels need not
+    compile either: a part of a kernel starts from this state and only steps.
+    """
+    w0, w1, w2, w3 = (int(w) for w in seed_words)
+    increment = (((w2 << 64) | w3) << 1 | 1) & _MASK128
+    state = increment  # one step from state 0
+    state = (state + ((w0 << 64) | w1)) & _MASK128
+    state = (state * _PCG64_MULTIPLIER + increment) & _MASK128
+    bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
+    bit_generator.state = {
+        "bit_generator": "PCG64", "state": {"state": state, "inc": increment}, "has_uint32": 0, "uinteger": 0,
+    }  # fmt: skip
+    bit_generator.advance(int(draws))
+    advanced = bit_generator.state["state"]
+    s, inc = advanced["state"], advanced["inc"]
+    return np.array([s >> 64, s & _MASK64, inc >> 64, inc & _MASK64], dtype=np.uint64)
+
+
 # Base points are handled in batches of _BATCH: first the map for the whole batch, into
 # arrays (structure of arrays), then the orbit stores.  The equal-area map has no libm call
-# (its sine is a polynomial), so LLVM vectorises the batch loop (AVX-512: 8 doubles a vector);
-# the stores of one point no longer wait for the next point's dependent chain of square roots
-# and divisions.  Measured for 48 * 2**16 directions, two threads: float32 kernel 2.96 ms (one
-# point at a time) -> 2.05 ms (batched) -> ~1.2 ms (vectorised map).
+# (its sine is a polynomial), so LLVM vectorises the batch loop; the stores of one point no
+# longer wait for the next point's dependent chain of square roots and divisions.
 _BATCH = 16
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
+
+# The orbit stores gather: row element 3k + l of image k is c[_GATHER[3k + l]] with
+# c = (x, y, z, -x, -y, -z), i.e. SIGNS[k, l] * (x, y, z)[SOURCES[k, l]] (exact copies).
+_GATHER_48 = (SOURCES + 3 * (SIGNS < 0)).astype(np.intp).reshape(-1)
+_GATHER_24 = _GATHER_48[: 3 * 24].copy()
 
 
 @njit(inline="always")
 def _map_batch(u, v, code, base):
-    """base[:, j] = the point of T0 of map *code* at (u[j], v[j]), for all j < _BATCH."""
+    """base[:, j] = the point of T0 of map *code* at (u[j], v[j]), for all j < _BATCH.
+
+    Inlined in numba's IR: with *code* a constant of the caller (a specialised kernel), numba
+    prunes the other maps before typing them.
+    """
     # One loop per map, so the default one is branch-free (vectorisable).
     if code == 0:
         for j in range(_BATCH):
@@ -214,12 +257,25 @@ def _map_batch(u, v, code, base):
 
 
 @njit(inline="always")
-def _store_one(x, y, z, i, kind, weights, rows):
-    """Store the orbit of (x, y, z) in row i."""
+def _gather(x, y, z, row, table, coordinates):
+    """row[q] = (x, y, z, -x, -y, -z)[table[q]]: an orbit of exact signed copies."""
+    coordinates[0] = x
+    coordinates[1] = y
+    coordinates[2] = z
+    coordinates[3] = -x
+    coordinates[4] = -y
+    coordinates[5] = -z
+    for q in range(table.shape[0]):
+        row[q] = coordinates[table[q]]
+
+
+@njit(inline="always")
+def _store_one(x, y, z, i, kind, weights, rows, coordinates):
+    """Store the orbit of (x, y, z) in row i (*kind* a constant of the specialised kernel)."""
     if kind == _SPHERE:
-        store_orbit_48(rows, i, x, y, z)
+        _gather(x, y, z, rows[i], _GATHER_48, coordinates)
     elif kind == _HEMISPHERE:
-        store_orbit_24(rows, i, x, y, z)
+        _gather(x, y, z, rows[i], _GATHER_24, coordinates)
     else:
         # image k = x W[0, 3k:3k+3] + y W[1, ...] + z W[2, ...], W from _rotated_weights
         # (a loop over 72 contiguous columns, which LLVM vectorises).
@@ -228,14 +284,14 @@ def _store_one(x, y, z, i, kind, weights, rows):
 
 
 @njit(inline="always")
-def _store_cut(x, y, z, kind, weights, rows, tail, offset):
+def _store_cut(x, y, z, kind, weights, rows, tail, offset, coordinates):
     """Store members ``(offset + i) % count``, ``i < len(tail)``, of the orbit of (x, y, z) in tail's rows.
 
     The orbit is stored whole into a one-row scratch of *tail*'s dtype by the same store as
     every other orbit (so the members are bit for bit those of a whole orbit), then copied.
     """
     scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)
-    _store_one(x, y, z, 0, kind, weights, scratch)
+    _store_one(x, y, z, 0, kind, weights, scratch, coordinates)
     count = rows.shape[1] // 3
     for i in range(tail.shape[0]):
         k = (offset + i) % count
@@ -274,67 +330,57 @@ def part_count(m, parts):
     return max(1, min(parts, (m + _BATCH - 1) // _BATCH))
 
 
-# The kernels' output is *rows* (whole, 3 count): the whole orbits, one per row, and *tail*
-# (rest, 3): if rest > 0, the last of the m = whole + 1 points has its orbit cut to rest members
-# from *offset* on (_store_cut), in the same call (no second kernel launch, no copy of the output).
-@njit(parallel=True, **_OPTIONS)
-def _fill(uv, parts, code, kind, basis, rows, tail, offset):
-    # One part per thread (not one prange step per batch): the batch buffers are allocated once
-    # per part.
-    m = uv.shape[0]
-    whole = rows.shape[0]
-    weights = _rotated_weights(basis, rows.shape[1] // 3)
-    count = part_count(m, parts)
-    for part in prange(count):
-        lo, hi = part_range(m, count, part)
+_GIVEN, _RANDOM = 0, 1
+
+
+@functools.lru_cache(maxsize=None)
+def _fill_kernel(source: int, code: int, kind: int) -> Any:
+    """The serial kernel of one case: base points given (*source* = _GIVEN) or drawn (_RANDOM), map
+    *code*, store *kind*.  It fills points ``lo ... hi - 1`` of the call (one part).
+
+    *source*, *code* and *kind* are closure cells, hence constants to numba: the branches of
+    the other cases are pruned before typing, and numba's cache keys the case by their values
+    (numba hashes a closure's cell contents into the cache index), so every case is cached on
+    its own, and a process compiles only the cases it uses.
+
+    The output is *rows* (whole, 3 count): the whole orbits, one per row, and *tail* (rest, 3):
+    if rest > 0, the last of the m = whole + 1 points has its orbit cut to rest members from
+    *offset* on (_store_cut), in the same call.  Given points are *points* (m, 2); random ones
+    are drawn from *points*, the PCG64 stream at point *lo* (uint64[4], :func:`pcg64_state`),
+    u then v per point; the next batch's points are drawn between the current batch's orbit
+    stores, so that the generator's dependent chain of 128-bit multiplications overlaps the
+    stores instead of following them.
+    """
+
+    @njit(**_OPTIONS)
+    def fill(points, lo, hi, weights, rows, tail, offset):  # pragma: no cover - compiled by numba
+        whole = rows.shape[0]
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
+        coordinates = np.empty(6)
+        if source == _RANDOM:
+            for j in range(min(_BATCH, hi - lo)):
+                u[j] = pcg64_random(points)
+                v[j] = pcg64_random(points)
         for first in range(lo, hi, _BATCH):
             stop = min(first + _BATCH, hi)
-            for j in range(stop - first):
-                u[j] = uv[first + j, 0]
-                v[j] = uv[first + j, 1]
-            _map_batch(u, v, code, base)
-            for j in range(min(stop, whole) - first):
-                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
-            if stop > whole:  # the last point (of the last part), its orbit cut
-                j = whole - first
-                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset)
-
-
-@njit(parallel=True, **_OPTIONS)
-def _fill_random(seed_words, first_point, m, parts, code, kind, basis, rows, tail, offset):
-    # As _fill, but each part draws its own points, u then v per point, from numpy's PCG64
-    # stream seeded by *seed_words* and jumped ahead to the part's first point: no (m, 2) array
-    # of base points, and the jumps and draws run in parallel.  The next batch's points are
-    # drawn between the current batch's orbit stores, so that the generator's dependent chain
-    # of 128-bit multiplications overlaps the stores instead of following them.
-    start = pcg64_seeded(seed_words)
-    whole = rows.shape[0]
-    weights = _rotated_weights(basis, rows.shape[1] // 3)
-    count = part_count(m, parts)
-    for part in prange(count):
-        lo, hi = part_range(m, count, part)
-        stream = pcg64_advanced(start, 2 * (first_point + lo))
-        u = np.full(_BATCH, 0.5)
-        v = np.full(_BATCH, 0.5)
-        base = np.empty((3, _BATCH))
-        for j in range(min(_BATCH, hi - lo)):
-            u[j] = pcg64_random(stream)
-            v[j] = pcg64_random(stream)
-        for first in range(lo, hi, _BATCH):
-            stop = min(first + _BATCH, hi)
+            if source == _GIVEN:
+                for j in range(stop - first):
+                    u[j] = points[first + j, 0]
+                    v[j] = points[first + j, 1]
             _map_batch(u, v, code, base)
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
-                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows)
-                if j < upcoming:
-                    u[j] = pcg64_random(stream)
-                    v[j] = pcg64_random(stream)
-            if stop > whole:  # the last point (stop == hi == m: nothing more to draw), its orbit cut
+                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows, coordinates)
+                if source == _RANDOM and j < upcoming:
+                    u[j] = pcg64_random(points)
+                    v[j] = pcg64_random(points)
+            if stop > whole:  # the last point (of the last part), its orbit cut
                 j = whole - first
-                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset)
+                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset, coordinates)
+
+    return fill
 
 
 _ready = False
@@ -344,9 +390,21 @@ def _prepare_kernels():
     """Before the first kernel runs: drop a stale disk cache, start the threads (nothing at import)."""
     global _ready
     if not _ready:
-        invalidate_if_changed(_fill)  # the module's cache directory holds _fill_random's entries too
+        invalidate_if_changed(_fill_kernel(_GIVEN, 0, _SPHERE))  # the module's cache directory: every case's entries
         start_threads()
         _ready = True
+
+
+def _run(source, code, kind, m, parts, part_input, weights, rows, tail, offset):
+    """Run the case's kernel over the parts of m points, on the threads of symsphere._threads."""
+    kernel = _fill_kernel(source, code, kind)
+    count = part_count(m, parts)
+
+    def part(index):
+        lo, hi = part_range(m, count, index)
+        kernel(part_input(lo), lo, hi, weights, rows, tail, offset)
+
+    run_parts(part, count)
 
 
 def fill_orbits(
@@ -363,9 +421,10 @@ def fill_orbits(
     same kernel call.
     """
     _prepare_kernels()
-    kind, frame = _store_kind(count, basis)
+    kind, weights = _store_kind(count, basis)
     rows, tail = _split(out, count)
-    _fill(uv, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows, tail, offset)
+    uv = np.ascontiguousarray(uv, dtype=np.float64)
+    _run(_GIVEN, METHOD_CODES[method], kind, len(uv), parts or _default_parts(len(uv)), lambda lo: uv, weights, rows, tail, offset)
     return out
 
 
@@ -385,10 +444,23 @@ def fill_random_orbits(
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
     (:attr:`symsphere.points.BasePoints.seed_words`); the last orbit cut as there."""
     _prepare_kernels()
-    kind, frame = _store_kind(count, basis)
+    kind, weights = _store_kind(count, basis)
     rows, tail = _split(out, count)
-    _fill_random(seed_words, first_point, m, parts or get_num_threads(), METHOD_CODES[method], kind, frame, rows, tail, offset)
+
+    def stream(lo):
+        return pcg64_state(seed_words, 2 * (first_point + lo))
+
+    _run(_RANDOM, METHOD_CODES[method], kind, m, parts or _default_parts(m), stream, weights, rows, tail, offset)
     return out
+
+
+# Fewer points than this per part are not worth a thread hand-off (~20 us): one part of 256 base
+# points is 12 288 directions, ~20 us of work.
+_MIN_PART = 256
+
+
+def _default_parts(m):
+    return max(1, min(get_num_threads(), m // _MIN_PART))
 
 
 def _split(out, count):
@@ -412,11 +484,11 @@ def part_bounds(m, parts=0):
     return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
-_IDENTITY = np.eye(3)
+_NO_WEIGHTS = np.zeros((3, 0))
 
 
 def _store_kind(count, basis):
-    """(kind of store, the frame: the identity when there is none)."""
+    """(kind of store, the image weights: none without a frame)."""
     if basis is None:
-        return (_SPHERE if count == 48 else _HEMISPHERE), _IDENTITY
-    return _HEMISPHERE_ROTATED, np.ascontiguousarray(basis, dtype=np.float64)
+        return (_SPHERE if count == 48 else _HEMISPHERE), _NO_WEIGHTS
+    return _HEMISPHERE_ROTATED, _rotated_weights(np.ascontiguousarray(basis, dtype=np.float64), count)
