@@ -69,7 +69,7 @@ _equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PA
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 
 
-@register_jitable
+@njit(inline="always")  # numba-IR inlining: a constant *code* of the caller prunes the other maps
 def triangle_point(u, v, code):
     """The map *code* of METHOD_CODES at (u, v): a point (x, y, z) of T0."""
     if code == 0:
@@ -79,7 +79,7 @@ def triangle_point(u, v, code):
     return _paper2_point(u, v)
 
 
-@register_jitable
+@njit(inline="always")
 def triangle_density(x, y, z, code):
     """The density of map *code* at a unit direction (x, y, z); 0 outside T0."""
     if code == 0:

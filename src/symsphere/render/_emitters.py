@@ -1,11 +1,12 @@
 """Emitters for next-event estimation and MIS: sampling, densities, selection, the power heuristic.
 
-Scalar numba functions (``register_jitable``), inlined into the path-tracing
-kernel of :mod:`symsphere.render._integrator`, which calls :func:`choose_light`,
-:func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.  Those
-that take the scene's tables are inlined at the numba-IR level
-(``inline="always"``): as calls, numba reference-counts their array arguments,
-atomic operations on counters that both threads share, at every light sample.
+Scalar numba functions (``register_jitable``), called by the path-tracing
+kernel of :mod:`symsphere.render._integrator`: :func:`choose_light`,
+:func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.  They are
+compiled as functions of their own, not inlined into the kernel by numba
+(``inline="always"``, as until 2026-12): numba then types each of them once instead of
+inside the kernel's one large function, which cut a render's first compilation
+from 35 to 17 CPU-seconds (docs/benchmarks.md, "Cold start"); LLVM may still inline them.
 The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
 spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
 ``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
@@ -79,7 +80,7 @@ def rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
 # --- emitters ------------------------------------------------------------------------
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
+@register_jitable
 def _sphere_cone(px, py, pz, i, spheres):
     """(e = c - p, |e|^2, p outside the sphere): whether a full sphere is sampled by its cone from p.
 
@@ -94,7 +95,7 @@ def _sphere_cone(px, py, pz, i, spheres):
     return ex, ey, ez, d2, d2 > spheres[4, i] and spheres[8, i] == -np.inf
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
+@register_jitable
 def spherical_rectangle(px, py, pz, j, quads):
     """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
     Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
@@ -180,7 +181,7 @@ def disk_point(state):
             return x, y, r2, state
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
+@register_jitable
 def sample_emitter(px, py, pz, obj, state, spheres, quads):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
@@ -304,7 +305,7 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
+@register_jitable
 def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
@@ -331,7 +332,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     return t * t / (cos_l * area)
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no reference counting of the tables
+@register_jitable
 def choose_light(lights, u):
     """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
     last = lights.shape[1] - 1

@@ -77,15 +77,16 @@ member, base point).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit
 from numba.extending import register_jitable
 
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
-from .._threads import start_threads
+from .._threads import run_parts, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
@@ -124,7 +125,7 @@ _ONE = np.uint64(1)
 
 
 @register_jitable
-def _is_cosine(sampler):
+def is_cosine(sampler):
     """The symmetric cosine samplers and the i.i.d. cosine sampler: pdf cos / pi (sphere |cos| / (2 pi))."""
     return (
         sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
@@ -132,14 +133,16 @@ def _is_cosine(sampler):
     )  # fmt: skip
 
 
-@register_jitable
-def sample_local(sampler, code, full, key, s, depth, state):
+@njit(inline="always")  # numba-IR inlining: a specialised kernel's constants prune the other samplers
+def sample_local(sampler, cosine, code, full, key, s, depth, state):
     """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
 
     Parameters
     ----------
     sampler, code : int
         Sampler code and map code (``METHOD_CODES``; used by the orbit samplers).
+    cosine : bool
+        ``is_cosine(sampler)`` (a constant of a specialised kernel, like *sampler* and *code*).
     full : bool
         Sample the whole sphere (Lambertian transmission) rather than the
         upper hemisphere.
@@ -202,7 +205,6 @@ def sample_local(sampler, code, full, key, s, depth, state):
                 z = -z
             return x, y, z, 2.0, abs(z) * INV_2PI, state
         return x, y, z, 1.0, z * _INV_PI, state
-    cosine = _is_cosine(sampler)
     if cosine:
         n = 16 if full else 8
     else:
@@ -248,8 +250,8 @@ def sample_local(sampler, code, full, key, s, depth, state):
     return x, y, z, weight, density / n, state
 
 
-@register_jitable
-def bsdf_pdf(sampler, code, full, x, y, z):
+@njit(inline="always")
+def bsdf_pdf(sampler, cosine, code, full, x, y, z):
     """The solid-angle density with which *sampler* draws the local unit direction (x, y, z).
 
     The marginal density of one sample (what :func:`sample_local` returns as
@@ -261,7 +263,7 @@ def bsdf_pdf(sampler, code, full, x, y, z):
     """
     if sampler == UNIFORM:
         return _INV_4PI if full else INV_2PI
-    if _is_cosine(sampler):
+    if cosine:
         return abs(z) * INV_2PI if full else z * _INV_PI
     a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
     if a < b:
@@ -282,7 +284,7 @@ def _tent(bits):
     return 1.0 - math.sqrt(2.0 - r)
 
 
-@register_jitable
+@njit(inline="always")
 def _film_offset(pixel_filter, state):
     """Position of a sample inside its pixel: box: uniform in [0, 1); tent: smallpt's, in [-0.25, 1.25]."""
     state, b1 = next_u64(state)
@@ -293,7 +295,7 @@ def _film_offset(pixel_filter, state):
     return (sub + 0.5 + _tent(b1)) * 0.5, state
 
 
-@register_jitable(inline="always")
+@register_jitable
 def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     """smallpt's quadratic for the ray o + t d and the sphere (centre c, radius^2 r2): (det, near, far).
 
@@ -309,7 +311,7 @@ def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     return det, b - root, b + root
 
 
-@register_jitable(inline="always")
+@register_jitable
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -387,10 +389,10 @@ def plain_spheres(spheres):
     return n
 
 
-@register_jitable(inline="always")  # numba-IR inlining: no call, no reference counting of the arrays
+@njit(inline="always")  # numba-IR inlining: no call, no reference counting; a kernel's constants prune branches
 def radiance(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-    rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col, width, height, scratch, plain,
+    rr_depth, max_depth, integrator, sampler, cosine, code, pixel_filter, key, s, row, col, width, height, scratch, plain,
 ):  # fmt: skip
     """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top."""
     state = path_state(key, s)
@@ -494,7 +496,7 @@ def radiance(
                         p_light *= light_pmf[obj]
                         lx = wx * t_row[0] + wy * t_row[1] + wz * t_row[2]
                         ly = wx * b_row[0] + wy * b_row[1] + wz * b_row[2]
-                        p_b = bsdf_pdf(sampler, code, full, lx, ly, lz)
+                        p_b = bsdf_pdf(sampler, cosine, code, full, lx, ly, lz)
                         g = abs(lz) * _INV_PI * power_heuristic(p_light, p_b) / p_light
                         lm = sphere_material[obj] if obj < n_spheres else quad_material[obj - n_spheres]
                         cr = br * fr * materials[lm, 8] * g
@@ -504,7 +506,7 @@ def radiance(
                         if shadow:  # the sampled point itself is not an occluder
                             t_max = dist * (1.0 - _SHADOW_TOLERANCE) - eps
                         ndx, ndy, ndz = wx, wy, wz  # swapped with the path's direction below
-            x, y, z, weight, pdf_bsdf, state = sample_local(sampler, code, full, key, s, depth, state)
+            x, y, z, weight, pdf_bsdf, state = sample_local(sampler, cosine, code, full, key, s, depth, state)
             if z >= 0.0:
                 br *= materials[m, 1] * weight
                 bg *= materials[m, 2] * weight
@@ -578,39 +580,68 @@ def radiance(
     return lr, lg, lb
 
 
-@njit(parallel=True, **KERNEL_OPTIONS)
+@functools.lru_cache(maxsize=None)
+def _pass_kernel(integrator, sampler, code, pixel_filter):
+    """The serial kernel of one (integrator, sampler, map, pixel filter): it renders the rows it is given.
+
+    The four codes (and ``is_cosine(sampler)``) are closure cells, constants to numba: the other
+    estimator's, samplers', maps' and filter's branches are pruned before typing, and numba's cache
+    keys each case by their values, so a render compiles (or loads) only its own case.
+    """
+    cosine = is_cosine(sampler)
+
+    @njit(**KERNEL_OPTIONS)
+    def render_rows(
+        spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
+        rr_depth, max_depth, seed, sample_start, sample_count, rows, accum,
+    ):  # fmt: skip  # pragma: no cover - compiled by numba
+        height = accum.shape[0]
+        width = accum.shape[1]
+        scratch = np.empty(max(spheres.shape[1], quads.shape[1], 1))
+        plain = plain_spheres(spheres)
+        for i in range(rows.shape[0]):
+            row = rows[i]
+            for col in range(width):
+                key = pixel_key(seed, row * width + col)
+                sr, sg, sb = 0.0, 0.0, 0.0
+                for s in range(sample_start, sample_start + sample_count):
+                    lr, lg, lb = radiance(
+                        spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
+                        background, eps, rr_depth, max_depth, integrator, sampler, cosine, code, pixel_filter, key, s,
+                        row, col, width, height, scratch, plain,
+                    )  # fmt: skip
+                    sr += lr
+                    sg += lg
+                    sb += lb
+                accum[row, col, 0] += sr
+                accum[row, col, 1] += sg
+                accum[row, col, 2] += sb
+
+    return render_rows
+
+
 def render_pass(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
     rr_depth, max_depth, integrator, sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
 ):  # fmt: skip
     """Add samples sample_start .. sample_start + sample_count - 1 of every pixel into *accum* (H, W, 3).
 
-    Rows are distributed over the threads in the order *rows*; every pixel is
-    done by one thread and its random numbers depend only on (seed, pixel,
+    Rows are split into one stretch of *rows* per thread (``symsphere._threads.run_parts``);
+    every pixel is done by one thread and its random numbers depend only on (seed, pixel,
     sample), so the sum does not depend on the number of threads or passes.
     """
-    height = accum.shape[0]
-    width = accum.shape[1]
-    scratch_size = max(spheres.shape[1], quads.shape[1], 1)
-    plain = plain_spheres(spheres)
-    for i in prange(rows.shape[0]):
-        row = rows[i]
-        scratch = np.empty(scratch_size)
-        for col in range(width):
-            key = pixel_key(seed, row * width + col)
-            sr, sg, sb = 0.0, 0.0, 0.0
-            for s in range(sample_start, sample_start + sample_count):
-                lr, lg, lb = radiance(
-                    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
-                    background, eps, rr_depth, max_depth, integrator, sampler, code, pixel_filter, key, s, row, col,
-                    width, height, scratch, plain,
-                )  # fmt: skip
-                sr += lr
-                sg += lg
-                sb += lb
-            accum[row, col, 0] += sr
-            accum[row, col, 1] += sg
-            accum[row, col, 2] += sb
+    prepare_kernels()
+    kernel = _pass_kernel(int(integrator), int(sampler), int(code), int(pixel_filter))
+    parts = max(1, min(get_num_threads(), len(rows)))
+
+    def part(index):
+        lo, hi = len(rows) * index // parts, len(rows) * (index + 1) // parts
+        kernel(
+            spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
+            rr_depth, max_depth, seed, sample_start, sample_count, rows[lo:hi], accum,
+        )  # fmt: skip
+
+    run_parts(part, parts)
 
 
 _ready = False
@@ -625,6 +656,6 @@ def prepare_kernels() -> None:
     """
     global _ready
     if not _ready:
-        invalidate_if_changed(render_pass)
+        invalidate_if_changed(_pass_kernel(PATH, COSINE, 0, BOX))  # the module's cache directory: every case's entries
         start_threads()
         _ready = True

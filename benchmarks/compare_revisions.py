@@ -1,0 +1,98 @@
+"""Before/after: one benchmark script run on two revisions of symsphere in interleaved rounds.
+
+The base revision is checked out into a temporary git worktree; each round runs the
+script once with that tree's ``src`` first on ``PYTHONPATH`` and once with this
+checkout's (the order alternating between rounds), each revision with its own warm
+numba cache (one untimed run first fills it).  Every number of the script's ``--json``
+output whose key says it is a median time (``median_s``, ``*_median_s``, ``seconds``
+medians) is collected per round; reported is, per number, the median over the rounds of
+each revision and the ratio base / new (above 1: the new revision is faster).
+
+Usage::
+
+    python benchmarks/compare_revisions.py --base db6d760 --rounds 3 -- \\
+        benchmarks/bench_sample.py --no-mitsuba --no-integrate --no-profile --repeats 7
+    python benchmarks/compare_revisions.py --base db6d760 -- benchmarks/bench_integrate.py --rounds 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _numbers(payload, prefix=""):
+    """{path: value} of the median times in a JSON document."""
+    found = {}
+    if isinstance(payload, dict):
+        label = payload.get("label") or payload.get("name") or payload.get("case")
+        extra = "/".join(str(payload[k]) for k in ("dtype", "group") if isinstance(payload.get(k), str))
+        here = prefix + (f"[{label}{'/' + extra if extra else ''}]" if isinstance(label, str) else "")
+        for key, value in payload.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and "median" in key:
+                found[f"{here}.{key}"] = float(value)
+            elif isinstance(value, (dict, list)):
+                found.update(_numbers(value, f"{here}.{key}"))
+    elif isinstance(payload, list):
+        for index, value in enumerate(payload):
+            found.update(_numbers(value, f"{prefix}[{index}]"))
+    return found
+
+
+def _run(tree: Path, cache: Path, script: list[str], out: Path) -> dict[str, float]:
+    env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=str(cache))
+    command = [sys.executable, str(tree / script[0]), *script[1:], "--json", str(out)]
+    subprocess.run(command, cwd=tree, env=env, check=True, stdout=subprocess.DEVNULL)
+    return _numbers(json.loads(out.read_text()))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--base", required=True, help="the revision to compare against (any git revision)")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (default: %(default)s)")
+    parser.add_argument("--json", type=Path, help="write the per-round numbers here")
+    parser.add_argument("script", nargs=argparse.REMAINDER, help="-- the benchmark script (relative to the repository) and its arguments")
+    args = parser.parse_args(argv)
+    script = args.script[1:] if args.script[:1] == ["--"] else args.script
+    if not script:
+        parser.error("give the benchmark script after --")
+    with tempfile.TemporaryDirectory(prefix="symsphere-compare-") as scratch:
+        scratch = Path(scratch)
+        base_tree = scratch / "base"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base_tree), args.base], check=True)
+        try:
+            trees = {"base": base_tree, "new": ROOT}
+            caches = {name: scratch / f"numba-{name}" for name in trees}
+            for name in trees:  # untimed: fill each revision's numba cache
+                _run(trees[name], caches[name], script, scratch / "warm.json")
+            rounds: dict[str, list[dict[str, float]]] = {"base": [], "new": []}
+            for index in range(args.rounds):
+                order = ["base", "new"] if index % 2 == 0 else ["new", "base"]
+                for name in order:
+                    rounds[name].append(_run(trees[name], caches[name], script, scratch / f"{name}-{index}.json"))
+                print(f"round {index + 1}/{args.rounds} done", file=sys.stderr)
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base_tree)], check=False)
+    keys = [k for k in rounds["new"][0] if all(k in r for r in rounds["base"] + rounds["new"])]
+    print(f"`{' '.join(script)}`: base {args.base} vs this checkout, medians of {args.rounds} interleaved rounds\n")
+    print("| number | base | new | base / new |\n|---|---:|---:|---:|")
+    summary = {}
+    for key in keys:
+        base = statistics.median(r[key] for r in rounds["base"])
+        new = statistics.median(r[key] for r in rounds["new"])
+        summary[key] = {"base": base, "new": new, "ratio": base / new if new else None}
+        print(f"| {key} | {base:.4g} | {new:.4g} | {base / new:.2f}× |" if new else f"| {key} | {base:.4g} | {new:.4g} | — |")
+    if args.json:
+        args.json.write_text(json.dumps({"base": args.base, "script": script, "rounds": rounds, "summary": summary}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
