@@ -12,10 +12,19 @@ The breakdown runs the same child with ``time.perf_counter`` around
 ``import symsphere``, the first call and a second call, and
 ``python -X importtime -c "import symsphere"`` shows which imports take the time.
 
+``--cold-start`` measures instead what a new install pays (docs/benchmarks.md, "Cold start"):
+with an empty numba cache, in one new process, the first ``sample_sphere`` and then each
+further variant (dtype, point set, domain, frame, map), the first ``integrate`` with a numpy
+f; in new processes the first ``symsphere render --scene cornell`` and ``symsphere demo``;
+and every kernel numba compiled on the way, with its compile time (numba's
+``"numba:compile"`` events).  Each is run ``--cold`` times; medians are reported, with the
+CPU seconds beside the wall seconds (on a shared machine wall time includes waiting).
+
 Usage::
 
     python benchmarks/first_sample.py                 # 48 * 1024 directions, 7 rounds, 2 cold runs
     python benchmarks/first_sample.py --repeats 11 --cold 3 --json first.json
+    python benchmarks/first_sample.py --cold-start --cold 3 --json cold.json
 """
 
 from __future__ import annotations
@@ -114,13 +123,110 @@ def importtime_table(max_depth=3, min_ms=20.0):
     return "\n".join(lines), flat
 
 
+COLD_STEPS = """
+import json, time, sys
+from numba.core import event
+steps = []
+def step(label, call):
+    wall, cpu = time.perf_counter(), time.process_time()
+    call()
+    steps.append((label, time.perf_counter() - wall, time.process_time() - cpu))
+with event.install_recorder("numba:compile") as recorder:
+    step("import symsphere", lambda: __import__("symsphere"))
+    import numpy as np
+    import symsphere as ss
+    step("first sample_sphere(48000)", lambda: ss.sample_sphere(48000, rng=1))
+    step("+ dtype=float32", lambda: ss.sample_sphere(48000, rng=1, dtype="float32"))
+    step("+ points='sobol'", lambda: ss.sample_sphere(48 * 1024, rng=1, points="sobol"))
+    step("+ sample_hemisphere", lambda: ss.sample_hemisphere(24000, rng=1))
+    step("+ sample_hemisphere(normal=...)", lambda: ss.sample_hemisphere(24000, rng=1, normal=[0, 1, 1]))
+    step("+ method='paper1'", lambda: ss.sample_sphere(48000, rng=1, method="paper1"))
+    a = np.array([0.3, 0.2, 0.1])
+    step("+ first integrate, numpy f", lambda: ss.integrate(lambda w: np.exp(w @ a), n=48 * 4096, rng=1))
+kernels = {}
+starts = {}
+for timestamp, ev in recorder.buffer:
+    key = (str(ev.data["dispatcher"].py_func.__qualname__), str(ev.data["args"]))
+    cells = ev.data["dispatcher"].py_func.__closure__
+    if cells:
+        key = (key[0] + str(tuple(c.cell_contents for c in cells if isinstance(c.cell_contents, (int, bool)))), key[1])
+    if ev.is_start:
+        starts[key] = timestamp
+    elif key in starts:
+        kernels[" ".join(key)] = timestamp - starts.pop(key)
+print(json.dumps({"steps": steps, "kernels": kernels}))
+"""
+
+
+def _cold_command(command, cache):
+    """Wall and CPU seconds (children included) of one command with the numba cache *cache*."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    before = os.times()
+    start = time.perf_counter()
+    proc = subprocess.run(command, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    after = os.times()
+    if proc.returncode != 0:
+        raise RuntimeError(f"{command} failed ({proc.returncode}):\n{proc.stderr}")
+    cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    return wall, cpu, proc
+
+
+def cold_start(runs, json_path=None):
+    """The cold-start table (see the module docstring)."""
+    symsphere_cli = [sys.executable, "-m", "symsphere"]
+    rows, kernels = {}, {}
+    commands = {
+        "first `symsphere render --scene cornell --width 64 --height 48 --spp 48`":
+            [*symsphere_cli, "render", "--scene", "cornell", "--width", "64", "--height", "48", "--spp", "48", "--seed", "1"],
+        "`symsphere demo` after install": [*symsphere_cli, "demo", "--no-progress"],
+    }
+    for _ in range(runs):
+        cache = tempfile.mkdtemp(prefix="symsphere-numba-cold-")
+        try:
+            _, _, proc = _cold_command([sys.executable, "-c", COLD_STEPS], cache)
+            result = json.loads(proc.stdout.splitlines()[-1])
+            for label, wall, cpu in result["steps"]:
+                rows.setdefault(label, []).append((wall, cpu))
+            for label, seconds in result["kernels"].items():
+                kernels.setdefault(label, []).append(seconds)
+        finally:
+            _rmtree(cache)
+        for label, command in commands.items():
+            cache = tempfile.mkdtemp(prefix="symsphere-numba-cold-")
+            out = tempfile.mkdtemp(prefix="symsphere-cold-out-")
+            try:
+                extra = ["--out", os.path.join(out, "render.png")] if "render" in command else ["--out", os.path.join(out, "demo")]
+                wall, cpu, _ = _cold_command(command + extra, cache)
+                rows.setdefault(label, []).append((wall, cpu))
+            finally:
+                _rmtree(cache)
+                _rmtree(out)
+    print(f"Cold start (empty NUMBA_CACHE_DIR), {sys.executable}, {os.cpu_count()} CPUs, median of {runs} runs, "
+          f"load average {os.getloadavg()[0]:.2f}:\n")
+    print("| step | wall s | CPU s |\n|---|---:|---:|")
+    for label, values in rows.items():
+        print(f"| {label} | {statistics.median(v[0] for v in values):.2f} | {statistics.median(v[1] for v in values):.2f} |")
+    print("\nKernels compiled by the steps in one process (numba's compile events; wall s, median):\n")
+    print("| kernel (closure constants) | argument types | s |\n|---|---|---:|")
+    for label, values in sorted(kernels.items(), key=lambda kv: -statistics.median(kv[1])):
+        name, _, types = label.partition(" ")
+        print(f"| `{name}` | `{types[:90]}` | {statistics.median(values):.2f} |")
+    if json_path:
+        with open(json_path, "w", encoding="utf-8") as handle:
+            json.dump({"steps": rows, "kernels": kernels, "runs": runs}, handle, indent=1)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=48 * 1024, help="directions of the first call (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=7, help="rounds of warm runs (default: %(default)s)")
     parser.add_argument("--cold", type=int, default=2, help="cold runs, each with a new empty numba cache (default: %(default)s)")
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON to FILE")
+    parser.add_argument("--cold-start", action="store_true", help="the cold-start table instead (module docstring)")
     args = parser.parse_args(argv)
+    if args.cold_start:
+        return cold_start(max(1, args.cold), args.json)
     if args.n <= 0 or args.n % 48:
         parser.error(f"--n must be a positive multiple of 48, got {args.n}")
 

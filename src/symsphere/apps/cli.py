@@ -41,6 +41,7 @@ from ..integrands import INTEGRANDS
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..maps import METHODS
 from ..points import BLOCK, POINT_SETS
+from ._notices import compile_notice
 from .demo import run_demo
 from .study import add_study_parser
 
@@ -361,7 +362,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     prog = f"symsphere {args.verb}"
     try:
-        with _signals_as_interrupts():
+        with _signals_as_interrupts(), compile_notice(prog):
             return _with_notes(args.handler, args, prog)
     except _Terminated as exc:
         name = signal.Signals(exc.signum).name

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from collections.abc import Iterable
@@ -84,8 +85,9 @@ def run_demo(
     seed : int, optional
         Seeds all the sampling; the same seed gives the same report.
     progress : bool, optional
-        Show a progress bar over the tests (on stderr, and only if it is a
-        terminal).
+        Say on stderr which of the four steps runs (sampling, the tests,
+        the figure, the render) and show a progress bar over the tests (the
+        bar only on a terminal).
 
     Returns
     -------
@@ -119,7 +121,12 @@ def run_demo(
     sampling_seeds = seed_sequence.spawn(2 * len(METHODS))
     choice_rng = np.random.default_rng(seed_sequence.spawn(1)[0])
 
+    def step(number: int, what: str) -> None:
+        if progress:
+            print(f"demo: step {number}/4: {what}", file=sys.stderr, flush=True)
+
     with atomic_directory(out_dir, replaceable=DEMO_FILES) as build_dir:
+        step(1, f"sampling {n} directions per map and domain ({', '.join(METHODS)}; sphere, hemisphere)")
         tests: list[_Test] = []
         scatter: dict[str, FloatArray] = {}
         for index, method in enumerate(METHODS):
@@ -130,6 +137,7 @@ def run_demo(
             independent_hemisphere = one_per_orbit(hemisphere, 24, choice_rng)
             tests.extend(_tests_of(method, independent_sphere, independent_hemisphere))
 
+        step(2, f"{len(tests)} chi-square tests")
         results = []
         bar = tqdm(tests, desc="chi-square tests", unit="test", disable=True if not progress else None)
         for test in bar:
@@ -144,7 +152,9 @@ def run_demo(
                 )
             )
 
+        step(3, "the figure")
         _write_figure(build_dir / "figure.png", tests, results, scatter)
+        step(4, "rendering the Cornell box")
         render_lines = _render(build_dir / "render.png", seed)
         shown = len(next(iter(scatter.values())))  # what the scatter plots show: n < 3072 shows all n
         report = _report(tests, results, n, seed, shown) + render_lines
