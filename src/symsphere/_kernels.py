@@ -256,7 +256,7 @@ def _map_batch(u, v, code, base):
             base[0, j], base[1, j], base[2, j] = _paper2_point(u[j], v[j])
 
 
-@njit(inline="always")
+@register_jitable
 def _gather(x, y, z, row, table, coordinates):
     """row[q] = (x, y, z, -x, -y, -z)[table[q]]: an orbit of exact signed copies."""
     coordinates[0] = x
@@ -269,34 +269,22 @@ def _gather(x, y, z, row, table, coordinates):
         row[q] = coordinates[table[q]]
 
 
-@njit(inline="always")
-def _store_one(x, y, z, i, kind, weights, rows, coordinates):
-    """Store the orbit of (x, y, z) in row i (*kind* a constant of the specialised kernel)."""
-    if kind == _SPHERE:
-        _gather(x, y, z, rows[i], _GATHER_48, coordinates)
-    elif kind == _HEMISPHERE:
-        _gather(x, y, z, rows[i], _GATHER_24, coordinates)
-    else:
-        # image k = x W[0, 3k:3k+3] + y W[1, ...] + z W[2, ...], W from _rotated_weights
-        # (a loop over 72 contiguous columns, which LLVM vectorises).
-        for column in range(weights.shape[1]):
-            rows[i, column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
+@register_jitable
+def _weighted(x, y, z, row, weights):
+    """row = x W[0] + y W[1] + z W[2]: image k in columns 3k ... 3k + 2, W from _rotated_weights
+    (a loop over 72 contiguous columns, which LLVM vectorises)."""
+    for column in range(weights.shape[1]):
+        row[column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
 
 
-@njit(inline="always")
-def _store_cut(x, y, z, kind, weights, rows, tail, offset, coordinates):
-    """Store members ``(offset + i) % count``, ``i < len(tail)``, of the orbit of (x, y, z) in tail's rows.
-
-    The orbit is stored whole into a one-row scratch of *tail*'s dtype by the same store as
-    every other orbit (so the members are bit for bit those of a whole orbit), then copied.
-    """
-    scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)
-    _store_one(x, y, z, 0, kind, weights, scratch, coordinates)
-    count = rows.shape[1] // 3
+@register_jitable
+def _copy_members(scratch, tail, offset):
+    """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (3 count,)."""
+    count = scratch.shape[0] // 3
     for i in range(tail.shape[0]):
         k = (offset + i) % count
         for l in range(3):
-            tail[i, l] = scratch[0, 3 * k + l]
+            tail[i, l] = scratch[3 * k + l]
 
 
 @register_jitable
@@ -345,7 +333,8 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
 
     The output is *rows* (whole, 3 count): the whole orbits, one per row, and *tail* (rest, 3):
     if rest > 0, the last of the m = whole + 1 points has its orbit cut to rest members from
-    *offset* on (_store_cut), in the same call.  Given points are *points* (m, 2); random ones
+    *offset* on, in the same call (stored whole by the same store as every other orbit, so the
+    members are bit for bit those of a whole orbit, then copied).  Given points are *points* (m, 2); random ones
     are drawn from *points*, the PCG64 stream at point *lo* (uint64[4], :func:`pcg64_state`),
     u then v per point; the next batch's points are drawn between the current batch's orbit
     stores, so that the generator's dependent chain of 128-bit multiplications overlaps the
@@ -354,11 +343,16 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
 
     @njit(**_OPTIONS)
     def fill(points, lo, hi, weights, rows, tail, offset):  # pragma: no cover - compiled by numba
+        # Every branch on source, code or kind is at this function's top level, where numba prunes
+        # it; the helpers are functions of their own (register_jitable: compiled once per process
+        # and shared by the cases; LLVM inlines them), not inlined in numba's IR, which costs
+        # compile time in every case.
         whole = rows.shape[0]
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
         coordinates = np.empty(6)
+        scratch = np.empty(rows.shape[1], dtype=tail.dtype)  # the cut orbit, stored whole
         if source == _RANDOM:
             for j in range(min(_BATCH, hi - lo)):
                 u[j] = pcg64_random(points)
@@ -369,16 +363,36 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
                 for j in range(stop - first):
                     u[j] = points[first + j, 0]
                     v[j] = points[first + j, 1]
-            _map_batch(u, v, code, base)
+            # One loop per map, so the default one is branch-free (vectorisable).
+            if code == 0:
+                for j in range(_BATCH):
+                    base[0, j], base[1, j], base[2, j] = _equal_area_point(u[j], v[j])
+            elif code == 1:
+                for j in range(_BATCH):
+                    base[0, j], base[1, j], base[2, j] = _paper1_point(u[j], v[j])
+            else:
+                for j in range(_BATCH):
+                    base[0, j], base[1, j], base[2, j] = _paper2_point(u[j], v[j])
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
-                _store_one(base[0, j], base[1, j], base[2, j], first + j, kind, weights, rows, coordinates)
+                if kind == _SPHERE:
+                    _gather(base[0, j], base[1, j], base[2, j], rows[first + j], _GATHER_48, coordinates)
+                elif kind == _HEMISPHERE:
+                    _gather(base[0, j], base[1, j], base[2, j], rows[first + j], _GATHER_24, coordinates)
+                else:
+                    _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
                 if source == _RANDOM and j < upcoming:
                     u[j] = pcg64_random(points)
                     v[j] = pcg64_random(points)
-            if stop > whole:  # the last point (of the last part), its orbit cut
+            if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
-                _store_cut(base[0, j], base[1, j], base[2, j], kind, weights, rows, tail, offset, coordinates)
+                if kind == _SPHERE:
+                    _gather(base[0, j], base[1, j], base[2, j], scratch, _GATHER_48, coordinates)
+                elif kind == _HEMISPHERE:
+                    _gather(base[0, j], base[1, j], base[2, j], scratch, _GATHER_24, coordinates)
+                else:
+                    _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
+                _copy_members(scratch, tail, offset)
 
     return fill
 
