@@ -125,6 +125,15 @@ _ONE = np.uint64(1)
 
 
 @register_jitable
+def fixed_sampler(sampler):
+    """*sampler* if it is UNIFORM, COSINE or ORBIT, else -1: a symmetric sampler, whose base-point source
+    (random, Sobol', interlaced) stays a runtime choice inside one specialised kernel."""
+    if sampler == UNIFORM or sampler == COSINE or sampler == ORBIT:
+        return sampler
+    return -1
+
+
+@register_jitable
 def is_cosine(sampler):
     """The symmetric cosine samplers and the i.i.d. cosine sampler: pdf cos / pi (sphere |cos| / (2 pi))."""
     return (
@@ -134,15 +143,17 @@ def is_cosine(sampler):
 
 
 @njit(inline="always")  # numba-IR inlining: a specialised kernel's constants prune the other samplers
-def sample_local(sampler, cosine, code, full, key, s, depth, state):
+def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
 
     Parameters
     ----------
     sampler, code : int
         Sampler code and map code (``METHOD_CODES``; used by the orbit samplers).
-    cosine : bool
-        ``is_cosine(sampler)`` (a constant of a specialised kernel, like *sampler* and *code*).
+    fixed, cosine : int, bool
+        ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``: constants of a specialised kernel
+        (like *code*), which prune the other samplers' code; *sampler* itself then only chooses
+        the symmetric samplers' base-point source.
     full : bool
         Sample the whole sphere (Lambertian transmission) rather than the
         upper hemisphere.
@@ -187,7 +198,7 @@ def sample_local(sampler, cosine, code, full, key, s, depth, state):
     (:func:`symsphere.wedge.cosine_wedge_point`), whose
     8 images tile the hemisphere: each sample is cosine-distributed.
     """
-    if sampler == UNIFORM:
+    if fixed == UNIFORM:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
         if full:
@@ -195,7 +206,7 @@ def sample_local(sampler, cosine, code, full, key, s, depth, state):
             return x, y, z, 4.0 * abs(z), _INV_4PI, state
         x, y, z = uniform_hemisphere_point(u01(b1), u01(b2))
         return x, y, z, 2.0 * z, INV_2PI, state
-    if sampler == COSINE:
+    if fixed == COSINE:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
         x, y, z = cosine_hemisphere_point(u01(b1), u01(b2))
@@ -209,7 +220,7 @@ def sample_local(sampler, cosine, code, full, key, s, depth, state):
         n = 16 if full else 8
     else:
         n = 48 if full else 24
-    if sampler == ORBIT:
+    if fixed == ORBIT:
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
         state, b3 = next_u64(state)
@@ -251,7 +262,7 @@ def sample_local(sampler, cosine, code, full, key, s, depth, state):
 
 
 @njit(inline="always")
-def bsdf_pdf(sampler, cosine, code, full, x, y, z):
+def bsdf_pdf(fixed, cosine, code, full, x, y, z):
     """The solid-angle density with which *sampler* draws the local unit direction (x, y, z).
 
     The marginal density of one sample (what :func:`sample_local` returns as
@@ -261,7 +272,7 @@ def bsdf_pdf(sampler, cosine, code, full, x, y, z):
     sorting |x|, |y|, |z| into T0 = {z >= x >= y >= 0}.  Hemisphere samplers:
     only for z >= 0.
     """
-    if sampler == UNIFORM:
+    if fixed == UNIFORM:
         return _INV_4PI if full else INV_2PI
     if cosine:
         return abs(z) * INV_2PI if full else z * _INV_PI
@@ -389,10 +400,77 @@ def plain_spheres(spheres):
     return n
 
 
+@register_jitable
+def _light_sample(
+    px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material, quad_material,
+    spheres, quads, state,
+):  # fmt: skip
+    """Next-event estimation at a diffuse vertex, the part that does not depend on the sampler.
+
+    One emitter chosen by power, a point or direction on it; returns (ok, world direction w,
+    local direction (lx, ly, lz) in the frame (t_row, b_row, n), distance, solid-angle pdf
+    times the selection probability, the vertex's reflectance (or transmittance) towards w,
+    the emitter's material, state).  ok is False when w is on the wrong side or the BSDF
+    is black there.  A function of its own (not inlined by numba), so that numba types it
+    once, not in every specialised kernel.
+    """
+    choice = 0
+    if lights.shape[1] > 1:
+        state, b1 = next_u64(state)
+        choice = choose_light(lights, u01(b1))
+    obj = np.int64(lights[0, choice])
+    wx, wy, wz, dist, p_light, ok, state = sample_emitter(px, py, pz, obj, state, spheres, quads)
+    lz = wx * nx + wy * ny + wz * nz
+    lx, ly, fr, fg, fb = 0.0, 0.0, 0.0, 0.0, 0.0
+    lm = np.int64(0)
+    if ok and (lz > 0.0 or (full and lz < 0.0)):
+        c = 1 if lz > 0.0 else 4  # reflectance on the incoming side, transmittance on the other
+        fr, fg, fb = materials[m, c], materials[m, c + 1], materials[m, c + 2]
+        ok = fr != 0.0 or fg != 0.0 or fb != 0.0
+        if ok:
+            p_light *= light_pmf[obj]
+            lx = wx * t_row[0] + wy * t_row[1] + wz * t_row[2]
+            ly = wx * b_row[0] + wy * b_row[1] + wz * b_row[2]
+            n_spheres = spheres.shape[1]
+            lm = np.int64(sphere_material[obj] if obj < n_spheres else quad_material[obj - n_spheres])
+    else:
+        ok = False
+    return ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state
+
+
+@register_jitable
+def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, state):
+    """The direction after a mirror or a smooth dielectric (exact unpolarised Fresnel), and the state.
+
+    *cos_in* = d . n with n facing the incoming ray (<= 0).  A function of its own, typed once.
+    """
+    if kind == MIRROR:
+        c2 = 2.0 * cos_in
+        return dx - c2 * nx, dy - c2 * ny, dz - c2 * nz, state
+    eta = 1.0 / ior if entering else ior  # n_incident / n_transmitted
+    cos_i = -cos_in
+    sin2_t = eta * eta * (1.0 - cos_i * cos_i)
+    state, bits = next_u64(state)
+    reflect = True
+    cos_t = 0.0
+    if sin2_t < 1.0:
+        cos_t = math.sqrt(1.0 - sin2_t)
+        rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+        rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+        fresnel = 0.5 * (rs * rs + rp * rp)
+        reflect = u01(bits) < fresnel
+    if reflect:
+        c2 = 2.0 * cos_in
+        return dx - c2 * nx, dy - c2 * ny, dz - c2 * nz, state
+    k = eta * cos_i - cos_t
+    return eta * dx + k * nx, eta * dy + k * ny, eta * dz + k * nz, state
+
+
 @njit(inline="always")  # numba-IR inlining: no call, no reference counting; a kernel's constants prune branches
 def radiance(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-    rr_depth, max_depth, integrator, sampler, cosine, code, pixel_filter, key, s, row, col, width, height, scratch, plain,
+    rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter, key, s, row, col, width, height, scratch,
+    plain,
 ):  # fmt: skip
     """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top."""
     state = path_state(key, s)
@@ -482,31 +560,21 @@ def radiance(
                     break  # black: absorbed, whatever the direction
             t_row, b_row = frame_rows(nx, ny, nz)
             if nee and depth + 1 < max_depth:  # next-event estimation: one emitter, one shadow ray
-                choice = 0
-                if lights.shape[1] > 1:
-                    state, b1 = next_u64(state)
-                    choice = choose_light(lights, u01(b1))
-                obj = np.int64(lights[0, choice])
-                wx, wy, wz, dist, p_light, ok, state = sample_emitter(px, py, pz, obj, state, spheres, quads)
-                lz = wx * nx + wy * ny + wz * nz
-                if ok and (lz > 0.0 or (full and lz < 0.0)):
-                    c = 1 if lz > 0.0 else 4  # reflectance on the incoming side, transmittance on the other
-                    fr, fg, fb = materials[m, c], materials[m, c + 1], materials[m, c + 2]
-                    if fr != 0.0 or fg != 0.0 or fb != 0.0:
-                        p_light *= light_pmf[obj]
-                        lx = wx * t_row[0] + wy * t_row[1] + wz * t_row[2]
-                        ly = wx * b_row[0] + wy * b_row[1] + wz * b_row[2]
-                        p_b = bsdf_pdf(sampler, cosine, code, full, lx, ly, lz)
-                        g = abs(lz) * _INV_PI * power_heuristic(p_light, p_b) / p_light
-                        lm = sphere_material[obj] if obj < n_spheres else quad_material[obj - n_spheres]
-                        cr = br * fr * materials[lm, 8] * g
-                        cg = bg * fg * materials[lm, 9] * g
-                        cb = bb * fb * materials[lm, 10] * g
-                        shadow = cr != 0.0 or cg != 0.0 or cb != 0.0
-                        if shadow:  # the sampled point itself is not an occluder
-                            t_max = dist * (1.0 - _SHADOW_TOLERANCE) - eps
-                        ndx, ndy, ndz = wx, wy, wz  # swapped with the path's direction below
-            x, y, z, weight, pdf_bsdf, state = sample_local(sampler, cosine, code, full, key, s, depth, state)
+                ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state = _light_sample(
+                    px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material,
+                    quad_material, spheres, quads, state,
+                )  # fmt: skip
+                if ok:
+                    p_b = bsdf_pdf(fixed, cosine, code, full, lx, ly, lz)
+                    g = abs(lz) * _INV_PI * power_heuristic(p_light, p_b) / p_light
+                    cr = br * fr * materials[lm, 8] * g
+                    cg = bg * fg * materials[lm, 9] * g
+                    cb = bb * fb * materials[lm, 10] * g
+                    shadow = cr != 0.0 or cg != 0.0 or cb != 0.0
+                    if shadow:  # the sampled point itself is not an occluder
+                        t_max = dist * (1.0 - _SHADOW_TOLERANCE) - eps
+                    ndx, ndy, ndz = wx, wy, wz  # swapped with the path's direction below
+            x, y, z, weight, pdf_bsdf, state = sample_local(sampler, fixed, cosine, code, full, key, s, depth, state)
             if z >= 0.0:
                 br *= materials[m, 1] * weight
                 bg *= materials[m, 2] * weight
@@ -517,39 +585,8 @@ def radiance(
                 bb *= materials[m, 6] * weight
             dx, dy, dz = rows_to_world(x, y, z, t_row, b_row, nx, ny, nz)
             specular = False
-        elif kind == MIRROR:
-            c2 = 2.0 * cos_in  # cos_in = d . n_facing <= 0
-            dx -= c2 * nx
-            dy -= c2 * ny
-            dz -= c2 * nz
-            br *= materials[m, 1]
-            bg *= materials[m, 2]
-            bb *= materials[m, 3]
-            specular = True
-        else:  # DIELECTRIC
-            ior = materials[m, 7]
-            eta = 1.0 / ior if entering else ior  # n_incident / n_transmitted
-            cos_i = -cos_in
-            sin2_t = eta * eta * (1.0 - cos_i * cos_i)
-            state, bits = next_u64(state)
-            reflect = True
-            cos_t = 0.0
-            if sin2_t < 1.0:
-                cos_t = math.sqrt(1.0 - sin2_t)
-                rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
-                rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
-                fresnel = 0.5 * (rs * rs + rp * rp)
-                reflect = u01(bits) < fresnel
-            if reflect:
-                c2 = 2.0 * cos_in
-                dx -= c2 * nx
-                dy -= c2 * ny
-                dz -= c2 * nz
-            else:
-                k = eta * cos_i - cos_t
-                dx = eta * dx + k * nx
-                dy = eta * dy + k * ny
-                dz = eta * dz + k * nz
+        else:  # MIRROR or DIELECTRIC
+            dx, dy, dz, state = _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, materials[m, 7], state)
             br *= materials[m, 1]
             bg *= materials[m, 2]
             bb *= materials[m, 3]
@@ -581,19 +618,22 @@ def radiance(
 
 
 @functools.lru_cache(maxsize=None)
-def _pass_kernel(integrator, sampler, code, pixel_filter):
-    """The serial kernel of one (integrator, sampler, map, pixel filter): it renders the rows it is given.
+def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
+    """The serial kernel of one (integrator, sampler family, map, pixel filter): it renders the rows it is given.
 
-    The four codes (and ``is_cosine(sampler)``) are closure cells, constants to numba: the other
-    estimator's, samplers', maps' and filter's branches are pruned before typing, and numba's cache
-    keys each case by their values, so a render compiles (or loads) only its own case.
+    The family is ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``: UNIFORM, COSINE, ORBIT,
+    the symmetric samplers, the symmetric cosine samplers.  These codes are closure cells,
+    constants to numba: the other estimator's, families', maps' and filter's branches are pruned
+    before typing, and numba's cache keys each case by their values, so a render compiles (or
+    loads) only its own case; a symmetric sampler's base-point source (random, Sobol',
+    interlaced) is a runtime argument, so that the eight symmetric samplers share two kernels
+    per estimator (measured: a first case ~14 CPU-s on an empty cache, each further one ~7 s).
     """
-    cosine = is_cosine(sampler)
 
     @njit(**KERNEL_OPTIONS)
     def render_rows(
         spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-        rr_depth, max_depth, seed, sample_start, sample_count, rows, accum,
+        rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum,
     ):  # fmt: skip  # pragma: no cover - compiled by numba
         height = accum.shape[0]
         width = accum.shape[1]
@@ -607,7 +647,8 @@ def _pass_kernel(integrator, sampler, code, pixel_filter):
                 for s in range(sample_start, sample_start + sample_count):
                     lr, lg, lb = radiance(
                         spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
-                        background, eps, rr_depth, max_depth, integrator, sampler, cosine, code, pixel_filter, key, s,
+                        background, eps, rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter,
+                        key, s,
                         row, col, width, height, scratch, plain,
                     )  # fmt: skip
                     sr += lr
@@ -631,14 +672,14 @@ def render_pass(
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
-    kernel = _pass_kernel(int(integrator), int(sampler), int(code), int(pixel_filter))
+    kernel = _pass_kernel(int(integrator), int(fixed_sampler(sampler)), bool(is_cosine(sampler)), int(code), int(pixel_filter))
     parts = max(1, min(get_num_threads(), len(rows)))
 
     def part(index):
         lo, hi = len(rows) * index // parts, len(rows) * (index + 1) // parts
         kernel(
             spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-            rr_depth, max_depth, seed, sample_start, sample_count, rows[lo:hi], accum,
+            rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows[lo:hi], accum,
         )  # fmt: skip
 
     run_parts(part, parts)
@@ -656,6 +697,6 @@ def prepare_kernels() -> None:
     """
     global _ready
     if not _ready:
-        invalidate_if_changed(_pass_kernel(PATH, COSINE, 0, BOX))  # the module's cache directory: every case's entries
+        invalidate_if_changed(_pass_kernel(PATH, COSINE, True, 0, BOX))  # the module's cache directory: every case's entries
         start_threads()
         _ready = True

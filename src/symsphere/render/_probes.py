@@ -20,7 +20,7 @@ from numba import njit
 from .._numba_cache import invalidate_if_changed
 from . import _integrator
 from ._emitters import emitter_pdf, sample_emitter
-from ._integrator import KERNEL_OPTIONS, bsdf_pdf, intersect, is_cosine, plain_spheres, sample_local
+from ._integrator import KERNEL_OPTIONS, bsdf_pdf, fixed_sampler, intersect, is_cosine, plain_spheres, sample_local
 from ._random import interlace_fractions, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, sobol_coordinate
 
 __all__ = [
@@ -47,7 +47,7 @@ def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
     key = pixel_key(seed, pixel)
     for s in range(samples):
         state = path_state(key, s)
-        x, y, z, weight, pdf, state = sample_local(sampler, is_cosine(sampler), code, full, key, s, depth, state)
+        x, y, z, weight, pdf, state = sample_local(sampler, fixed_sampler(sampler), is_cosine(sampler), code, full, key, s, depth, state)
         out[s, 0] = x
         out[s, 1] = y
         out[s, 2] = z
@@ -61,7 +61,7 @@ def bsdf_pdfs(sampler, code, full, directions):
     """:func:`~symsphere.render._integrator.bsdf_pdf` of each local unit direction (rows of *directions*)."""
     out = np.empty(directions.shape[0])
     for i in range(directions.shape[0]):
-        out[i] = bsdf_pdf(sampler, is_cosine(sampler), code, full, directions[i, 0], directions[i, 1], directions[i, 2])
+        out[i] = bsdf_pdf(fixed_sampler(sampler), is_cosine(sampler), code, full, directions[i, 0], directions[i, 1], directions[i, 2])
     return out
 
 
