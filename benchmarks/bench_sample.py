@@ -353,7 +353,7 @@ def profile_cases(n, rng):
     """The pieces of sample_sphere / sample_hemisphere, each timed alone (kind 'piece').
 
     Each piece runs the library's own functions (``pcg64_random``, ``_map_batch``,
-    the orbit store ``_gather``) in the kernel's layout -- one part per numba thread, batches of
+    the orbit store ``_store_orbit``) in the kernel's layout -- one part per numba thread, batches of
     ``_BATCH`` base points -- with the other pieces left out, so that the sum of the
     pieces against the whole kernel shows how much of them overlaps.
     """
@@ -361,7 +361,7 @@ def profile_cases(n, rng):
     from numba import njit, prange
 
     from symsphere._kernels import (
-        _BATCH, _GATHER_24, _GATHER_48, _gather, _map_batch, fill_orbits, fill_random_orbits, part_bounds,
+        _BATCH, _map_batch, _store_orbit, fill_orbits, fill_random_orbits, part_bounds,
         pcg64_advanced, pcg64_random, pcg64_seeded,
     )
     from symsphere.points import BasePoints
@@ -398,12 +398,8 @@ def profile_cases(n, rng):
     def stores_only(bounds, count, rows):
         # the orbit stores alone, of a fixed point (no draws, no map)
         for part in prange(len(bounds) - 1):
-            coordinates = np.empty(6)
             for i in range(bounds[part], bounds[part + 1]):
-                if count == 48:
-                    _gather(0.25, 0.125, 0.5, rows[i], _GATHER_48, coordinates)
-                else:
-                    _gather(0.25, 0.125, 0.5, rows[i], _GATHER_24, coordinates)
+                _store_orbit(0.25, 0.125, 0.5, rows[i], count)
 
     @njit(parallel=True, cache=False)
     def parallel_fill(flat, value):

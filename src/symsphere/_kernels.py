@@ -231,12 +231,6 @@ def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) ->
 _BATCH = 16
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
 
-# The orbit stores gather: row element 3k + l of image k is c[_GATHER[3k + l]] with
-# c = (x, y, z, -x, -y, -z), i.e. SIGNS[k, l] * (x, y, z)[SOURCES[k, l]] (exact copies).
-_GATHER_48 = (SOURCES + 3 * (SIGNS < 0)).astype(np.intp).reshape(-1)
-_GATHER_24 = _GATHER_48[: 3 * 24].copy()
-
-
 @njit(inline="always")
 def _map_batch(u, v, code, base):
     """base[:, j] = the point of T0 of map *code* at (u[j], v[j]), for all j < _BATCH.
@@ -257,16 +251,43 @@ def _map_batch(u, v, code, base):
 
 
 @register_jitable
-def _gather(x, y, z, row, table, coordinates):
-    """row[q] = (x, y, z, -x, -y, -z)[table[q]]: an orbit of exact signed copies."""
-    coordinates[0] = x
-    coordinates[1] = y
-    coordinates[2] = z
-    coordinates[3] = -x
-    coordinates[4] = -y
-    coordinates[5] = -z
-    for q in range(table.shape[0]):
-        row[q] = coordinates[table[q]]
+def _store_columns(row, at, a, b, c):
+    """The four columns of one row of Tables 1 and 2 at *row*[at ...]: (a, b, c), (-a, b, c), (-a, -b, c),
+    (a, -b, c) (symmetry._COLUMN_SIGNS), written out: plain copies, no table to read."""
+    row[at] = a
+    row[at + 1] = b
+    row[at + 2] = c
+    row[at + 3] = -a
+    row[at + 4] = b
+    row[at + 5] = c
+    row[at + 6] = -a
+    row[at + 7] = -b
+    row[at + 8] = c
+    row[at + 9] = a
+    row[at + 10] = -b
+    row[at + 11] = c
+
+
+@register_jitable
+def _store_orbit(x, y, z, row, count):
+    """row[3k:3k+3] = (x, y, z) @ SPHERE_MAPS[k] for k < count (48 or 24), by the tables' structure
+    (symmetry._build_maps: k = 24 half + 4 i + j): the six rows P0..P5 of Table 1
+    (x, y, z), (y, x, z), (z, y, x), (z, x, y), (x, z, y), (y, z, x), each in its four columns;
+    for the sphere the same again with the third coordinate negated (Table 2's barred rows).
+    tests/test_kernels.py compares every image with the tables."""
+    _store_columns(row, 0, x, y, z)
+    _store_columns(row, 12, y, x, z)
+    _store_columns(row, 24, z, y, x)
+    _store_columns(row, 36, z, x, y)
+    _store_columns(row, 48, x, z, y)
+    _store_columns(row, 60, y, z, x)
+    if count == 48:
+        _store_columns(row, 72, x, y, -z)
+        _store_columns(row, 84, y, x, -z)
+        _store_columns(row, 96, z, y, -x)
+        _store_columns(row, 108, z, x, -y)
+        _store_columns(row, 120, x, z, -y)
+        _store_columns(row, 132, y, z, -x)
 
 
 @register_jitable
@@ -351,7 +372,6 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
         base = np.empty((3, _BATCH))
-        coordinates = np.empty(6)
         scratch = np.empty(rows.shape[1], dtype=tail.dtype)  # the cut orbit, stored whole
         if source == _RANDOM:
             for j in range(min(_BATCH, hi - lo)):
@@ -376,9 +396,9 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
-                    _gather(base[0, j], base[1, j], base[2, j], rows[first + j], _GATHER_48, coordinates)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], 48)
                 elif kind == _HEMISPHERE:
-                    _gather(base[0, j], base[1, j], base[2, j], rows[first + j], _GATHER_24, coordinates)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], 24)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
                 if source == _RANDOM and j < upcoming:
@@ -387,9 +407,9 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
-                    _gather(base[0, j], base[1, j], base[2, j], scratch, _GATHER_48, coordinates)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 48)
                 elif kind == _HEMISPHERE:
-                    _gather(base[0, j], base[1, j], base[2, j], scratch, _GATHER_24, coordinates)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 24)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
                 _copy_members(scratch, tail, offset)
