@@ -8,6 +8,48 @@ import math
 
 import numpy as np
 
+# --- comparing two implementations of one formula (issue 19) -----------------------------------
+#
+# The error model every cross-implementation comparison in the tests uses.  numpy's ufuncs run its own
+# SIMD code or Intel's SVML (AVX2, AVX-512: chosen at run time per CPU), or libm; a numba kernel and
+# Python's ``math`` call libm.  So sin, cos, tan, atan, atan2, asin, acos, exp, log, hypot, power may
+# differ in the last bits between two paths, machines and numpy builds.  What the tests assume:
+#
+# - each of those elementary functions is within ELEMENTARY_ULPS ulps of its exact value, on every
+#   path: numpy's accuracy tests (numpy/_core/tests/test_umath_accuracy.py, its umath-validation-set
+#   files) allow up to 4 ulps for its SIMD transcendentals; glibc's are within 1-2 (its manual's table);
+# - +, -, *, / and sqrt are correctly rounded (IEEE 754): the same operands in the same order give
+#   the same bits on every path.  numba compiles without fastmath, so LLVM neither reorders nor
+#   contracts a * b + c into an FMA; numpy applies one operation per ufunc call.  Sums whose order
+#   differs (matmul, BLAS, with or without FMA) are bounded by GAMMA3 for a 3-term dot product;
+# - an ulp of t is at most EPS64 * |t| (EPS32 for float32); relative errors add, to first order, and
+#   an input's relative error is multiplied by the function's condition number |t f'(t) / f(t)|.
+#
+# Two paths that each stay within k ulps of the exact result differ by at most 2 k of them.  The
+# numbers below are stated and derived where they are used.
+ELEMENTARY_ULPS = 4
+EPS64 = float(np.finfo(np.float64).eps)  # 2^-52
+EPS32 = float(np.finfo(np.float32).eps)  # 2^-23
+GAMMA3 = 1.5  # 3 u / (1 - 3 u) with u = EPS / 2: a 3-term dot product of unit vectors, in EPS, per path
+
+
+def assert_within_eps(got, expected, k, *, scale=None, eps=EPS64):
+    """|got - expected| <= k * eps * scale, elementwise (scale: |expected| by default, i.e. relative).
+
+    For unit vectors pass scale=1 (an absolute bound in units of eps).  Reports the worst ratio.
+    """
+    got = np.asarray(got, dtype=np.float64)
+    expected = np.asarray(expected, dtype=np.float64)
+    got, expected = np.broadcast_arrays(got, expected)
+    bound = np.broadcast_to(k * eps * (np.abs(expected) if scale is None else np.asarray(scale, dtype=np.float64)), got.shape)
+    excess = np.abs(got - expected) - bound
+    worst = np.unravel_index(int(np.argmax(excess)), excess.shape) if excess.size else ()
+    assert excess.size == 0 or excess[worst] <= 0, (
+        f"differ by {abs(got[worst] - expected[worst]):.3g} > {k} eps = {bound[worst]:.3g} at {worst}: "
+        f"{got[worst]!r} vs {expected[worst]!r}"
+    )
+
+
 # Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
 LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
 
