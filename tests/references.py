@@ -50,6 +50,17 @@ def assert_within_eps(got, expected, k, *, scale=None, eps=EPS64):
     )
 
 
+def scaled_for_load(seconds):
+    """A time limit *seconds* (measured on an idle machine) stretched by the 1-minute load average per core.
+
+    The suite runs under pytest-xdist (one worker per core) on machines shared with others: a limit that
+    separates "fails fast" from "computes for minutes" must not fail because the cores are busy.
+    """
+    import os
+
+    return seconds * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+
+
 # Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
 LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
 

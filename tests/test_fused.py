@@ -145,6 +145,7 @@ def test_compiled_f_errors():
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("dask")  # a local Dask cluster: with the other cluster tests (Makefile: --dist loadgroup)
 def test_distributed_ships_the_fused_kernel():
     """distributed.integrate with a compiled f: bit for bit the single-process fused result."""
     pytest.importorskip("distributed")
