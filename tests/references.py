@@ -143,3 +143,37 @@ def net_t_value(x, m):
         if all(np.all(np.bincount(box_index(d), minlength=2 ** (m - t)) == 2**t) for d in splits(m - t, s)):
             return t
     raise AssertionError("unreachable: t = m always holds")
+
+
+# --- the power of a chi-square test ----------------------------------------------------------------
+#
+# Against an alternative density q (bin probabilities q_i instead of p_i), Pearson's statistic over n
+# independent samples is approximately noncentral chi-square with the test's degrees of freedom and
+# noncentrality n w^2, w^2 = sum (q_i - p_i)^2 / p_i (Cohen's effect size w).  Example: a density too high by
+# a factor 1 + delta on a fraction f of the domain (and too low by delta f / (1 - f) elsewhere) has
+# w = delta sqrt(f / (1 - f)); delta = 5 % on a tenth: w = 0.0167.
+
+
+def chi2_power(n, dof, w, threshold):
+    """P(reject) at per-test significance *threshold* (Sidak-corrected) for effect size *w* and n samples."""
+    from scipy import stats
+
+    return float(stats.ncx2.sf(stats.chi2.isf(threshold, dof), dof, n * w * w))
+
+
+def chi2_detectable_w(n, dof, threshold, power=0.99):
+    """The smallest effect size w that a chi-square test of n samples rejects with probability *power*."""
+    from scipy import optimize
+
+    return float(optimize.brentq(lambda w: chi2_power(n, dof, w, threshold) - power, 1e-6, 10.0))
+
+
+def assert_power(result, w, power=0.99):
+    """The test behind *result* (a symsphere.stats.Chi2Result) rejects an alternative of effect size *w*
+    with probability >= *power*: so its sample size is enough for what it must detect."""
+    n = int(result.observed.sum())
+    got = chi2_power(n, result.dof, w, result.threshold)
+    assert got >= power, (
+        f"power {got:.3f} < {power} against w = {w} (n = {n}, dof = {result.dof}); "
+        f"this n detects w >= {chi2_detectable_w(n, result.dof, result.threshold, power):.4f}"
+    )
