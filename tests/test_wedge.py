@@ -8,7 +8,7 @@ import pytest
 from numba import njit
 from scipy import integrate
 
-from references import ELEMENTARY_ULPS, assert_within_eps
+from references import ELEMENTARY_ULPS, assert_power, assert_within_eps
 
 from symsphere.stats import chi2_test
 from symsphere.wedge import (
@@ -30,6 +30,10 @@ CHI2_TESTS = 2
 # bin edges 32 and 40, so W is exactly 8 x 16 bins and the pdf is smooth on every bin.
 BINS = (64, 16)
 N_CHI2 = 200_000
+# Power: with these 127 cells, 200 000 samples reject an alternative of Cohen's effect size w >= 0.022 with
+# probability 99 % (tests/references.py), e.g. a density 2.2 % off on either half of the hemisphere; what the
+# tests must detect is w = 0.04 (as tests/statistical/), asserted below.
+MUST_DETECT_W = 0.04
 
 
 def _interior_uv(n, seed=0, margin=1e-3):
@@ -223,6 +227,7 @@ def test_forward_chi2():
     np.testing.assert_allclose(res.expected / N_CHI2, closed_form, rtol=1e-12, atol=1e-15)
     assert res.dof == 8 * 16 - 1
     assert res.passed, str(res)
+    assert_power(res, MUST_DETECT_W)
 
 
 def test_chi2_has_power():
@@ -277,6 +282,7 @@ def test_symmetrised_sampler_chi2_cosine():
     )
     assert res.dof == BINS[0] * BINS[1] - 1
     assert res.passed, str(res)
+    assert_power(res, MUST_DETECT_W)
     assert d[:, 2].mean() == pytest.approx(2 / 3, abs=5 * math.sqrt(1 / 18 / N_CHI2))  # E[cos] = 2/3
 
 
