@@ -129,7 +129,6 @@ or scipy.stats.qmc.QMCEngine
         self.total = check_count(total, "total")
         self._engine = check_points(points)
         # n: the caller's count (ceil(n / per_point) = total), for the messages; default total * per_point.
-        n = self.total * per_point if n is None else n
         check_sobol_size(points, self.total, per_point, n=n)  # at the call, not when the last chunk is drawn
         self._kind: str = "engine" if self._engine is not None else points
         self._side: int | None = None
@@ -340,12 +339,13 @@ def check_points(points: object) -> QMCEngine | None:
     )
 
 
-def _square_side(m: int, per_point: int, n: int) -> int:
+def _square_side(m: int, per_point: int, n: int | None) -> int:
     side = math.isqrt(m)
     if side * side != m:
         options = [c for c in (side * side, (side + 1) ** 2) if c > 0]
         if per_point > 1:
             sizes = " or ".join(f"n={per_point * c}" for c in options)
+            n = per_point * m if n is None else n
             got = f"n={n} gives {m} ({_per(n, per_point)})"
         else:
             sizes = " or ".join(str(c) for c in options)
