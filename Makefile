@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh machine (Python >= 3.11 with pip and venv):
 #   make demo   install into .venv, then sample, test uniformity and write symsphere-demo/report.md
-#   make test   install into .venv (with the test extras), then run the whole test suite
+#   make test   install into .venv (with the test extras), then run the whole test suite in parallel
+#               (pytest-xdist, one worker per core; the 20 slowest tests are listed at the end)
 #   make docs   install the docs extra too, then build the HTML docs (docs/_build/html; warnings are errors)
 PYTHON ?= python3
 VENV := .venv
@@ -19,8 +20,11 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/symsphere demo
 
+# -n auto: one worker per core; --dist loadgroup: the tests marked xdist_group("dask") (each starts a local
+# Dask cluster of worker processes) run on one worker, one after another.  A single file runs serially as
+# before: .venv/bin/python -m pytest tests/test_x.py
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
 
 # make bench: the speed benchmarks (docs/benchmarks.md).  Mitsuba 3 (the optional extra "bench") is
 # a peer in the comparison; drjit 1.5 needs LLVM >= 16 (Debian: libllvm19).  Both are optional: if

@@ -8,6 +8,59 @@ import math
 
 import numpy as np
 
+# --- comparing two implementations of one formula (issue 19) -----------------------------------
+#
+# The error model every cross-implementation comparison in the tests uses.  numpy's ufuncs run its own
+# SIMD code or Intel's SVML (AVX2, AVX-512: chosen at run time per CPU), or libm; a numba kernel and
+# Python's ``math`` call libm.  So sin, cos, tan, atan, atan2, asin, acos, exp, log, hypot, power may
+# differ in the last bits between two paths, machines and numpy builds.  What the tests assume:
+#
+# - each of those elementary functions is within ELEMENTARY_ULPS ulps of its exact value, on every
+#   path: numpy's accuracy tests (numpy/_core/tests/test_umath_accuracy.py, its umath-validation-set
+#   files) allow up to 4 ulps for its SIMD transcendentals; glibc's are within 1-2 (its manual's table);
+# - +, -, *, / and sqrt are correctly rounded (IEEE 754): the same operands in the same order give
+#   the same bits on every path.  numba compiles without fastmath, so LLVM neither reorders nor
+#   contracts a * b + c into an FMA; numpy applies one operation per ufunc call.  Sums whose order
+#   differs (matmul, BLAS, with or without FMA) are bounded by GAMMA3 for a 3-term dot product;
+# - an ulp of t is at most EPS64 * |t| (EPS32 for float32); relative errors add, to first order, and
+#   an input's relative error is multiplied by the function's condition number |t f'(t) / f(t)|.
+#
+# Two paths that each stay within k ulps of the exact result differ by at most 2 k of them.  The
+# numbers below are stated and derived where they are used.
+ELEMENTARY_ULPS = 4
+EPS64 = float(np.finfo(np.float64).eps)  # 2^-52
+EPS32 = float(np.finfo(np.float32).eps)  # 2^-23
+GAMMA3 = 1.5  # 3 u / (1 - 3 u) with u = EPS / 2: a 3-term dot product of unit vectors, in EPS, per path
+
+
+def assert_within_eps(got, expected, k, *, scale=None, eps=EPS64):
+    """|got - expected| <= k * eps * scale, elementwise (scale: |expected| by default, i.e. relative).
+
+    For unit vectors pass scale=1 (an absolute bound in units of eps).  Reports the worst ratio.
+    """
+    got = np.asarray(got, dtype=np.float64)
+    expected = np.asarray(expected, dtype=np.float64)
+    got, expected = np.broadcast_arrays(got, expected)
+    bound = np.broadcast_to(k * eps * (np.abs(expected) if scale is None else np.asarray(scale, dtype=np.float64)), got.shape)
+    excess = np.abs(got - expected) - bound
+    worst = np.unravel_index(int(np.argmax(excess)), excess.shape) if excess.size else ()
+    assert excess.size == 0 or excess[worst] <= 0, (
+        f"differ by {abs(got[worst] - expected[worst]):.3g} > {k} eps = {bound[worst]:.3g} at {worst}: "
+        f"{got[worst]!r} vs {expected[worst]!r}"
+    )
+
+
+def scaled_for_load(seconds):
+    """A time limit *seconds* (measured on an idle machine) stretched by the 1-minute load average per core.
+
+    The suite runs under pytest-xdist (one worker per core) on machines shared with others: a limit that
+    separates "fails fast" from "computes for minutes" must not fail because the cores are busy.
+    """
+    import os
+
+    return seconds * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))
+
+
 # Linear density on T0: z / int_T0 z d(omega), with int_T0 z = atan(1/sqrt 2) / (2 sqrt 2).
 LINEAR_NORM = 2 * math.sqrt(2) / math.atan(1 / math.sqrt(2))
 
@@ -90,3 +143,37 @@ def net_t_value(x, m):
         if all(np.all(np.bincount(box_index(d), minlength=2 ** (m - t)) == 2**t) for d in splits(m - t, s)):
             return t
     raise AssertionError("unreachable: t = m always holds")
+
+
+# --- the power of a chi-square test ----------------------------------------------------------------
+#
+# Against an alternative density q (bin probabilities q_i instead of p_i), Pearson's statistic over n
+# independent samples is approximately noncentral chi-square with the test's degrees of freedom and
+# noncentrality n w^2, w^2 = sum (q_i - p_i)^2 / p_i (Cohen's effect size w).  Example: a density too high by
+# a factor 1 + delta on a fraction f of the domain (and too low by delta f / (1 - f) elsewhere) has
+# w = delta sqrt(f / (1 - f)); delta = 5 % on a tenth: w = 0.0167.
+
+
+def chi2_power(n, dof, w, threshold):
+    """P(reject) at per-test significance *threshold* (Sidak-corrected) for effect size *w* and n samples."""
+    from scipy import stats
+
+    return float(stats.ncx2.sf(stats.chi2.isf(threshold, dof), dof, n * w * w))
+
+
+def chi2_detectable_w(n, dof, threshold, power=0.99):
+    """The smallest effect size w that a chi-square test of n samples rejects with probability *power*."""
+    from scipy import optimize
+
+    return float(optimize.brentq(lambda w: chi2_power(n, dof, w, threshold) - power, 1e-6, 10.0))
+
+
+def assert_power(result, w, power=0.99):
+    """The test behind *result* (a symsphere.stats.Chi2Result) rejects an alternative of effect size *w*
+    with probability >= *power*: so its sample size is enough for what it must detect."""
+    n = int(result.observed.sum())
+    got = chi2_power(n, result.dof, w, result.threshold)
+    assert got >= power, (
+        f"power {got:.3f} < {power} against w = {w} (n = {n}, dof = {result.dof}); "
+        f"this n detects w >= {chi2_detectable_w(n, result.dof, result.threshold, power):.4f}"
+    )

@@ -29,6 +29,9 @@ from symsphere import distributed as ss_distributed  # noqa: E402
 
 A = np.array([0.7, -0.4, 0.5])
 
+# Local Dask clusters (worker processes): on one xdist worker, one at a time (Makefile: --dist loadgroup).
+pytestmark = pytest.mark.xdist_group("dask")
+
 
 def _scaled(seconds):
     """*seconds* stretched by how overloaded the machine is (1-minute load average per core, at least 1)."""

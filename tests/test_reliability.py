@@ -24,6 +24,8 @@ import symsphere
 from symsphere import harmonics, io, symmetry
 from symsphere.apps.cli import main
 
+from references import scaled_for_load
+
 CLI = [sys.executable, "-m", "symsphere"]
 
 
@@ -294,7 +296,7 @@ def _fails_fast(call, error, match, seconds=5.0):
     start = time.monotonic()
     with pytest.raises(error, match=match):
         call()
-    assert time.monotonic() - start < seconds
+    assert time.monotonic() - start < scaled_for_load(seconds)  # instead of allocating or computing for minutes
 
 
 def test_absurd_sizes_fail_fast_naming_the_argument():
@@ -369,7 +371,7 @@ def test_timeout_nan_with_scheduler_is_a_usage_error(capsys):
 def test_exposure_inf_is_rejected_before_rendering(tmp_path, capsys):
     start = time.monotonic()
     status = main(["render", "--spp", "9600000", "--exposure", "inf", "--out", str(tmp_path / "x.png")])
-    assert status == 2 and time.monotonic() - start < 5
+    assert status == 2 and time.monotonic() - start < scaled_for_load(5)
     assert "--exposure must be a positive finite number" in _one_line_error(capsys.readouterr().err)
 
 

@@ -65,6 +65,21 @@ def test_stratified_needs_square_base_count():
         sample_sphere(480, points="stratified")
     with pytest.raises(ValueError, match=r"n=72 gives 3 \(n/24\); use n=24 or n=96"):
         sample_hemisphere(72, points="stratified")
+    # Any size: the message quotes the n the user passed, not the whole orbits' n it was rounded up to
+    # (issue 19: sample_sphere(50) said "n=96 gives 2 (n/48)").
+    with pytest.raises(ValueError, match=r"; n=50 gives 2 \(ceil\(n/48\)\); use n=48 or n=192$"):
+        sample_sphere(50, points="stratified")
+    with pytest.raises(ValueError, match=r"; n=50 gives 3 \(ceil\(n/24\)\); use n=24 or n=96$"):
+        sample_hemisphere(50, points="stratified")
+
+
+def test_sobol_size_error_quotes_the_users_n():
+    # 2**30 Sobol' points at most: n = 48 * 2**30 + 1 needs one more (ceil(n/48)); the message says so with n as given.
+    n = 48 * 2**30 + 1
+    with pytest.raises(ValueError, match=rf"^'n'={n} needs {2**30 + 1} Sobol' points \(ceil\(n/48\)\) but"):
+        sample_sphere(n, points="sobol")
+    with pytest.raises(ValueError, match=rf"^'n'={48 * 2**31} needs {2**31} Sobol' points \(n/48\) but"):
+        sample_sphere(48 * 2**31, points="sobol")
 
 
 def test_sobol_warns_unless_power_of_two():

@@ -63,7 +63,7 @@ def prepare(
     get_map(method)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        source = BasePoints(points, rng, -(-n // count), per_point=count)
+        source = BasePoints(points, rng, -(-n // count), per_point=count, n=n)
     for warning in caught:
         warn_at_caller(str(warning.message), warning.category)
     basis = None if normal is None else frames.frame(normal)

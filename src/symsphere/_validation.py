@@ -147,10 +147,10 @@ def check_size(value: int, name: str, limit: int, what: str = "") -> int:
     return value
 
 
-def check_sobol_size(points: object, total: int, per_point: int = 1) -> None:
+def check_sobol_size(points: object, total: int, per_point: int = 1, *, n: int | None = None) -> None:
     """Raise ValueError if a Sobol' point set (by name or a ``scipy.stats.qmc.Sobol`` engine, counting the
     points it has already given) would need more than :data:`MAX_SOBOL_POINTS` points for *total* points;
-    the message is in terms of the caller's ``n`` (``n = total * per_point``).
+    the message is in terms of the caller's ``n`` (``total = ceil(n / per_point)``; default ``total * per_point``).
 
     Examples
     --------
@@ -170,11 +170,13 @@ def check_sobol_size(points: object, total: int, per_point: int = 1) -> None:
         return
     if used + total <= MAX_SOBOL_POINTS:
         return
-    name, per = ("n", f" (n/{per_point})") if per_point > 1 else ("m", "")
+    n = total * per_point if n is None else n
+    ratio = f"n/{per_point}" if n % per_point == 0 else f"ceil(n/{per_point})"
+    name, per = ("n", f" ({ratio})") if per_point > 1 else ("m", "")
     already = f" after the engine's {used}" if used else ""
     limit = (MAX_SOBOL_POINTS - used) * per_point
     raise ValueError(
-        f"'{name}'={total * per_point} needs {total} Sobol' points{per}{already} but the sequence has 2**30: "
+        f"'{name}'={n} needs {total} Sobol' points{per}{already} but the sequence has 2**30: "
         f"use {name} <= {limit}, or points='random' or 'halton'"
     )
 

@@ -109,6 +109,9 @@ or scipy.stats.qmc.QMCEngine
         count checked for Sobol' balance).
     per_point : int
         Outputs per point (48 or 24), only to phrase errors in terms of ``n``.
+    n : int, optional
+        The caller's number of outputs (``total = ceil(n / per_point)``), only for the
+        errors, which quote it as given; default ``total * per_point``.
 
     Examples
     --------
@@ -120,16 +123,19 @@ or scipy.stats.qmc.QMCEngine
     True
     """
 
-    def __init__(self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1) -> None:
+    def __init__(
+        self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1, n: int | None = None
+    ) -> None:
         self.total = check_count(total, "total")
         self._engine = check_points(points)
-        check_sobol_size(points, self.total, per_point)  # at the call, not when the last chunk is drawn
+        # n: the caller's count (ceil(n / per_point) = total), for the messages; default total * per_point.
+        check_sobol_size(points, self.total, per_point, n=n)  # at the call, not when the last chunk is drawn
         self._kind: str = "engine" if self._engine is not None else points
         self._side: int | None = None
         entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
         self.root_entropy = tuple(int(e) for e in entropy)
         if self._kind == "stratified":
-            self._side = _square_side(self.total, per_point)
+            self._side = _square_side(self.total, per_point, n)
         elif self._kind in ("sobol", "halton") or self._kind in _INTERLACED:
             from scipy.stats import qmc  # imported when needed: scipy.stats costs 0.3 s at start-up
 
@@ -333,15 +339,21 @@ def check_points(points: object) -> QMCEngine | None:
     )
 
 
-def _square_side(m: int, per_point: int) -> int:
+def _square_side(m: int, per_point: int, n: int | None) -> int:
     side = math.isqrt(m)
     if side * side != m:
         options = [c for c in (side * side, (side + 1) ** 2) if c > 0]
         if per_point > 1:
             sizes = " or ".join(f"n={per_point * c}" for c in options)
-            got = f"n={per_point * m} gives {m} (n/{per_point})"
+            n = per_point * m if n is None else n
+            got = f"n={n} gives {m} ({_per(n, per_point)})"
         else:
             sizes = " or ".join(str(c) for c in options)
             got = f"got {m}"
         raise ValueError(f"points='stratified' needs a square number of base points; {got}; use {sizes}")
     return side
+
+
+def _per(n: int, per_point: int) -> str:
+    """How *n* gives its number of base points, as the messages say it: ``n/48`` or ``ceil(n/48)``."""
+    return f"n/{per_point}" if n % per_point == 0 else f"ceil(n/{per_point})"

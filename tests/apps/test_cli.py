@@ -189,6 +189,7 @@ def test_integrate_prints_estimate_and_exact(capsys):
     assert "estimate" in out and "exact     14.5379897513" in out and "100 orbits" in out
 
 
+@pytest.mark.xdist_group("dask")  # local Dask clusters: with the other cluster tests (Makefile: --dist loadgroup)
 def test_integrate_on_local_cluster_is_identical(capsys):
     pytest.importorskip("distributed")
     args = ["integrate", "--integrand", "cap", "--n", str(48 * 4096 * 2), "--seed", "4"]
@@ -199,6 +200,7 @@ def test_integrate_on_local_cluster_is_identical(capsys):
     assert single == clustered and single
 
 
+@pytest.mark.xdist_group("dask")
 def test_integrate_to_tolerance_on_local_cluster_is_identical(capsys):
     """--rtol with --workers: the stages' blocks as tasks, the in-process result (the fused path)."""
     pytest.importorskip("distributed")
