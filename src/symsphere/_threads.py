@@ -74,7 +74,7 @@ def _executor() -> ThreadPoolExecutor:
     global _pool, _pool_pid
     with _pool_lock:
         if _pool is None or _pool_pid != os.getpid():
-            workers = max(1, numba.config.NUMBA_NUM_THREADS - 1)
+            workers = max(1, int(numba.config.NUMBA_NUM_THREADS) - 1)  # type: ignore[attr-defined]  # set at import by numba
             _pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="symsphere")
             _pool_pid = os.getpid()
         return _pool

@@ -20,7 +20,7 @@ from numba.core import event
 __all__ = ["compile_notice"]
 
 
-class _Notice(event.Listener):  # type: ignore[misc]  # numba is untyped
+class _Notice(event.Listener):
     def __init__(self, line: str, stream: TextIO, delay: float) -> None:
         self._line, self._stream, self._delay = line, stream, delay
         self._lock = threading.Lock()
@@ -75,9 +75,9 @@ def compile_notice(prog: str, stream: TextIO | None = None, delay: float = 0.5) 
     """
     line = f"{prog}: compiling numba kernels - first run after install, cached for next time ..."
     notice = _Notice(line, sys.stderr if stream is None else stream, delay)
-    event.register("numba:compile", notice)
+    event.register("numba:compile", notice)  # type: ignore[no-untyped-call]  # numba is untyped
     try:
         yield
     finally:
-        event.unregister("numba:compile", notice)
+        event.unregister("numba:compile", notice)  # type: ignore[no-untyped-call]
         notice.close()
