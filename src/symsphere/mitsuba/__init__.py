@@ -41,7 +41,14 @@ from ._warps import (
     triangle_to_square,
 )
 
+from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, SymspherePath, register
+
 __all__ = [
+    "SymspherePath",
+    "register",
+    "STRATEGIES",
+    "POINTS",
+    "GROUP_SIZES",
     "square_to_triangle",
     "square_to_triangle_pdf",
     "triangle_to_square",
@@ -57,3 +64,6 @@ __all__ = [
     "square_to_cosine_wedge_pdf",
     "cosine_wedge_to_square",
 ]
+
+if _mitsuba.variant() is not None and "scalar" not in _mitsuba.variant():
+    register()
