@@ -4,10 +4,10 @@
   (``square_to_triangle``, ``square_to_triangle_pdf``, ``triangle_to_square``), the orbit
   member and the fold, the whole-sphere/hemisphere bijection of :mod:`symsphere.square_warps`
   and the cosine wedge map, in Mitsuba's ``warp.h`` form; they run in every variant.
-- The integrator ``symsphere_path`` (:class:`SymspherePath`): Mitsuba's ``path`` estimator
+- The integrator ``symsphere_path`` (:func:`integrator_class`): Mitsuba's ``path`` estimator
   whose direction at Lambertian vertices comes from the chosen ``strategy``; registered with
-  Mitsuba by :func:`register` when this module is imported, for the variant set then (and
-  again by :func:`register` after another ``mi.set_variant``).
+  Mitsuba (:func:`register`) when this module is imported, for the variant set then and for
+  every variant set later (a Mitsuba variant callback).
 - The scene files shipped with the package (:func:`scene_path`, :data:`SCENES`).
 
 ``import symsphere`` never imports this module (nor Mitsuba).  See docs/rendering.md.
@@ -41,10 +41,10 @@ from ._warps import (
     triangle_to_square,
 )
 
-from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, SymspherePath, register
+from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, integrator_class, on_variant_change, register
 
 __all__ = [
-    "SymspherePath",
+    "integrator_class",
     "register",
     "STRATEGIES",
     "POINTS",
@@ -65,5 +65,6 @@ __all__ = [
     "cosine_wedge_to_square",
 ]
 
-if _mitsuba.variant() is not None and "scalar" not in _mitsuba.variant():
+if _mitsuba.variant() is not None:
     register()
+_mitsuba.detail.add_variant_callback(on_variant_change)  # and for every variant set later

@@ -45,7 +45,7 @@ from ..maps import METHODS
 from . import _random
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
-__all__ = ["STRATEGIES", "POINTS", "GROUP_SIZES", "SymspherePath", "register", "lambertian_codes"]
+__all__ = ["STRATEGIES", "POINTS", "GROUP_SIZES", "integrator_class", "register", "on_variant_change", "lambertian_codes"]
 
 STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
 POINTS = ("random", "sobol")
@@ -77,8 +77,9 @@ def lambertian_codes(bsdf: Any) -> int:
     return 0
 
 
-class SymspherePath(mi.SamplingIntegrator):
-    """The ``symsphere_path`` plugin (see the module docstring).
+class _PathMethods:
+    """The ``symsphere_path`` plugin (see the module docstring); its methods become a subclass of each
+    variant's ``mi.SamplingIntegrator`` (:func:`integrator_class`).
 
     Parameters (scene file or ``load_dict``): ``strategy`` ('bsdf', 'cosine', 'symmetric',
     'symmetric_cosine'; default 'symmetric'), ``points`` ('random', 'sobol'; default 'random'),
@@ -87,7 +88,7 @@ class SymspherePath(mi.SamplingIntegrator):
     """
 
     def __init__(self, props: Any) -> None:
-        super().__init__(props)
+        mi.SamplingIntegrator.__init__(self, props)  # the current variant's base (this class is a template)
         if not dr.is_jit_v(mi.Float):
             raise ValueError(
                 f"symsphere_path runs in Mitsuba's JIT variants (llvm_*, cuda_*), not in {mi.variant()!r}"
@@ -142,6 +143,8 @@ class SymspherePath(mi.SamplingIntegrator):
             wavefront = int(dr.prod(film_size)) * spp
             if wavefront > 2**32:
                 raise ValueError(f"spp x pixels = {wavefront} exceeds 2^32: use fewer samples per pixel")
+            if isinstance(seed, int):
+                seed = dr.opaque(mi.UInt32, seed)  # one kernel for every seed
             sampler.seed(seed, wavefront)
             film.prepare([])
 
@@ -163,7 +166,7 @@ class SymspherePath(mi.SamplingIntegrator):
                 time += sampler.next_1d() * sensor.shutter_open_time()
             wavelength_sample = sampler.next_1d() if mi.is_spectral else 0.5
             ray, ray_weight = sensor.sample_ray_differential(time, wavelength_sample, dr.fma(pos_f, scale, offset), aperture)
-            key = _random.pixel_key(mi.UInt64(mi.UInt32(seed)), pixel)
+            key = _random.pixel_key(mi.UInt64(seed), pixel)
             table = self._lambertian_table(scene) if self.strategy != "bsdf" else None
             spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table)
 
@@ -310,6 +313,30 @@ class SymspherePath(mi.SamplingIntegrator):
         return dr.select(valid_ray, result, 0.0), valid_ray
 
 
+_CLASSES: dict[str, type] = {}
+
+
+def integrator_class() -> type:
+    """The ``symsphere_path`` class of the current Mitsuba variant (a subclass of its ``mi.SamplingIntegrator``)."""
+    variant = mi.variant()
+    if variant is None:
+        raise RuntimeError("no Mitsuba variant is set: call mi.set_variant('llvm_ad_rgb') (or another) first")
+    if variant not in _CLASSES:
+        methods = {k: v for k, v in vars(_PathMethods).items() if k not in ("__dict__", "__weakref__")}
+        _CLASSES[variant] = type("SymspherePath", (mi.SamplingIntegrator,), methods)  # nanobind: one base only
+    return _CLASSES[variant]
+
+
 def register() -> None:
-    """Register ``symsphere_path`` with Mitsuba for the current variant (a JIT variant)."""
-    mi.register_integrator("symsphere_path", lambda props: SymspherePath(props))
+    """Register ``symsphere_path`` with Mitsuba for the current variant.
+
+    In a scalar or polarized variant the plugin is registered too, and loading it raises the
+    ValueError that says which variants it runs in.
+    """
+    mi.register_integrator("symsphere_path", lambda props: integrator_class()(props))
+
+
+def on_variant_change(old: str | None, new: str | None) -> None:
+    """Mitsuba's variant callback: register ``symsphere_path`` for every variant set after import."""
+    if new is not None:
+        register()
