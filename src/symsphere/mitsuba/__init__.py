@@ -41,11 +41,14 @@ from ._warps import (
     triangle_to_square,
 )
 
+from ._scenes import SCENES, scene_path
 from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, integrator_class, on_variant_change, register
 
 __all__ = [
     "integrator_class",
     "register",
+    "SCENES",
+    "scene_path",
     "STRATEGIES",
     "POINTS",
     "GROUP_SIZES",
