@@ -147,6 +147,7 @@ def quality(args, mi):
         ref = 0.5 * (a + b)
         own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
         ref_ldr = _ldr(ref)
+        strip = [ref]  # --images: the reference, then every case at the last budget, side by side
         cases = [Case(mi, name, "ours", s, p) for s, p in OURS] + [Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS]
         for case in cases:
             case.render(args.width, args.height, args.equal_spp, 0)  # compile
@@ -163,6 +164,7 @@ def quality(args, mi):
                 for seed in range(1, args.seeds + 1):
                     image, seconds, actual = case.render(args.width, args.height, spp, 100 + seed)
                     results[f"{budget:g}s"].append((_rel_mse(image, ref) - own, float(flip_evaluator.evaluate(ref_ldr, _ldr(image), "LDR", applyMagma=False)[1]), actual, seconds))
+            strip.append(image)
             row = {"scene": name, "case": case.label, "paths_per_s": paths_per_s, "reference_own_rel_mse": own}
             for key, values in results.items():
                 row[key] = {"rel_mse": float(np.mean([v[0] for v in values])), "flip": float(np.mean([v[1] for v in values])),
@@ -171,6 +173,11 @@ def quality(args, mi):
             cells = "  ".join(f"{k}: relMSE {v['rel_mse']:.4g} FLIP {v['flip']:.4f} ({v['spp']} spp, {v['seconds']:.2f} s)"
                               for k, v in row.items() if isinstance(v, dict))  # fmt: skip
             print(f"{name} {case.label:<40} {cells}", flush=True)
+        if args.images:
+            from symsphere.render import save_png
+
+            Path(args.images).mkdir(parents=True, exist_ok=True)
+            save_png(Path(args.images) / f"{name}.png", np.concatenate(strip, axis=1))
     return rows
 
 
@@ -189,6 +196,8 @@ def main(argv=None):
     parser.add_argument("--budgets", type=float, nargs="+", default=[1.0, 2.0, 4.0], help="quality: seconds (default 1 2 4)")
     parser.add_argument("--seeds", type=int, default=2, help="quality: seeds per measurement (default %(default)s)")
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    parser.add_argument("--images", metavar="DIR", help="quality: write DIR/<scene>.png, the reference and every case "
+                        "at the last budget side by side (in the order of the table)")  # fmt: skip
     args = parser.parse_args(argv)
     if args.spp % 24 or args.equal_spp % 24:
         parser.error("--spp and --equal-spp must be multiples of 24 (the symmetric strategies' group)")
