@@ -13,6 +13,10 @@ speed
     median); reported: the median seconds and paths/s, and the ratio of the medians to Mitsuba's
     ``path`` with the ``independent`` sampler, measured in the same rounds (targets: >= 0.95 for
     strategies bsdf and cosine, >= 0.9 for the symmetric ones).
+report
+    Markdown tables of a quality run's --json file: relMSE and FLIP at equal spp and relMSE·spp (equal
+    work: Mitsuba's samplers round the spp up), and the efficiency 1/(relMSE·seconds) at the last budget
+    with the seconds actually taken, each also as a ratio to the best of Mitsuba's samplers.
 quality
     A converged reference per scene (Mitsuba's ``path``, ``independent``, --ref-spp, in two independent
     halves whose difference estimates the reference's own relMSE, which is subtracted).  Every case
@@ -181,11 +185,35 @@ def quality(args, mi):
     return rows
 
 
+def report(record):
+    """Markdown tables of a quality run: per scene, every case at equal spp and at the last budget."""
+    lines = []
+    rows = record.get("quality", [])
+    budgets = [k for k in rows[0] if k.endswith("s") and isinstance(rows[0][k], dict) and k != "equal_spp"] if rows else []
+    last = budgets[-1] if budgets else None
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        mine = [r for r in rows if r["scene"] == scene]
+        work = {r["case"]: r["equal_spp"]["rel_mse"] * r["equal_spp"]["spp"] for r in mine}
+        eff = {r["case"]: 1.0 / (r[last]["rel_mse"] * r[last]["seconds"]) for r in mine}
+        best = max((c for c in eff if c.startswith("Mitsuba")), key=lambda c: eff[c])
+        best_work = min((c for c in work if c.startswith("Mitsuba")), key=lambda c: work[c])
+        lines += [f"**{scene}** (reference's own relMSE {mine[0]['reference_own_rel_mse']:.2g}, subtracted)", "",
+                  f"| case | relMSE (spp) | FLIP | relMSE·spp | × best Mitsuba | at {last}: relMSE (spp, s) | FLIP | efficiency 1/(relMSE·s) | × best Mitsuba |",
+                  "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+        for r in mine:
+            e, b = r["equal_spp"], r[last]
+            lines.append(f"| {r['case']} | {e['rel_mse']:.4g} ({e['spp']}) | {e['flip']:.4f} | {work[r['case']]:.3g} | "
+                         f"{work[best_work] / work[r['case']]:.2f} | {b['rel_mse']:.4g} ({b['spp']}, {b['seconds']:.2f}) | "
+                         f"{b['flip']:.4f} | {eff[r['case']]:.3g} | {eff[r['case']] / eff[best]:.2f} |")  # fmt: skip
+        lines += ["", f"(best Mitsuba sampler: at equal work {best_work.split(' · ')[-1]}, at {last} {best.split(' · ')[-1]})", ""]
+    return "\n".join(lines)
+
+
 def main(argv=None):
     import symsphere.mitsuba as sm
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("what", choices=("speed", "quality", "all"))
+    parser.add_argument("what", choices=("speed", "quality", "all", "report"), help="report: print the markdown tables of --json FILE")
     parser.add_argument("--scenes", nargs="+", default=list(sm.SCENES), choices=sm.SCENES)
     parser.add_argument("--width", type=int, default=256)
     parser.add_argument("--height", type=int, default=256)
@@ -201,6 +229,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if args.spp % 24 or args.equal_spp % 24:
         parser.error("--spp and --equal-spp must be multiples of 24 (the symmetric strategies' group)")
+    if args.what == "report":
+        print(report(json.loads(Path(args.json).read_text(encoding="utf-8"))))
+        return
     mi = _setup()
     record = {"cpu": cpu_name(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
               "mitsuba": mi.__version__}  # fmt: skip
