@@ -3,7 +3,8 @@
 The estimator restates Mitsuba's C++ ``path`` integrator (src/integrators/path.cpp; the primal part of
 its Python twin ``prb.py``): next-event estimation with MIS by the power heuristic, Russian roulette
 after ``rr_depth`` with survival ``min(max(throughput) eta^2, 0.95)``, ``max_depth`` (-1: unbounded)
-and ``hide_emitters`` as Mitsuba defines them.  Only the direction sampled at a Lambertian vertex
+and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through area emitters,
+``skip_area_emitters``, as Mitsuba 3.9's ``path``).  Only the direction sampled at a Lambertian vertex
 (Mitsuba's ``diffuse``, alone or as both sides of ``twosided``) depends on ``strategy``:
 
 ``bsdf``
@@ -259,6 +260,11 @@ class _PathMethods:
 
         while active:
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
+            if dr.hint(self.hide_emitters, mode="scalar"):  # Mitsuba's: the camera ray passes through area emitters
+                skip = (depth == 0) & si.is_valid() & (si.shape.emitter() != None)  # noqa: E711 - a Dr.Jit comparison
+                ray_skip = si.spawn_ray(ray.d)
+                after = self.skip_area_emitters(scene, ray_skip, True, skip)
+                si = dr.select(skip, after.compute_surface_interaction(ray_skip, mi.RayFlags.All, skip), si)
 
             # direct emission, weighted against the previous vertex's emitter sampling
             ds = mi.DirectionSample3f(scene, si=si, ref=prev_si)
