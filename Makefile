@@ -1,7 +1,7 @@
 # Two commands do all the set-up on a fresh machine (Python >= 3.11 with pip and venv):
 #   make demo   install into .venv, then sample, test uniformity and write symsphere-demo/report.md
-#   make test   install into .venv (with the test extras), then run the whole test suite in parallel
-#               (pytest-xdist, one worker per core; the 20 slowest tests are listed at the end)
+#   make test   install into .venv (with the test extras, and Mitsuba 3: the extra mitsuba), then run the whole test
+#               suite in parallel (pytest-xdist, one worker per core; the 20 slowest tests are listed at the end)
 #   make docs   install the docs extra too, then build the HTML docs (docs/_build/html; warnings are errors)
 PYTHON ?= python3
 VENV := .venv
@@ -9,7 +9,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: demo test bench docs clean
+.PHONY: demo test mitsuba-setup bench docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -23,8 +23,23 @@ demo: $(STAMP)
 # -n auto: one worker per core; --dist loadgroup: the tests marked xdist_group("dask") (each starts a local
 # Dask cluster of worker processes) run on one worker, one after another.  A single file runs serially as
 # before: .venv/bin/python -m pytest tests/test_x.py
-test: $(STAMP)
+test: $(STAMP) mitsuba-setup
 	$(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
+
+# The Mitsuba 3 tests (tests/mitsuba) need the extra "mitsuba" and, for the LLVM variants, libLLVM >= 16
+# (Debian: libllvm19; installed here as root with apt).  Without them the tests skip with the reason;
+# .ci/run sets SYMSPHERE_REQUIRE_MITSUBA=1, which makes a missing Mitsuba an error.
+mitsuba-setup: $(STAMP)
+	@$(BIN)/python -c "import mitsuba, drjit" 2>/dev/null || $(BIN)/python -m pip install --quiet -e ".[mitsuba]" \
+		|| echo "test: could not install the extra 'mitsuba'; tests/mitsuba will be skipped"
+	@if $(BIN)/python benchmarks/bench_sample.py --find-llvm >/dev/null; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "test: installing libllvm19 for Mitsuba's LLVM backend (apt-get)"; \
+		(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19) \
+			|| echo "test: apt-get install libllvm19 failed; tests/mitsuba will be skipped"; \
+	else \
+		echo "test: for tests/mitsuba run 'sudo apt-get install libllvm19' (or set DRJIT_LIBLLVM_PATH to a libLLVM >= 16)"; \
+	fi
 
 # make bench: the speed benchmarks (docs/benchmarks.md).  Mitsuba 3 (the optional extra "bench") is
 # a peer in the comparison; drjit 1.5 needs LLVM >= 16 (Debian: libllvm19).  Both are optional: if

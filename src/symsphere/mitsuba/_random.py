@@ -1,0 +1,106 @@
+"""Counter-based random numbers and Owen-scrambled Sobol' points in Dr.Jit, for ``symsphere_path``.
+
+The Dr.Jit form of :mod:`symsphere.render._random`, for JIT variants (``mi.UInt64`` / ``mi.UInt32``
+arrays; wrap-around arithmetic): splitmix64's finaliser :func:`mix64` (Steele, Lea & Flood 2014),
+the per-pixel key :func:`pixel_key`, Lemire's :func:`below`, and the point ``index`` of the
+Owen-scrambled, index-shuffled 2D Sobol' sequence :func:`owen_sobol2` (Burley 2020: reverse the
+bits, Laine-Karras permutation, reverse back), in the reference form the renderer's table-driven
+version is pinned to::
+
+    i = nested_uniform_scramble(index, s0);  x, y = sobol2(i)
+    nested_uniform_scramble(x, s1), nested_uniform_scramble(y, s2)
+
+with the seeds s0, s1, s2 taken from the 64-bit key as the renderer takes them.  The constants are
+the renderer's (restated: they are private there); tests/mitsuba/test_integrator.py checks these
+functions bit for bit against :mod:`symsphere.render._random`.  Floats are the top 24 bits (float32
+has 24), in [0, 1).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mitsuba as mi
+
+__all__ = ["GOLDEN", "ODD", "mix64", "pixel_key", "below", "u01", "owen_sobol2", "fraction"]
+
+GOLDEN = 0x9E3779B97F4A7C15
+_MIX1 = 0xBF58476D1CE4E5B9
+_MIX2 = 0x94D049BB133111EB
+ODD = 0xD6E8FEB86659FD93
+_LK = (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6)  # Laine-Karras constants (Burley 2020, listing 2)
+_M32 = 0xFFFFFFFF
+
+
+def _pascal() -> list[int]:
+    # The second Sobol' dimension: direction numbers v_i = v_{i-1} ^ (v_{i-1} >> 1), v_0 = 2^31
+    v = [1 << 31]
+    for _ in range(31):
+        v.append(v[-1] ^ (v[-1] >> 1))
+    return v
+
+
+_SOBOL2 = _pascal()
+
+
+def mix64(z: Any) -> Any:
+    """splitmix64's finaliser (``render._random.mix64``) on a UInt64 array."""
+    z = (z ^ (z >> 30)) * _MIX1
+    z = (z ^ (z >> 27)) * _MIX2
+    return z ^ (z >> 31)
+
+
+def pixel_key(seed: Any, pixel: Any) -> Any:
+    """``render._random.pixel_key``: the key of one pixel (UInt64)."""
+    seed = mi.UInt64(seed)
+    return mix64(mix64(seed + GOLDEN) ^ (mi.UInt64(pixel) * GOLDEN + 1))
+
+
+def below(bits: Any, n: int) -> Any:
+    """``render._random.below``: a UInt64 to a UInt32 in 0..n-1 (multiply-shift on the top 32 bits)."""
+    return mi.UInt32(((bits >> 32) * n) >> 32)
+
+
+def u01(bits: Any) -> Any:
+    """A UInt64 to a Float in [0, 1): its top 24 bits."""
+    return mi.Float(mi.UInt32(bits >> 40)) * (2.0**-24)
+
+
+def _reverse32(x: Any) -> Any:
+    x = ((x >> 1) & 0x55555555) | ((x & 0x55555555) << 1)
+    x = ((x >> 2) & 0x33333333) | ((x & 0x33333333) << 2)
+    x = ((x >> 4) & 0x0F0F0F0F) | ((x & 0x0F0F0F0F) << 4)
+    x = ((x >> 8) & 0x00FF00FF) | ((x & 0x00FF00FF) << 8)
+    return (x >> 16) | (x << 16)
+
+
+def _laine_karras(x: Any, seed: Any) -> Any:
+    x = x + seed
+    for c in _LK:
+        x = x ^ (x * c)
+    return x
+
+
+def _scramble(x: Any, seed: Any) -> Any:
+    """``render._random.nested_uniform_scramble`` of a UInt32 fraction."""
+    return _reverse32(_laine_karras(_reverse32(x), seed))
+
+
+def owen_sobol2(index: Any, key: Any) -> tuple[Any, Any]:
+    """Point *index* (UInt32) of the Owen-scrambled, index-shuffled 2D Sobol' sequence of the UInt64 *key*.
+
+    Returns the two UInt32 fractions (``render._random.owen_sobol2`` returns them divided by 2^32).
+    """
+    h1 = mix64(key ^ GOLDEN)
+    h2 = mix64(key ^ _MIX1)
+    i = _scramble(mi.UInt32(index), mi.UInt32(h1 & _M32))
+    x = _reverse32(i)  # van der Corput
+    y = mi.UInt32(0)
+    for bit, v in enumerate(_SOBOL2):
+        y = y ^ ((mi.UInt32(0) - ((i >> bit) & 1)) & v)  # xor of v_j over the set bits j of i
+    return _scramble(x, mi.UInt32(h1 >> 32)), _scramble(y, mi.UInt32(h2 & _M32))
+
+
+def fraction(bits32: Any) -> Any:
+    """A UInt32 fraction to a Float in [0, 1): its top 24 bits."""
+    return mi.Float(bits32 >> 8) * (2.0**-24)

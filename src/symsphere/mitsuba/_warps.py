@@ -1,0 +1,377 @@
+"""The scheme's maps in Dr.Jit: T0 maps, orbit member and fold, the square warps, the cosine wedge.
+
+Each function restates one numpy function of the library with Dr.Jit operations, so that it
+runs in every Mitsuba variant: on ``mi.Float`` / ``mi.Point2f`` / ``mi.Vector3f`` of a JIT
+variant (``llvm_*``, ``cuda_*``: traced into the caller's kernel) and on Python floats in a
+``scalar_*`` variant.  The numpy function each one mirrors is named in its docstring; the tests
+(tests/mitsuba/test_warps.py) compare them to float32 rounding and run Mitsuba's own chi^2 test.
+
+The triples are named as in Mitsuba's ``warp.h``: ``square_to_X``, ``square_to_X_pdf``,
+``X_to_square``.  ``method`` is a Python string (a trace-time constant), one of
+:data:`symsphere.maps.METHODS`.  Like the numpy originals these trust their inputs: ``uv`` in
+[0, 1]^2, unit directions; outputs are clamped into their domain, so u, v in {0, 1} give no NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..maps import METHODS
+from ..square_warps import strip_order
+from ..symmetry import SIGNS, SOURCES
+from ..symmetry import fold as numpy_fold
+from .._validation import check_choice
+
+__all__ = [
+    "square_to_triangle",
+    "square_to_triangle_pdf",
+    "triangle_to_square",
+    "orbit_member",
+    "fold",
+    "square_to_sphere",
+    "square_to_sphere_pdf",
+    "sphere_to_square",
+    "square_to_hemisphere",
+    "square_to_hemisphere_pdf",
+    "hemisphere_to_square",
+    "square_to_cosine_wedge",
+    "square_to_cosine_wedge_pdf",
+    "cosine_wedge_to_square",
+    "triangle_point",
+    "triangle_density",
+    "cosine_wedge_point",
+]
+
+_SQRT2 = math.sqrt(2.0)
+_PI = math.pi
+
+
+# --- elementwise pieces (x, y, z as separate Floats) ------------------------------------------
+
+
+def _clip(x: Any, lo: float, hi: float) -> Any:
+    return dr.minimum(dr.maximum(x, lo), hi)
+
+
+def _clamped_into_t0(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+    # maps._clamped_into_t0
+    x = dr.minimum(x, z)
+    return x, dr.minimum(dr.maximum(y, 0.0), x), z
+
+
+def _in_triangle(x: Any, y: Any, z: Any) -> Any:
+    return (z >= x) & (x >= y) & (y >= 0.0)
+
+
+def _one_minus_cos_theta_max(cos_phi: Any) -> Any:
+    # maps._one_minus_cos_theta_max: 1 - c / sqrt(1 + c^2) = 1 / (r (r + c)) without cancellation
+    r = dr.sqrt(1.0 + cos_phi * cos_phi)
+    return dr.rcp(r * (r + cos_phi))
+
+
+def _equal_area_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
+    # maps._equal_area_point (Arvo's triangle sampling on T0), with Dr.Jit's sine for maps._sin_small
+    sin_s = dr.sin(u * (_PI / 12))
+    a = _SQRT2 * sin_s
+    b = _SQRT2 * dr.sqrt(dr.maximum(1.0 - sin_s * sin_s, 0.0)) - 1.0
+    inv_norm = dr.rsqrt(a * a + b * b)
+    cos_phi, sin_phi = b * inv_norm, a * inv_norm
+    w = v * _one_minus_cos_theta_max(cos_phi)
+    sin_theta = dr.sqrt(dr.maximum(w * (2.0 - w), 0.0))
+    return _clamped_into_t0(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - w)
+
+
+def _equal_area_inverse(x: Any, y: Any, z: Any) -> tuple[Any, Any]:
+    # maps._equal_area_inverse
+    phi = _clip(dr.atan2(y, x), 0.0, _PI / 4)
+    u = _clip((phi - dr.asin(dr.sin(phi) / _SQRT2)) * (12 / _PI), 0.0, 1.0)
+    one_minus_cos = (x * x + y * y) / (1.0 + z)
+    v = _clip(one_minus_cos / _one_minus_cos_theta_max(dr.cos(phi)), 0.0, 1.0)
+    return u, v
+
+
+def _paper1_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
+    # maps._paper1_point: phi = u pi/4, theta = arctan(v / cos phi)
+    phi = u * (_PI / 4)
+    sin_p, cos_p = dr.sincos(phi)
+    sin_t, cos_t = dr.sincos(dr.atan(v / cos_p))
+    return _clamped_into_t0(cos_p * sin_t, sin_p * sin_t, cos_t)
+
+
+def _paper2_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
+    # maps._paper2_point: phi = u pi/4, theta = v pi/4, P = N'_x x N'_y / |N'_x x N'_y|
+    sin_p, cos_p = dr.sincos(u * (_PI / 4))
+    sin_t, cos_t = dr.sincos(v * (_PI / 4))
+    inv_norm = dr.rsqrt(sin_t * sin_t + cos_t * cos_t * cos_p * cos_p)
+    return _clamped_into_t0(sin_t * cos_p * inv_norm, sin_t * sin_p * inv_norm, cos_t * cos_p * inv_norm)
+
+
+def _vertex_singular_density(x: Any, y: Any, inside: Any, constant: float, smooth_factor: Any) -> Any:
+    # maps._vertex_singular_density: constant x / (smooth_factor (x^2 + y^2)) on T0, +inf at the vertex
+    r = dr.sqrt(x * x + y * y)
+    at_vertex = r == 0.0
+    cos_phi = dr.select(at_vertex, 1.0, x / dr.select(at_vertex, 1.0, r))
+    value = dr.select(at_vertex, math.inf, constant * cos_phi / (smooth_factor * dr.select(at_vertex, 1.0, r)))
+    return dr.select(inside, value, 0.0)
+
+
+def _azimuth_u(x: Any, y: Any) -> Any:
+    # maps._azimuth_to_u
+    return _clip(dr.atan2(y, x) * (4 / _PI), 0.0, 1.0)
+
+
+def triangle_point(u: Any, v: Any, method: str = "equal_area") -> tuple[Any, Any, Any]:
+    """Elementwise forward map of the square onto T0 (x, y, z): ``TriangleMap.point`` of :mod:`symsphere.maps`."""
+    if method == "equal_area":
+        return _equal_area_point(u, v)
+    if method == "paper1":
+        return _paper1_point(u, v)
+    return _paper2_point(u, v)
+
+
+def triangle_density(x: Any, y: Any, z: Any, method: str = "equal_area") -> Any:
+    """Elementwise solid-angle density on T0: ``TriangleMap.density`` of :mod:`symsphere.maps` (0 outside)."""
+    inside = _in_triangle(x, y, z)
+    if method == "equal_area":
+        return dr.select(inside, 12 / _PI, 0.0)
+    if method == "paper1":  # maps._paper1_density: 4 x / (pi z^2 (x^2 + y^2))
+        return _vertex_singular_density(x, y, inside, 4.0, _PI * z * z)
+    return _vertex_singular_density(x, y, inside, 16.0, _PI**2 * (x * x + z * z))  # maps._paper2_density
+
+
+def _triangle_uv(x: Any, y: Any, z: Any, method: str) -> tuple[Any, Any]:
+    if method == "equal_area":
+        return _equal_area_inverse(x, y, z)
+    if method == "paper1":  # maps._paper1_inverse
+        return _azimuth_u(x, y), _clip(x / z, 0.0, 1.0)
+    return _azimuth_u(x, y), _clip(dr.atan2(x, z) * (4 / _PI), 0.0, 1.0)  # maps._paper2_inverse
+
+
+def cosine_wedge_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
+    """Elementwise cosine-weighted map onto the wedge W: :func:`symsphere.wedge.cosine_wedge_point`."""
+    r = dr.sqrt(u)
+    sin_p, cos_p = dr.sincos(v * (_PI / 4))
+    x = r * cos_p
+    y = dr.minimum(dr.maximum(r * sin_p, 0.0), x)
+    return x, y, dr.sqrt(dr.maximum(1.0 - u, 0.0))
+
+
+# --- orbit member and fold ------------------------------------------------------------------------
+
+# orbit_member restates symmetry.SOURCES / SIGNS (``(p @ SPHERE_MAPS[k])[j] == SIGNS[k, j] p[SOURCES[k, j]]``)
+# as selects, using their structure (k = 24 half + 4 i + j: the source coordinates depend on the row i, the
+# first two signs on the column j, the third on the half), checked here on the tables themselves.
+_K = np.arange(48)
+assert np.array_equal(SOURCES, SOURCES[4 * ((_K % 24) // 4)])
+assert np.array_equal(SIGNS[:, :2], SIGNS[_K % 4, :2])
+assert np.array_equal(SIGNS[:, 2], SIGNS[24 * (_K >= 24), 2])
+_ROW_SOURCES = [tuple(int(s) for s in SOURCES[4 * i]) for i in range(6)]
+_COLUMN_SIGNS = [tuple(float(s) for s in SIGNS[j, :2]) for j in range(4)]
+
+
+def _chain(index: Any, values: list[Any]) -> Any:
+    """values[index] by a chain of selects (index a UInt32 array or an int)."""
+    if isinstance(index, (int, np.integer)):
+        return values[int(index)]
+    result = values[-1]
+    for i in range(len(values) - 2, -1, -1):
+        result = dr.select(index == i, values[i], result)
+    return result
+
+
+def orbit_member(x: Any, y: Any, z: Any, k: Any) -> tuple[Any, Any, Any]:
+    """Image k (0..47) of (x, y, z): ``(x, y, z) @ SPHERE_MAPS[k]`` (:func:`symsphere.orbit`, one member)."""
+    half = k >= 24
+    rest = dr.select(half, k - 24, k) if not isinstance(k, (int, np.integer)) else (k - 24 if k >= 24 else k)
+    row = rest // 4
+    column = rest % 4
+    base = (x, y, z)
+    out = [_chain(row, [base[_ROW_SOURCES[i][c]] for i in range(6)]) for c in range(3)]
+    sx = _chain(column, [s[0] for s in _COLUMN_SIGNS])
+    sy = _chain(column, [s[1] for s in _COLUMN_SIGNS])
+    sz = dr.select(half, float(SIGNS[24, 2]), float(SIGNS[0, 2]))
+    return sx * out[0], sy * out[1], sz * out[2]
+
+
+def _sign(value: Any) -> Any:
+    return dr.select(value > 0, 1, dr.select(value < 0, -1, 0))
+
+
+def _weak_order(a: Any, b: Any) -> Any:
+    return dr.select(a > b, 1, dr.select(a < b, -1, 0))
+
+
+def _fold_key(x: Any, y: Any, z: Any) -> Any:
+    """The sign pattern of d and the weak order of |d| as one key < 729 (symmetry's fold key)."""
+    ax, ay, az = dr.abs(x), dr.abs(y), dr.abs(z)
+    key = 0
+    for part in (_sign(x), _sign(y), _sign(z), _weak_order(ax, ay), _weak_order(ax, az), _weak_order(ay, az)):
+        key = key * 3 + (part + 1)
+    return key
+
+
+def _fold_table() -> np.ndarray:
+    # Every key is realised on the grid {-3, ..., 3}^3 (as in symmetry): its k is what the public
+    # symmetry.fold returns there (the lowest table index whose image is exact).
+    grid = np.array(np.meshgrid(*[np.arange(-3, 4.0)] * 3, indexing="ij")).reshape(3, -1).T
+    k, _ = numpy_fold(grid)
+    sign = np.sign(grid).astype(np.int64)
+    a = np.abs(grid)
+    keys = np.zeros(len(grid), dtype=np.int64)
+    for part in (sign[:, 0], sign[:, 1], sign[:, 2], np.sign(a[:, 0] - a[:, 1]), np.sign(a[:, 0] - a[:, 2]),
+                 np.sign(a[:, 1] - a[:, 2])):  # fmt: skip
+        keys = keys * 3 + (part.astype(np.int64) + 1)
+    table = np.zeros(3**6, dtype=np.uint32)
+    table[keys] = k
+    return table
+
+
+_FOLD_TABLE = _fold_table()
+
+
+def _lookup(table: np.ndarray, index: Any) -> Any:
+    """table[index] for an int (scalar variants) or a UInt32 array (JIT variants: a gather)."""
+    if isinstance(index, (int, np.integer)):
+        return int(table[int(index)])
+    index_type = type(index)
+    uint = dr.uint32_array_t(index_type)
+    return dr.gather(uint, uint(table.astype(np.uint32)), uint(index))
+
+
+def _base(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+    """(middle, smallest, largest) of |d|: the preimage in T0 (symmetry._base), by a min/max network."""
+    a, b, c = dr.abs(x), dr.abs(y), dr.abs(z)
+    lo_ab, hi_ab = dr.minimum(a, b), dr.maximum(a, b)
+    largest = dr.maximum(hi_ab, c)
+    smallest = dr.minimum(lo_ab, c)
+    middle = dr.maximum(lo_ab, dr.minimum(hi_ab, c))
+    return middle, smallest, largest
+
+
+def fold(d: Any) -> tuple[Any, Any]:
+    """Sub-domain index k and preimage in T0 of directions: :func:`symsphere.fold`.
+
+    Returns ``(k, base)`` with ``orbit_member(base, k) == d`` exactly (the lowest k on boundaries).
+    """
+    key = _fold_key(d.x, d.y, d.z)
+    if not isinstance(key, int):
+        key = dr.uint32_array_t(type(d.x))(key)
+    return _lookup(_FOLD_TABLE, key), _vector(*_base(d.x, d.y, d.z))
+
+
+# --- the public triples (Mitsuba's warp.h form) ------------------------------------------------------
+
+
+def _vector(x: Any, y: Any, z: Any) -> Any:
+    return mi.Vector3f(x, y, z)
+
+
+def _method(method: str) -> str:
+    return check_choice(method, "method", METHODS)
+
+
+def square_to_triangle(sample: Any, method: str = "equal_area") -> Any:
+    """Points of the unit square to directions in T0: :func:`symsphere.square_to_triangle`."""
+    return _vector(*triangle_point(sample.x, sample.y, _method(method)))
+
+
+def square_to_triangle_pdf(v: Any, method: str = "equal_area") -> Any:
+    """Solid-angle density of :func:`square_to_triangle` (0 outside T0): :func:`symsphere.triangle_pdf`."""
+    return triangle_density(v.x, v.y, v.z, _method(method))
+
+
+def triangle_to_square(v: Any, method: str = "equal_area") -> Any:
+    """Inverse of :func:`square_to_triangle`: :func:`symsphere.triangle_to_square`."""
+    return mi.Point2f(*_triangle_uv(v.x, v.y, v.z, _method(method)))
+
+
+def _strip_forward(sample: Any, method: str, count: int) -> Any:
+    # square_warps._forward: strip j = floor(count u) onto triangle strip_order[j], odd strips mirrored
+    method = _method(method)
+    t = sample.x * count
+    j_float = dr.minimum(dr.floor(t), count - 1)
+    local = t - j_float
+    if isinstance(t, float):
+        j: Any = int(j_float)
+        odd = j % 2 == 1
+    else:
+        j = dr.uint32_array_t(type(t))(j_float)
+        odd = (j & 1) == 1
+    local_u = _clip(dr.select(odd, 1.0 - local, local), 0.0, 1.0)
+    bx, by, bz = triangle_point(local_u, sample.y, method)
+    k = _lookup(strip_order("sphere" if count == 48 else "hemisphere"), j)
+    return _vector(*orbit_member(bx, by, bz, k))
+
+
+def _strip_pdf(v: Any, method: str, count: int) -> Any:
+    # sampling.sphere_pdf / hemisphere_pdf: triangle_pdf(fold(d)) / count, 0 below the equator for 24
+    bx, by, bz = _base(v.x, v.y, v.z)
+    density = triangle_density(bx, by, bz, _method(method)) / count
+    if count == 24:
+        density = dr.select(v.z >= 0.0, density, 0.0)
+    return density
+
+
+def _strip_inverse(v: Any, method: str, count: int) -> Any:
+    # square_warps._inverse: fold, invert the map, put u' back into the strip of triangle k
+    method = _method(method)
+    k, base = fold(v)
+    lu, lv = _triangle_uv(base.x, base.y, base.z, method)
+    strips = np.argsort(strip_order("sphere" if count == 48 else "hemisphere")).astype(np.uint32)
+    j = _lookup(strips, k)
+    lu = _clip(lu, 0.0, 1.0)
+    odd = (j % 2 == 1) if isinstance(j, int) else ((j & 1) == 1)
+    j_float = float(j) if isinstance(j, int) else type(v.x)(j)
+    return mi.Point2f((j_float + dr.select(odd, 1.0 - lu, lu)) / count, lv)
+
+
+def square_to_sphere(sample: Any, method: str = "equal_area") -> Any:
+    """The whole-sphere bijection through the 48 triangles: :func:`symsphere.square_warps.square_to_sphere`."""
+    return _strip_forward(sample, method, 48)
+
+
+def square_to_sphere_pdf(v: Any, method: str = "equal_area") -> Any:
+    """Density of :func:`square_to_sphere`: :func:`symsphere.square_warps.square_to_sphere_pdf`."""
+    return _strip_pdf(v, method, 48)
+
+
+def sphere_to_square(v: Any, method: str = "equal_area") -> Any:
+    """Inverse of :func:`square_to_sphere`: :func:`symsphere.square_warps.sphere_to_square`."""
+    return _strip_inverse(v, method, 48)
+
+
+def square_to_hemisphere(sample: Any, method: str = "equal_area") -> Any:
+    """The hemisphere bijection through the 24 triangles: :func:`symsphere.square_warps.square_to_hemisphere`."""
+    return _strip_forward(sample, method, 24)
+
+
+def square_to_hemisphere_pdf(v: Any, method: str = "equal_area") -> Any:
+    """Density of :func:`square_to_hemisphere`: :func:`symsphere.square_warps.square_to_hemisphere_pdf`."""
+    return _strip_pdf(v, method, 24)
+
+
+def hemisphere_to_square(v: Any, method: str = "equal_area") -> Any:
+    """Inverse of :func:`square_to_hemisphere`: :func:`symsphere.square_warps.hemisphere_to_square`."""
+    return _strip_inverse(v, method, 24)
+
+
+def square_to_cosine_wedge(sample: Any) -> Any:
+    """Cosine-weighted map onto the wedge W: :func:`symsphere.wedge.square_to_cosine_wedge`."""
+    return _vector(*cosine_wedge_point(sample.x, sample.y))
+
+
+def square_to_cosine_wedge_pdf(v: Any) -> Any:
+    """``8 z / pi`` inside W = {x >= y >= 0, z >= 0}, else 0: :func:`symsphere.wedge.cosine_wedge_pdf`."""
+    inside = (v.x >= v.y) & (v.y >= 0.0) & (v.z >= 0.0)
+    return dr.select(inside, (8 / _PI) * dr.maximum(v.z, 0.0), 0.0)
+
+
+def cosine_wedge_to_square(v: Any) -> Any:
+    """Inverse of :func:`square_to_cosine_wedge`: :func:`symsphere.wedge.cosine_wedge_to_square`."""
+    u = dr.minimum(v.x * v.x + v.y * v.y, 1.0)
+    return mi.Point2f(u, _clip(dr.atan2(v.y, v.x) * (4 / _PI), 0.0, 1.0))
