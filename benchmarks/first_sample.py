@@ -153,7 +153,7 @@ for timestamp, ev in recorder.buffer:
     if ev.is_start:
         starts[key] = timestamp
     elif key in starts:
-        kernels[" ".join(key)] = timestamp - starts.pop(key)
+        kernels[" | ".join(key)] = timestamp - starts.pop(key)
 print(json.dumps({"steps": steps, "kernels": kernels}))
 """
 
@@ -210,7 +210,7 @@ def cold_start(runs, json_path=None):
     print("\nKernels compiled by the steps in one process (numba's compile events; wall s, median):\n")
     print("| kernel (closure constants) | argument types | s |\n|---|---|---:|")
     for label, values in sorted(kernels.items(), key=lambda kv: -statistics.median(kv[1])):
-        name, _, types = label.partition(" ")
+        name, _, types = label.partition(" | ")
         print(f"| `{name}` | `{types[:90]}` | {statistics.median(values):.2f} |")
     if json_path:
         with open(json_path, "w", encoding="utf-8") as handle:
