@@ -7,9 +7,12 @@ boundary; private helpers trust their inputs.
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
 import os
+import secrets
+import stat
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar, cast, overload
@@ -620,3 +623,90 @@ def check_seed(seed: int, name: str = "seed") -> int:
 
 
 __all__ += ["check_seed"]  # appended here, not in the list above, to keep this addition in one place
+
+
+# ---------------------------------------------------------------------------
+# Output files: what may be written, checked before any work (issue 22)
+# ---------------------------------------------------------------------------
+
+TEMPORARY_KINDS = ("tmp", "old", "probe")
+"""The last suffix of the hidden files an atomic write makes beside its target, ``.NAME.<8 hex>.KIND``:
+the temporary (``tmp``), the previous version kept during the renames of a set (``old``) and the
+file that :func:`check_output_path` creates and removes at once (``probe``)."""
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def file_kind(mode: int) -> str:
+    """What a file of the ``st_mode`` *mode* is, in words: ``'a regular file'``, ``'a FIFO (named pipe)'``, ...
+
+    Examples
+    --------
+    >>> import stat
+    >>> from symsphere._validation import file_kind
+    >>> file_kind(stat.S_IFCHR | 0o666)
+    'a character device'
+    """
+    if stat.S_ISREG(mode):
+        return "a regular file"
+    for test, words in _KINDS:
+        if test(mode):
+            return words
+    return "not a regular file"
+
+
+def check_output_path(path: object, name: str = "path", *, probe: bool = True) -> Path:
+    """*path* as a Path that an atomic write may replace, checked before any work is done.
+
+    The target, followed through symbolic links, must be absent or a regular file (a device, a
+    FIFO, a socket or a directory is never replaced, nor written into), and its directory must
+    exist; with *probe*, a hidden file ``.NAME.<hex>.probe`` is created in it and removed at once,
+    so that a directory that takes no new files (read-only, ``/proc``, no permission) fails now,
+    not after minutes of work.  Errors name *path* as the user gave it: TypeError or ValueError
+    for a bad name (see :func:`check_path`), else an ``OSError`` whose ``filename`` is *path*.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_output_path
+    >>> check_output_path("/dev/null")
+    Traceback (most recent call last):
+        ...
+    OSError: [Errno 22] is a character device, not a regular file: only regular files are replaced: '/dev/null'
+    """
+    given = check_path(path, name)
+    target = Path(os.path.realpath(given))  # through symbolic links, as the writer goes
+    try:
+        mode = os.stat(target).st_mode
+    except (FileNotFoundError, NotADirectoryError):  # absent, or a "directory" that is a file: below
+        mode = None
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, str(given)) from None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise IsADirectoryError(errno.EISDIR, "is a directory, not a file", str(given))
+    if mode is not None and not stat.S_ISREG(mode):
+        shown = f" ({target})" if str(target) != str(given) else ""
+        raise OSError(
+            errno.EINVAL, f"is {file_kind(mode)}{shown}, not a regular file: only regular files are replaced", str(given)
+        )
+    folder = target.parent
+    if not folder.exists():
+        raise FileNotFoundError(errno.ENOENT, f"its directory {str(given.parent)!r} does not exist", str(given))
+    if not folder.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, f"{str(given.parent)!r} is not a directory", str(given))
+    if probe:
+        trial = folder / f".{target.name}.{secrets.token_hex(4)}.probe"
+        try:
+            os.close(os.open(trial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot create a file in {str(folder)!r} ({exc.strerror})", str(given)) from None
+        os.unlink(trial)
+    return given
+
+
+__all__ += ["TEMPORARY_KINDS", "check_output_path", "file_kind"]
