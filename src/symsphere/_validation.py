@@ -109,6 +109,11 @@ MAX_TASKS = 100_000
 MAX_PATHS = 2**62
 """Largest number of camera paths (width * height * spp) of one render: path indices are int64."""
 
+MAX_PIXELS = 2**28
+"""Largest image (width * height pixels) of one render: 16384 x 16384.  The renderer holds the image in
+float64 RGB several times over (the sum, a pass, the mean: 24 bytes a pixel each, 6 GiB each at the
+limit); ``width = height = 2**31`` used to reach numpy's "array is too big", naming neither."""
+
 MAX_SH_DEGREE = 85
 """Largest degree l of a real spherical harmonic (:mod:`symsphere.harmonics`): its unnormalised Legendre
 recurrence and normalisation (factorials up to (2l)!) stay within float64 up to l = 85, accurate to 4e-14
@@ -405,7 +410,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
 
 
 __all__ += ["MAX_BINS", "MAX_COUNT", "MAX_DIMENSIONS", "MAX_QUADRATURE_ORDER", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
-__all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
+__all__ += ["MAX_PIXELS", "MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
 __all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
 
@@ -690,7 +695,7 @@ def check_output_path(path: object, name: str = "path", *, probe: bool = True) -
     if mode is not None and stat.S_ISDIR(mode):
         raise IsADirectoryError(errno.EISDIR, "is a directory, not a file", str(given))
     if mode is not None and not stat.S_ISREG(mode):
-        shown = f" ({target})" if str(target) != str(given) else ""
+        shown = f" ({target})" if str(target) != os.path.abspath(given) else ""  # reached through a link
         raise OSError(
             errno.EINVAL, f"is {file_kind(mode)}{shown}, not a regular file: only regular files are replaced", str(given)
         )
@@ -710,3 +715,38 @@ def check_output_path(path: object, name: str = "path", *, probe: bool = True) -
 
 
 __all__ += ["TEMPORARY_KINDS", "check_output_path", "file_kind"]
+
+
+def read_regular_file(path: Path, where: str, limit: int | None = None) -> bytes:
+    """The bytes of the regular file *path* (at most *limit* + 1 of them), refusing anything else first.
+
+    A FIFO would block the reader until a writer comes (forever, for a scene file), and ``/dev/zero`` or
+    ``/dev/urandom`` never end: what *path* is (through symbolic links) is checked before it is opened,
+    and again on the opened descriptor (opened without blocking), so that nothing is read from such a
+    file.  *where* starts the messages (``"scene file 'x.json'"``).  FileNotFoundError if it does not
+    exist, ValueError naming what it is otherwise.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from symsphere._validation import read_regular_file
+    >>> read_regular_file(Path("/dev/zero"), "scene file '/dev/zero'")
+    Traceback (most recent call last):
+        ...
+    ValueError: scene file '/dev/zero': is a character device, not a regular file
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path)) from None
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"{where}: is {file_kind(mode)}, not a regular file")
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # swapped for a FIFO meanwhile: no wait
+    with os.fdopen(descriptor, "rb") as handle:
+        mode = os.fstat(descriptor).st_mode
+        if not stat.S_ISREG(mode):
+            raise ValueError(f"{where}: is {file_kind(mode)}, not a regular file")
+        return handle.read() if limit is None else handle.read(limit + 1)
+
+
+__all__ += ["read_regular_file"]

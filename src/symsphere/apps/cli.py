@@ -16,7 +16,12 @@ SIGTERM (``kill``, ``timeout``, batch schedulers, containers) and 129 on SIGHUP.
 Every error is one line on stderr, never a traceback (set the environment
 variable ``SYMSPHERE_TRACEBACK=1`` to see one for an unexpected error).  No
 partial output file is ever left behind: the files of a run appear together,
-complete, or not at all.
+complete, or not at all.  A signal that arrives before the output files are
+renamed into place rolls them back (exit 130/143/129, nothing written); one that
+arrives once the renames have begun lets the command finish: the files are
+complete, it exits 0 and says so on stderr.  Outputs must be regular files (or
+new names): a device, a FIFO or a directory at ``--out`` is refused before any
+work.  Work estimated to take more than a day is refused unless ``--allow-long``.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, integrate, iter_hemisphere, iter_sphere
-from .._validation import check_count, check_seed
+from .._validation import MAX_PATHS, MAX_PIXELS, check_count, check_output_path, check_seed, check_size, file_kind
 from ..integrands import INTEGRANDS
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..maps import METHODS
@@ -68,7 +73,58 @@ _CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHU
 
 
 def _raise_terminated(signum, frame):
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
     raise _Terminated(signum)
+
+
+class _Outputs:
+    """The files (or directory) a verb writes, and whether they are in place: a late signal then ends in success."""
+
+    def __init__(self) -> None:
+        self.paths: list[Path] = []
+        self.before: list[tuple[int, int] | None] = []
+        self.done = False
+
+    def watch(self, paths) -> None:
+        """Call just before the write: remember what is at *paths* now (followed through symbolic links)."""
+        self.paths = [Path(p) for p in paths]
+        self.before = [_identity(p) for p in self.paths]
+
+    def complete(self) -> bool:
+        """Whether the write has put every file in place (each name now points at a new file)."""
+        if self.done:
+            return True
+        after = [_identity(p) for p in self.paths]
+        return bool(self.paths) and all(a is not None and a != b for a, b in zip(after, self.before))
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
+
+
+_LONG_SECONDS = 86400.0  # work estimated beyond a day needs --allow-long
+_FASTEST_DIRECTIONS_PER_SECOND = 1e9  # sample: 40x the 2.3e7/s measured to a file (docs/reliability.md)
+_FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread measured (docs/rendering.md)
+
+
+def _check_duration(seconds: float, what: str, args) -> None:
+    """Refuse work estimated beyond a day unless --allow-long was given (a usage error, before any work)."""
+    if seconds > _LONG_SECONDS and not args.allow_long:
+        raise _UsageError(
+            f"{what} is estimated to take at least {_duration(seconds)}; add --allow-long to run it anyway"
+        )
+
+
+def _add_allow_long(verb) -> None:
+    verb.add_argument(
+        "--allow-long", action="store_true",
+        help="run even if the work is estimated to take more than a day (refused otherwise, before any work)",
+    )  # fmt: skip
 
 
 @contextlib.contextmanager
@@ -77,7 +133,7 @@ def _signals_as_interrupts():
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signum: signal.signal(signum, _raise_terminated) for signum in _CLEAN_EXIT_SIGNALS}
+    previous = {signum: signal.signal(signum, _raise_terminated) for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS)}
     try:
         yield
     finally:
@@ -161,6 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
         "memory stays at one chunk for any N (default: 48 * 2**16)",
     )
+    _add_allow_long(sample)
     _add_cluster_options(sample)
     sample.set_defaults(handler=_run_sample)
 
@@ -195,6 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     integrate.add_argument("--rtol", type=float, default=None, help="relative tolerance: double n until it is met")
     integrate.add_argument("--atol", type=float, default=None, help="absolute tolerance: double n until it is met")
     integrate.add_argument("--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)")
+    _add_allow_long(integrate)
     _add_cluster_options(integrate)
     integrate.set_defaults(handler=_run_integrate)
 
@@ -260,6 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, default=None, help="numba threads (default: all cores)")
     render.add_argument("--out", default="render.png", metavar="FILE.png", help="default: %(default)s")
     render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    _add_allow_long(render)
     _add_cluster_options(render)
     render.set_defaults(handler=_run_render)
 
@@ -360,14 +419,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     prog = f"symsphere {args.verb}"
+    args.outputs = _Outputs()
     try:
         with _signals_as_interrupts():
-            return _with_notes(args.handler, args, prog)
-    except _Terminated as exc:
-        name = signal.Signals(exc.signum).name
-        print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
-        return 128 + exc.signum
-    except KeyboardInterrupt:
+            status = _with_notes(args.handler, args, prog)
+        if argv is None and status == 0 and args.outputs.paths:  # the program is about to exit: a signal
+            _ignore_signals()  # now must not turn a written output into a death by signal
+        return status
+    except KeyboardInterrupt as exc:
+        name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+        if args.outputs.complete():  # the renames had begun: the output is whole, and it stays
+            if argv is None:
+                _ignore_signals()
+            shown = ", ".join(str(p) for p in args.outputs.paths)
+            print(f"{prog}: {name} arrived after the output was complete; kept {shown}", file=sys.stderr)
+            return 0
+        if isinstance(exc, _Terminated):
+            print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
+            return 128 + exc.signum
         print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
         return 130
     except (_UsageError, ValueError, TypeError) as exc:
@@ -389,6 +458,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _ignore_signals() -> None:
+    for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS):
+        signal.signal(signum, signal.SIG_IGN)
 
 
 def _one_line(exc: object) -> str:
@@ -419,6 +493,7 @@ def _run_sample(args) -> int:
     if args.normal is not None and args.domain != "hemisphere":
         raise _UsageError("--normal is only valid with --domain hemisphere; add --domain hemisphere or drop --normal")
     check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
+    check_output_path(args.out, "--out")  # a device, a FIFO, a missing directory: refused now (OSError)
     seed = args.seed
     if seed is None:
         seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
@@ -427,6 +502,7 @@ def _run_sample(args) -> int:
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
     count = 48 if args.domain == "sphere" else 24
     check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
+    _check_duration(args.n / _FASTEST_DIRECTIONS_PER_SECOND, f"--n {args.n}", args)
     chunk = args.chunk if args.chunk is not None else count * 2**16
     if args.domain == "sphere":
         iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
@@ -437,10 +513,12 @@ def _run_sample(args) -> int:
     try:
         blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
         with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
+            args.outputs.watch([args.out])
             try:
                 stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=bar.update)
             except OSError as exc:  # name the user's file, not the temporary next to it
                 raise OSError(exc.errno, exc.strerror, args.out) from exc
+            args.outputs.done = True
     finally:
         _close_client(client)
     elapsed = time.perf_counter() - start
@@ -497,7 +575,7 @@ def _run_integrate(args) -> int:
         with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
             warnings.filterwarnings("ignore", message="integrate: the tolerance")
             if client is None:
-                _print_estimate(integrand, kwargs)  # the integrand's compiled kernel: the fused path
+                _print_estimate(integrand, kwargs, args)  # the integrand's compiled kernel: the fused path
                 result = integrate(integrand, **kwargs)
             else:
                 from .. import distributed  # function-level: dask is slow to import and optional
@@ -535,9 +613,11 @@ def _no_error_bar(result) -> str:
 _ESTIMATE_ABOVE = 48 * 2**22  # evaluations (~2 s): longer in-process runs first say how long they will take
 
 
-def _print_estimate(f, kwargs):
+def _print_estimate(f, kwargs, args):
     """For a long in-process integration: time a pilot of 48 * 2**14 evaluations, print the estimate."""
     n = kwargs["n"]
+    if kwargs.get("n_max") is not None or "rtol" in kwargs:  # to a tolerance: up to n_max (default 48 * 2**24)
+        n = max(n or 0, kwargs.get("n_max") or 48 * 2**24)
     if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
         return
     pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
@@ -545,6 +625,7 @@ def _print_estimate(f, kwargs):
     start = time.perf_counter()
     integrate(f, **pilot)  # the arguments are checked at the real call: errors appear there, at once
     rate = pilot["n"] / max(time.perf_counter() - start, 1e-9)
+    _check_duration(n / rate, f"{n} evaluations at {rate:.3g} evaluations/s", args)
     print(
         f"symsphere integrate: {n} evaluations, estimated {_duration(n / rate)} at {rate:.3g} evaluations/s; "
         "Ctrl-C stops",
@@ -561,6 +642,7 @@ def _duration(seconds: float) -> str:
 
 def _run_demo(args) -> int:
     start = time.perf_counter()
+    args.outputs.watch([args.out])
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
     print(
         f"report: {report}  (figures: {report.with_name('figure.png')}, {report.with_name('render.png')}; "
@@ -575,8 +657,9 @@ def _run_render(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in (".png", ".pfm", ".npy"):
         raise _UsageError(f"--out must end in .png, .pfm or .npy, got {args.out!r}")
-    if not out.parent.is_dir():
-        raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
+    outputs = [out.with_suffix(s) for s in (".png", ".pfm", ".npy")]  # what write_outputs writes
+    for path in outputs:  # before the render, not after minutes of work; errors name the path (OSError)
+        check_output_path(path, "--out")
     if args.seed is not None:
         check_seed(args.seed, "--seed")
     furnace_exact = _furnace_radiance() if args.scene == "furnace" else None
@@ -585,11 +668,21 @@ def _run_render(args) -> int:
     if not (math.isfinite(args.exposure) and args.exposure > 0):  # checked by save_png too, but after the render
         raise _UsageError(f"--exposure must be a positive finite number, got {args.exposure}")
     scene_file = Path(args.scene)
-    if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
-        raise _UsageError(f"--scene: file {args.scene!r} does not exist")
+    if scene_file.suffix.lower() in (".toml", ".json"):
+        if not scene_file.exists():
+            raise _UsageError(f"--scene: file {args.scene!r} does not exist")
+        if not scene_file.is_file():  # a FIFO would block the reader, /dev/zero never ends
+            raise _UsageError(f"--scene: {args.scene!r} is {file_kind(os.stat(scene_file).st_mode)}, not a regular file")
     for name in ("width", "height", "spp", "threads"):  # render() checks them too, naming 'spp' not '--spp'
         if getattr(args, name) is not None:
             check_count(getattr(args, name), f"--{name}")
+    pixels = args.width * args.height  # before any allocation; render() checks the same, without the '--'
+    check_size(pixels, "--width * --height", MAX_PIXELS, f"({args.width} x {args.height} pixels)")
+    check_size(args.spp, "--spp", MAX_PATHS // pixels, f"for {args.width} x {args.height} pixels (int64 path indices)")
+    if args.scheduler is None:  # on a remote cluster the number of threads is not known here
+        threads = (args.threads or os.cpu_count() or 1) * (args.workers or 1)
+        _check_duration(pixels * args.spp / (_FASTEST_PATHS_PER_THREAD * threads),
+                        f"{pixels * args.spp} paths (--width x --height x --spp on {threads} threads)", args)
     options = dict(
         width=args.width,
         height=args.height,
@@ -611,7 +704,9 @@ def _run_render(args) -> int:
             result = distributed.render(args.scene, client=client, **options)
     finally:
         _close_client(client)
+    args.outputs.watch(outputs)
     paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
+    args.outputs.done = True
     method = f" ({result.method})" if result.method else ""
     if client is None:
         where = f"on {result.threads} threads (+{result.startup_seconds:.2f} s compile/load)"
