@@ -558,10 +558,18 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
     """Return a polynomial ``{(a, b, c): coefficient}`` if its keys are exponent triples."""
     if not isinstance(coeffs, Mapping):
         raise TypeError(f"'coeffs' must be a mapping {{(a, b, c): coefficient}}, got {type(coeffs).__name__}")
-    for key in coeffs:
+    for key, value in coeffs.items():
         if not (isinstance(key, tuple) and len(key) == 3):
             raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {_short(key)}")
         check_exponents(*key)
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            raise TypeError(f"'coeffs' values must be real numbers; got {type(value).__name__} {_short(value)} at {key}")
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int or Fraction beyond float64: exact, and finite
+            finite = True
+        if not finite:
+            raise ValueError(f"'coeffs' values must be finite; got {_short(value)} at {key}")
     return coeffs
 
 
@@ -611,7 +619,7 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
 
 
 def check_seed(seed: int, name: str = "seed") -> int:
-    """Return *seed* as a non-negative int (not a bool), else raise ValueError naming *name*.
+    """Return *seed* as a non-negative int (not a bool): TypeError for another type, ValueError if negative.
 
     For a seed that must be reproducible and printable (a report, a command line): unlike
     :func:`check_rng` it accepts no Generator or SeedSequence.
@@ -622,7 +630,9 @@ def check_seed(seed: int, name: str = "seed") -> int:
     >>> check_seed(3)
     3
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):  # a Generator, a float: a wrong type
+        raise TypeError(f"'{name}' must be a non-negative integer, got {type(seed).__name__} {_short(seed)}")
+    if seed < 0:
         raise ValueError(f"'{name}' must be a non-negative integer, got {_short(seed)}")
     return int(seed)
 

@@ -39,7 +39,7 @@ from numba import njit, prange
 
 from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
-from ._validation import as_float_array, check_choice, check_count, check_rng, check_sobol_size
+from ._validation import MAX_COUNT, as_float_array, check_choice, check_count, check_rng, check_size, check_sobol_size
 
 if TYPE_CHECKING:
     from scipy.stats.qmc import QMCEngine
@@ -122,6 +122,8 @@ or scipy.stats.qmc.QMCEngine
 
     def __init__(self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1) -> None:
         self.total = check_count(total, "total")
+        per_point = check_count(per_point, "per_point")  # every point set: a positive integer
+        check_size(self.total * per_point, "total * per_point", MAX_COUNT, "(the caller's n)")
         self._engine = check_points(points)
         check_sobol_size(points, self.total, per_point)  # at the call, not when the last chunk is drawn
         self._kind: str = "engine" if self._engine is not None else points
