@@ -186,17 +186,23 @@ def _inject_sigint(monkeypatch, module, name, at_call):
 
 @pytest.mark.parametrize(
     "where, expected",
-    [(("write", 1), 130), (("write", 3), 130), (("fsync", 1), 130), (("replace", 1), 0), (("print", 1), 0)],
+    [(("block", 1), 130), (("block", 3), 130), (("fsync", 1), 130), (("replace", 1), 0), (("print", 1), 0)],
 )
 def test_late_sigint_in_process_has_one_outcome(tmp_path, monkeypatch, capsys, where, expected):
     out = tmp_path / "d.npy"
     np.save(out, np.zeros((1, 3)))
     old = out.read_bytes()
     name, at_call = where
-    if name == "write":  # the blocks' writes into the temporary
-        import io as stdlib_io
+    if name == "block":  # while the blocks are computed and written into the temporary
+        real_iter = cli.iter_sphere
 
-        _inject_sigint(monkeypatch, stdlib_io.BufferedWriter, "write", at_call)
+        def iter_sphere(*args, **kwargs):
+            for index, block in enumerate(real_iter(*args, **kwargs), 1):
+                if index == at_call:
+                    os.kill(os.getpid(), signal.SIGINT)
+                yield block
+
+        monkeypatch.setattr(cli, "iter_sphere", iter_sphere)
     elif name == "print":
         import builtins
 

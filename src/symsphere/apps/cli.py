@@ -128,17 +128,42 @@ def _add_allow_long(verb) -> None:
 
 
 @contextlib.contextmanager
-def _signals_as_interrupts():
-    """While the command runs, SIGTERM and SIGHUP raise _Terminated (the main thread only: signal's rule)."""
+def _signals_as_interrupts(pending: list[int]):
+    """While the command runs, SIGINT raises KeyboardInterrupt and SIGTERM, SIGHUP _Terminated (the main
+    thread only: signal's rule), and every signal is also recorded in *pending*.
+
+    Python runs a handler at any bytecode, also inside a callback from C (numba's compiler calls back into
+    Python through ctypes), where the exception is printed as "Exception ignored" and dropped: the run went
+    on and exited 0 with a traceback.  Such a lost interrupt stays in *pending*; :func:`_check_pending` raises
+    it again at the next safe point (each block written, the end of a render), and the unraisable-exception
+    hook stays quiet about it.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signum: signal.signal(signum, _raise_terminated) for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS)}
+
+    def handler(signum, frame):
+        pending.append(signum)
+        _raise_terminated(signum, frame)
+
+    def unraisable(report, previous_hook=sys.unraisablehook):
+        if not (isinstance(report.exc_type, type) and issubclass(report.exc_type, KeyboardInterrupt)):
+            previous_hook(report)
+
+    previous = {signum: signal.signal(signum, handler) for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS)}
+    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
         yield
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        sys.unraisablehook = previous_hook
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+def _check_pending(args) -> None:
+    """Raise a signal that arrived but whose exception was lost (see _signals_as_interrupts)."""
+    if args.pending:
+        _raise_terminated(args.pending[0], None)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -420,17 +445,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     prog = f"symsphere {args.verb}"
     args.outputs = _Outputs()
+    args.pending = []
     try:
-        with _signals_as_interrupts():
+        with _signals_as_interrupts(args.pending):
             status = _with_notes(args.handler, args, prog)
+            if not args.outputs.complete():  # an interrupt lost inside a C callback: not a success
+                _check_pending(args)
         if argv is None and status == 0 and args.outputs.paths:  # the program is about to exit: a signal
             _ignore_signals()  # now must not turn a written output into a death by signal
         return status
     except KeyboardInterrupt as exc:
         name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+        if argv is None:  # the program is about to exit: no second signal may turn this into a death by signal
+            _ignore_signals()
         if args.outputs.complete():  # the renames had begun: the output is whole, and it stays
-            if argv is None:
-                _ignore_signals()
             shown = ", ".join(str(p) for p in args.outputs.paths)
             print(f"{prog}: {name} arrived after the output was complete; kept {shown}", file=sys.stderr)
             return 0
@@ -514,8 +542,12 @@ def _run_sample(args) -> int:
         blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
         with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
             args.outputs.watch([args.out])
+            def progress(count):
+                _check_pending(args)  # an interrupt lost while a kernel compiled: roll back now
+                bar.update(count)
+
             try:
-                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=bar.update)
+                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=progress)
             except OSError as exc:  # name the user's file, not the temporary next to it
                 raise OSError(exc.errno, exc.strerror, args.out) from exc
             args.outputs.done = True
@@ -704,6 +736,7 @@ def _run_render(args) -> int:
             result = distributed.render(args.scene, client=client, **options)
     finally:
         _close_client(client)
+    _check_pending(args)  # an interrupt lost while the kernels compiled: nothing is written
     args.outputs.watch(outputs)
     paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
     args.outputs.done = True
