@@ -760,3 +760,39 @@ def read_regular_file(path: Path, where: str, limit: int | None = None) -> bytes
 
 
 __all__ += ["read_regular_file"]
+
+
+def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -> list[Any]:
+    """Each (value, name) as finite float64 (numpy scalars for scalars) that broadcast together; errors name them.
+
+    For the public scalar functions (frames, wedge, warps) that also run inside numba kernels: from Python
+    they check what their array twins check.  With *unit_interval* every value must lie in [0, 1].
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_real_arrays
+    >>> check_real_arrays((0.5, "u"), (2.0, "v"), unit_interval=True)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'v' must lie in [0, 1]; got 2.0
+    """
+    arrays = []
+    for value, name in named:
+        if value is None:
+            raise TypeError(f"'{name}' must be a real number or an array of real numbers; got None")
+        arr = as_float_array(value, name).astype(np.float64, copy=False)
+        check_dimensions(arr, name)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"'{name}' must be finite (no NaN or inf); got {_short(value)}")
+        if unit_interval and not np.all((arr >= 0) & (arr <= 1)):
+            raise ValueError(f"'{name}' must lie in [0, 1]; got {_short(value)}")
+        arrays.append(arr)
+    try:
+        np.broadcast_shapes(*(a.shape for a in arrays))
+    except ValueError:
+        names = ", ".join(f"'{name}'" for _, name in named)
+        raise ValueError(f"{names} must broadcast together; got shapes {[a.shape for a in arrays]}") from None
+    return [a[()] if a.ndim == 0 else a for a in arrays]
+
+
+__all__ += ["check_real_arrays"]

@@ -59,7 +59,7 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import overload
 
-from ._validation import as_float_array, check_directions, check_unit_directions, check_uv, short_repr
+from ._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
 from .symmetry import HEMISPHERE_MAPS
 
 __all__ = [
@@ -257,11 +257,7 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     >>> rim_distance(0.75, 0.3)     # sqrt(1 - u)
     0.5
     """
-    given = (u, v)
-    u, v = _reals((u, "u"), (v, "v"))
-    for value, original, name in ((u, given[0], "u"), (v, given[1], "v")):
-        if not np.all((value >= 0) & (value <= 1)):
-            raise ValueError(f"'{name}' must lie in [0, 1]; got {short_repr(original)}")
+    u, v = check_real_arrays((u, "u"), (v, "v"), unit_interval=True)
     return _point(u, v)
 
 
@@ -342,27 +338,9 @@ def _uv(x, y, z):  # the formula (numpy or numba)
     return u, v
 
 
-def _reals(*named):
-    """The arguments as float64 arrays (numpy scalars for scalars) that broadcast together; errors name them."""
-    arrays = []
-    for value, name in named:
-        if value is None:
-            raise TypeError(f"'{name}' must be a real number or an array of real numbers; got None")
-        arr = as_float_array(value, name).astype(np.float64, copy=False)
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"'{name}' must be finite (no NaN or inf); got {short_repr(value)}")
-        arrays.append(arr)
-    try:
-        np.broadcast_shapes(*(a.shape for a in arrays))
-    except ValueError:
-        names = ", ".join(f"'{name}'" for _, name in named)
-        raise ValueError(f"{names} must broadcast together; got shapes {[a.shape for a in arrays]}") from None
-    return [a[()] if a.ndim == 0 else a for a in arrays]
-
-
 def _unit(x, y, z):
     """x, y, z (see _reals) whose vectors are unit vectors (norm 1 within 10**-3), else ValueError naming them."""
-    x, y, z = _reals((x, "x"), (y, "y"), (z, "z"))
+    x, y, z = check_real_arrays((x, "x"), (y, "y"), (z, "z"))
     check_unit_directions(np.stack(np.broadcast_arrays(x, y, z), axis=-1), "x, y, z")
     return x, y, z
 
