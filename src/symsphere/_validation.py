@@ -763,7 +763,7 @@ __all__ += ["read_regular_file"]
 
 
 def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -> list[Any]:
-    """Each (value, name) as finite float64 (numpy scalars for scalars) that broadcast together; errors name them.
+    """Each (value, name) as finite float64, broadcast together (numpy scalars if all are scalars); errors name them.
 
     For the public scalar functions (frames, wedge, warps) that also run inside numba kernels: from Python
     they check what their array twins check.  With *unit_interval* every value must lie in [0, 1].
@@ -792,7 +792,9 @@ def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -
     except ValueError:
         names = ", ".join(f"'{name}'" for _, name in named)
         raise ValueError(f"{names} must broadcast together; got shapes {[a.shape for a in arrays]}") from None
-    return [a[()] if a.ndim == 0 else a for a in arrays]
+    if any(a.ndim for a in arrays):  # every output then has the broadcast shape (z = sqrt(1 - u) ignores v)
+        return list(np.broadcast_arrays(*arrays))
+    return [a[()] for a in arrays]
 
 
 __all__ += ["check_real_arrays"]
