@@ -281,7 +281,7 @@ def _ours(folder: Path) -> list[str]:
 def signals(verbose: bool) -> dict[str, int]:
     import numpy as np
 
-    counts = dict(runs=0, left_behind=0, inconsistent=0, tracebacks=0)
+    counts = dict(runs=0, left_behind=0, inconsistent=0, tracebacks=0, during_start_up=0)
     n = 48 * 2**16 * 8
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
@@ -321,7 +321,15 @@ def signals(verbose: bool) -> dict[str, int]:
             now = out.read_bytes() if out.exists() else None
             consistent = (status == 0 and now is not None and now != before) or (
                 status == 128 + signum and now == before)
-            if not consistent:
+            if not consistent and now == before and not left and (status == -signum or "KeyboardInterrupt" in stderr) \
+                    and "symsphere" not in stderr.replace("symsphere/", ""):
+                # Killed while Python imported the package, before main() installed its handlers: the
+                # default action of the signal (nothing was written yet).  Counted apart.
+                counts["during_start_up"] += 1
+                counts["tracebacks"] -= "Traceback" in stderr
+                if verbose:
+                    print(f"  {verb} {signal.Signals(signum).name} at {delay} s: during start-up", file=sys.stderr)
+            elif not consistent:
                 counts["inconsistent"] += 1
                 print(f"  {verb} {signal.Signals(signum).name} at {delay} s: exit {status}, "
                       f"{'changed' if now != before else 'unchanged'}: {stderr[-200:]!r}", file=sys.stderr)  # fmt: skip
@@ -357,6 +365,7 @@ def absurd_sizes(verbose: bool) -> dict[str, int]:
                 continue
             if time.monotonic() - start > 20:
                 counts["slow"] += 1
+                print(f"  slow ({time.monotonic() - start:.0f} s): {' '.join(arguments)}", file=sys.stderr)
             if run.returncode != 2 or named not in run.stderr or "Traceback" in run.stderr:
                 counts["unnamed"] += 1
                 print(f"  {' '.join(arguments)}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
@@ -388,7 +397,8 @@ def main() -> int:
                      f"hangs {c['hangs']}, unclear {c['unclear']}"))
         c = signals(args.verbose)
         rows.append(("signals", f"{c['runs']} runs of sample/render sent SIGINT/SIGTERM",
-                     f"left behind {c['left_behind']}, inconsistent {c['inconsistent']}, tracebacks {c['tracebacks']}"))
+                     f"left behind {c['left_behind']}, inconsistent {c['inconsistent']}, tracebacks {c['tracebacks']} "
+                     f"(and {c['during_start_up']} killed during start-up, before any work)"))
         c = absurd_sizes(args.verbose)
         rows.append(("absurd sizes", f"{c['cases']} commands", f"slow {c['slow']}, unnamed {c['unnamed']}"))
     print("| part | cases | findings |")

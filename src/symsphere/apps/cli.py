@@ -109,6 +109,7 @@ def _identity(path: Path) -> tuple[int, int] | None:
 
 _LONG_SECONDS = 86400.0  # work estimated beyond a day needs --allow-long
 _FASTEST_DIRECTIONS_PER_SECOND = 1e9  # sample: 40x the 2.3e7/s measured to a file (docs/reliability.md)
+_FASTEST_EVALUATIONS_PER_SECOND = 1e9  # integrate: 17x the 59 M/s measured (docs/integration.md); then a pilot
 _FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread measured (docs/rendering.md)
 
 
@@ -652,6 +653,7 @@ def _print_estimate(f, kwargs, args):
         n = max(n or 0, kwargs.get("n_max") or 48 * 2**24)
     if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
         return
+    _check_duration(n / _FASTEST_EVALUATIONS_PER_SECOND, f"{n} evaluations", args)  # before the pilot
     pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
     pilot.update(n=48 * 2**14, points="random", replicates=None, rng=0)
     start = time.perf_counter()
