@@ -465,9 +465,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
         if isinstance(exc, _Terminated):
             print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
-            return 128 + exc.signum
+            return _exit_now(128 + exc.signum, argv)
         print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        return _exit_now(130, argv)
     except (_UsageError, ValueError, TypeError) as exc:
         # The library's validators name the argument; a traceback would add nothing.
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
@@ -487,6 +487,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _exit_now(status: int, argv) -> int:
+    """Run as the program (no *argv*) after an interrupt: exit with *status* now.  The interpreter's own
+    exit could still die by the signal (the audit once saw exit -2 after this line was printed, an
+    interrupt having been dropped inside a numba callback); everything of ours is already cleaned up."""
+    if argv is None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
 
 
 def _ignore_signals() -> None:
