@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import os
-import pathlib
 import signal
 import stat
 import subprocess
