@@ -438,7 +438,7 @@ def test_fibonacci_integrates_exp():
         (lambda: P.square_to_spherical_triangle([0.1, 0.2], [0, 0, 1], [0, 0, 0], [1, 0, 0]), ValueError, "'b'"),
         (lambda: P.spherical_triangle_pdf([0, 0, 1], [0, 0, 1], [1, 0, 0], [1, 2]), ValueError, "'c'"),
         (lambda: P.fibonacci_points(-3), ValueError, "'n'"),
-        (lambda: P.get_peer("uniform"), ValueError, "peer"),
+        (lambda: P.get_peer("uniform"), ValueError, "'name'"),
         (lambda: P.sample_lebedev(100), ValueError, "'n'=100 is not the size of a Lebedev rule"),
         (lambda: P.sample_lebedev(2 * 5810), ValueError, "'n'"),
         (lambda: P.sample_lebedev(50, randomize="yes"), TypeError, "'randomize'"),

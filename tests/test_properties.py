@@ -93,11 +93,11 @@ OVERRIDES = {
 }
 # Documented to return inf (a density that diverges at a vertex of the paper's maps): finite elsewhere.
 MAY_BE_INF = {"triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
-# Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas and
-# the frame helpers used by the kernels.  Their valid inputs are still checked for finite output.
-TRUSTED = {"frame", "frame_rows", "to_world", "to_local", "cosine_wedge_point", "cosine_wedge_density",
-           "cosine_wedge_uv", "get_map", "get_peer", "check_points", "suite", "uniform_pdf",
-           "uniform_sphere_point", "uniform_hemisphere_point", "concentric_disk_point", "cosine_hemisphere_point"}  # fmt: skip
+# Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas.
+# Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
+# since issue 22 (inside kernels they are the bare formulas) and are tested like the others, and below;
+# so do the elementwise warps of symsphere.warps.
+TRUSTED = {"get_map", "check_points", "suite", "uniform_pdf"}
 MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module,
            bins, integration, spherical_triangles, square_warps, warps)  # fmt: skip
 
@@ -261,6 +261,79 @@ def test_direction_functions_keep_the_batch_shape(name, function, argument, tail
     if tail is not None:
         assert result.shape == d.shape[:-1] + tail, (name, d.shape, result.shape)
         assert result.dtype in (np.float32, np.float64)
+
+
+# --- the public scalar functions of frames and wedge: any numbers or arrays ----------------------------
+
+SCALAR_FUNCTIONS = [
+    ("frame_rows", frames.frame_rows, ("nx", "ny", "nz")),
+    ("cosine_wedge_point", wedge.cosine_wedge_point, ("u", "v")),
+    ("cosine_wedge_density", wedge.cosine_wedge_density, ("x", "y", "z")),
+    ("cosine_wedge_uv", wedge.cosine_wedge_uv, ("x", "y", "z")),
+    ("uniform_sphere_point", warps.uniform_sphere_point, ("u", "v")),
+    ("uniform_hemisphere_point", warps.uniform_hemisphere_point, ("u", "v")),
+    ("concentric_disk_point", warps.concentric_disk_point, ("u", "v")),
+    ("cosine_hemisphere_point", warps.cosine_hemisphere_point, ("u", "v")),
+]
+SCALARS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.integers(-(2**80), 2**80), st.sampled_from([0.0, 1.0, -0.0, 1e-320])
+)
+
+
+def _scalar_arguments(name, data):
+    """Mostly valid arguments (a unit vector of W, a point of the square), sometimes replaced by anything."""
+    if name.endswith("_point"):
+        values = [data.draw(st.floats(0, 1), label="u"), data.draw(st.floats(0, 1), label="v")]
+    else:
+        phi = data.draw(st.floats(0, math.pi / 4), label="phi")
+        z = data.draw(st.floats(0, 1), label="z")
+        r = math.sqrt(max(0.0, 1 - z * z))
+        values = [r * math.cos(phi), r * math.sin(phi), z]
+    if data.draw(st.booleans(), label="replace one"):
+        index = data.draw(st.integers(0, len(values) - 1), label="index")
+        strategy = SCALARS if name == "frame_rows" else st.one_of(SCALARS, ODD, FLOAT_ARRAYS, ARRAYS)
+        values[index] = data.draw(strategy, label="value")
+    return values
+
+
+@pytest.mark.parametrize("name, function, names", SCALAR_FUNCTIONS, ids=[f[0] for f in SCALAR_FUNCTIONS])
+@given(data=st.data())
+def test_scalar_functions_validate_like_their_array_twins(name, function, names, data):
+    values = _scalar_arguments(name, data)
+    try:
+        result = function(*values)
+    except (ValueError, TypeError) as exc:
+        message = str(exc)
+        assert "\n" not in message and any(f"'{n}" in message or f"{n}'" in message for n in names), (name, message)
+        return
+    assert _all_finite(result), (name, values, result)
+    if name == "frame_rows":  # rows orthonormal to each other and to n
+        basis = np.array([*result, values])
+        assert np.allclose(basis @ basis.T, np.eye(3), atol=3e-3), (values, basis)
+    else:
+        shape = np.broadcast_shapes(*(np.shape(v) for v in values))
+        if name == "cosine_wedge_density":
+            assert np.shape(result) == shape and np.all(np.asarray(result) >= 0)
+        else:
+            assert all(np.shape(component) == shape for component in result), (name, values, result)
+
+
+@given(normal=st.one_of(FLOAT_ARRAYS, ODD, ARRAYS), vectors=st.one_of(FLOAT_ARRAYS, ODD, ARRAYS))
+def test_frame_and_its_maps_validate(normal, vectors):
+    try:
+        basis = frames.frame(normal)
+    except (ValueError, TypeError) as exc:
+        assert "'normal'" in str(exc), str(exc)
+        basis = np.eye(3)
+    else:
+        assert np.allclose(basis @ basis.T, np.eye(3), atol=3e-3) and np.all(np.isfinite(basis))
+    for function, name in ((frames.to_world, "'local'"), (frames.to_local, "'world'")):
+        try:
+            out = function(vectors, basis)
+        except (ValueError, TypeError) as exc:
+            assert name in str(exc), str(exc)
+            continue
+        assert out.shape == np.shape(vectors) and np.all(np.isfinite(out))
 
 
 # --- the renderer's inputs: images and scene files --------------------------------------------------

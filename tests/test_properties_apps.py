@@ -343,6 +343,7 @@ IO_FUNCTIONS = [
                                                  name="path"), io.save_directions),
     ("stream_directions", io.stream_directions, dict(path="e.csv", n=48, dtype=np.float32, blocks=_blocks, name="path",
                                                      progress=None), io.stream_directions),
+    ("remove_stale_temporaries", io.remove_stale_temporaries, dict(path="a.txt"), io.remove_stale_temporaries),
 ]  # fmt: skip
 
 
@@ -362,6 +363,8 @@ _BAD_BLOCKS = [
     lambda out: [np.zeros((47, 3))],  # too few
     lambda out: [np.zeros((48, 3))] * 2,  # too many
     lambda out: [np.zeros((48, 2))],  # wrong shape
+    lambda out: [np.zeros((48, 3))],  # zero rows: not directions
+    lambda out: [np.full((48, 3), np.nan)],
     lambda out: 5,  # not iterable
     lambda out: [None],
 ]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import pathlib
 import shutil
 import signal
 import subprocess
@@ -235,14 +236,15 @@ def test_write_outputs_is_all_or_nothing_and_names_the_failing_file(tmp_path, mo
     result = render("furnace", width=4, height=4, spp=2, sampler="cosine", seed=1)
     write_outputs(result, tmp_path / "f.png")
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
-    real_write = image_module._write
+    real_encode, real_write_bytes = image_module._encode, pathlib.Path.write_bytes
 
-    def full_disk_at_pfm(suffix, temporary, image, exposure):
-        if suffix == ".pfm":
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(temporary))
-        real_write(suffix, temporary, image, exposure * 2)
+    def full_disk_at_pfm(self, data):  # the files are encoded first, then written to their temporaries
+        if ".f.pfm." in self.name:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
+        return real_write_bytes(self, data)
 
-    monkeypatch.setattr(image_module, "_write", full_disk_at_pfm)
+    monkeypatch.setattr(image_module, "_encode", lambda suffix, image, exposure: real_encode(suffix, image, exposure * 2))
+    monkeypatch.setattr(pathlib.Path, "write_bytes", full_disk_at_pfm)
     with pytest.raises(OSError) as caught:
         write_outputs(result, tmp_path / "f.png", exposure=0.5)
     assert caught.value.filename == str(tmp_path / "f.pfm")  # the file that failed, not the PNG

@@ -292,8 +292,10 @@ def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
     """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
     values = check_real_values(f(directions), "f")  # complex: TypeError, not a dropped imaginary part
     m = len(directions)
-    if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m)):
-        raise ValueError(f"'f' must return shape (m,) or (m, k) for directions of shape ({m}, 3), got {values.shape}")
+    if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m and values.shape[1] >= 1)):
+        raise ValueError(
+            f"'f' must return shape (m,) or (m, k) with k >= 1 for directions of shape ({m}, 3), got {values.shape}"
+        )
     if not np.all(np.isfinite(values)):
         raise ValueError("'f' returned non-finite values")
     return values.reshape(m, -1)

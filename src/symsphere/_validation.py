@@ -7,9 +7,12 @@ boundary; private helpers trust their inputs.
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
 import os
+import secrets
+import stat
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar, cast, overload
@@ -105,6 +108,11 @@ MAX_TASKS = 100_000
 
 MAX_PATHS = 2**62
 """Largest number of camera paths (width * height * spp) of one render: path indices are int64."""
+
+MAX_PIXELS = 2**28
+"""Largest image (width * height pixels) of one render: 16384 x 16384.  The renderer holds the image in
+float64 RGB several times over (the sum, a pass, the mean: 24 bytes a pixel each, 6 GiB each at the
+limit); ``width = height = 2**31`` used to reach numpy's "array is too big", naming neither."""
 
 MAX_SH_DEGREE = 85
 """Largest degree l of a real spherical harmonic (:mod:`symsphere.harmonics`): its unnormalised Legendre
@@ -404,7 +412,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
 
 
 __all__ += ["MAX_BINS", "MAX_COUNT", "MAX_DIMENSIONS", "MAX_QUADRATURE_ORDER", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
-__all__ += ["MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
+__all__ += ["MAX_PIXELS", "MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
 __all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
 
@@ -552,10 +560,18 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
     """Return a polynomial ``{(a, b, c): coefficient}`` if its keys are exponent triples."""
     if not isinstance(coeffs, Mapping):
         raise TypeError(f"'coeffs' must be a mapping {{(a, b, c): coefficient}}, got {type(coeffs).__name__}")
-    for key in coeffs:
+    for key, value in coeffs.items():
         if not (isinstance(key, tuple) and len(key) == 3):
             raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {_short(key)}")
         check_exponents(*key)
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            raise TypeError(f"'coeffs' values must be real numbers; got {type(value).__name__} {_short(value)} at {key}")
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int or Fraction beyond float64: exact, and finite
+            finite = True
+        if not finite:
+            raise ValueError(f"'coeffs' values must be finite; got {_short(value)} at {key}")
     return coeffs
 
 
@@ -605,7 +621,7 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
 
 
 def check_seed(seed: int, name: str = "seed") -> int:
-    """Return *seed* as a non-negative int (not a bool), else raise ValueError naming *name*.
+    """Return *seed* as a non-negative int (not a bool): TypeError for another type, ValueError if negative.
 
     For a seed that must be reproducible and printable (a report, a command line): unlike
     :func:`check_rng` it accepts no Generator or SeedSequence.
@@ -616,9 +632,171 @@ def check_seed(seed: int, name: str = "seed") -> int:
     >>> check_seed(3)
     3
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):  # a Generator, a float: a wrong type
+        raise TypeError(f"'{name}' must be a non-negative integer, got {type(seed).__name__} {_short(seed)}")
+    if seed < 0:
         raise ValueError(f"'{name}' must be a non-negative integer, got {_short(seed)}")
     return int(seed)
 
 
 __all__ += ["check_seed"]  # appended here, not in the list above, to keep this addition in one place
+
+
+# ---------------------------------------------------------------------------
+# Output files: what may be written, checked before any work (issue 22)
+# ---------------------------------------------------------------------------
+
+TEMPORARY_KINDS = ("tmp", "old", "probe")
+"""The last suffix of the hidden files an atomic write makes beside its target, ``.NAME.<8 hex>.KIND``:
+the temporary (``tmp``), the previous version kept during the renames of a set (``old``) and the
+file that :func:`check_output_path` creates and removes at once (``probe``)."""
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def file_kind(mode: int) -> str:
+    """What a file of the ``st_mode`` *mode* is, in words: ``'a regular file'``, ``'a FIFO (named pipe)'``, ...
+
+    Examples
+    --------
+    >>> import stat
+    >>> from symsphere._validation import file_kind
+    >>> file_kind(stat.S_IFCHR | 0o666)
+    'a character device'
+    """
+    if stat.S_ISREG(mode):
+        return "a regular file"
+    for test, words in _KINDS:
+        if test(mode):
+            return words
+    return "not a regular file"
+
+
+def check_output_path(path: object, name: str = "path", *, probe: bool = True) -> Path:
+    """*path* as a Path that an atomic write may replace, checked before any work is done.
+
+    The target, followed through symbolic links, must be absent or a regular file (a device, a
+    FIFO, a socket or a directory is never replaced, nor written into), and its directory must
+    exist; with *probe*, a hidden file ``.NAME.<hex>.probe`` is created in it and removed at once,
+    so that a directory that takes no new files (read-only, ``/proc``, no permission) fails now,
+    not after minutes of work.  Errors name *path* as the user gave it: TypeError or ValueError
+    for a bad name (see :func:`check_path`), else an ``OSError`` whose ``filename`` is *path*.
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_output_path
+    >>> check_output_path("/dev/null")
+    Traceback (most recent call last):
+        ...
+    OSError: [Errno 22] is a character device, not a regular file: only regular files are replaced: '/dev/null'
+    """
+    given = check_path(path, name)
+    target = Path(os.path.realpath(given))  # through symbolic links, as the writer goes
+    try:
+        mode = os.stat(target).st_mode
+    except (FileNotFoundError, NotADirectoryError):  # absent, or a "directory" that is a file: below
+        mode = None
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, str(given)) from None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise IsADirectoryError(errno.EISDIR, "is a directory, not a file", str(given))
+    if mode is not None and not stat.S_ISREG(mode):
+        shown = f" ({target})" if str(target) != os.path.abspath(given) else ""  # reached through a link
+        raise OSError(
+            errno.EINVAL, f"is {file_kind(mode)}{shown}, not a regular file: only regular files are replaced", str(given)
+        )
+    folder = target.parent
+    if not folder.exists():
+        raise FileNotFoundError(errno.ENOENT, f"its directory {str(given.parent)!r} does not exist", str(given))
+    if not folder.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, f"{str(given.parent)!r} is not a directory", str(given))
+    if probe:
+        trial = folder / f".{target.name}.{secrets.token_hex(4)}.probe"
+        try:
+            os.close(os.open(trial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot create a file in {str(folder)!r} ({exc.strerror})", str(given)) from None
+        os.unlink(trial)
+    return given
+
+
+__all__ += ["TEMPORARY_KINDS", "check_output_path", "file_kind"]
+
+
+def read_regular_file(path: Path, where: str, limit: int | None = None) -> bytes:
+    """The bytes of the regular file *path* (at most *limit* + 1 of them), refusing anything else first.
+
+    A FIFO would block the reader until a writer comes (forever, for a scene file), and ``/dev/zero`` or
+    ``/dev/urandom`` never end: what *path* is (through symbolic links) is checked before it is opened,
+    and again on the opened descriptor (opened without blocking), so that nothing is read from such a
+    file.  *where* starts the messages (``"scene file 'x.json'"``).  FileNotFoundError if it does not
+    exist, ValueError naming what it is otherwise.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from symsphere._validation import read_regular_file
+    >>> read_regular_file(Path("/dev/zero"), "scene file '/dev/zero'")
+    Traceback (most recent call last):
+        ...
+    ValueError: scene file '/dev/zero': is a character device, not a regular file
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path)) from None
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"{where}: is {file_kind(mode)}, not a regular file")
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # swapped for a FIFO meanwhile: no wait
+    with os.fdopen(descriptor, "rb") as handle:
+        mode = os.fstat(descriptor).st_mode
+        if not stat.S_ISREG(mode):
+            raise ValueError(f"{where}: is {file_kind(mode)}, not a regular file")
+        return handle.read() if limit is None else handle.read(limit + 1)
+
+
+__all__ += ["read_regular_file"]
+
+
+def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -> list[Any]:
+    """Each (value, name) as finite float64, broadcast together (numpy scalars if all are scalars); errors name them.
+
+    For the public scalar functions (frames, wedge, warps) that also run inside numba kernels: from Python
+    they check what their array twins check.  With *unit_interval* every value must lie in [0, 1].
+
+    Examples
+    --------
+    >>> from symsphere._validation import check_real_arrays
+    >>> check_real_arrays((0.5, "u"), (2.0, "v"), unit_interval=True)
+    Traceback (most recent call last):
+        ...
+    ValueError: 'v' must lie in [0, 1]; got 2.0
+    """
+    arrays = []
+    for value, name in named:
+        if value is None:
+            raise TypeError(f"'{name}' must be a real number or an array of real numbers; got None")
+        arr = as_float_array(value, name).astype(np.float64, copy=False)
+        check_dimensions(arr, name)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"'{name}' must be finite (no NaN or inf); got {_short(value)}")
+        if unit_interval and not np.all((arr >= 0) & (arr <= 1)):
+            raise ValueError(f"'{name}' must lie in [0, 1]; got {_short(value)}")
+        arrays.append(arr)
+    try:
+        np.broadcast_shapes(*(a.shape for a in arrays))
+    except ValueError:
+        names = ", ".join(f"'{name}'" for _, name in named)
+        raise ValueError(f"{names} must broadcast together; got shapes {[a.shape for a in arrays]}") from None
+    if any(a.ndim for a in arrays):  # every output then has the broadcast shape (z = sqrt(1 - u) ignores v)
+        return list(np.broadcast_arrays(*arrays))
+    return [a[()] for a in arrays]
+
+
+__all__ += ["check_real_arrays"]

@@ -5,29 +5,56 @@ The frame is Duff et al., "Building an Orthonormal Basis, Revisited" (JCGT 6(1),
 except across the plane n_z = 0, where the sign branch flips (no frame field on
 the sphere can be continuous everywhere).  For n = (0, 0, 1) it is the identity.
 
-:func:`frame_rows` is the formula, a scalar function that numba compiles
-(``register_jitable``): the path tracer's kernels call it, and :func:`frame`
-is it for one numpy normal.
+:func:`frame_rows` is the formula for one unit normal given as three numbers; the
+path tracer's numba kernels call it too (inside them it is the trusting scalar formula,
+through ``numba.extending.overload``; called from Python it validates its arguments as
+:func:`frame` does).  :func:`frame` is it for one numpy normal.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import register_jitable
+from numba.extending import overload
 
 from ._typing import Float64Array, FloatArray
+from ._validation import UNIT_TOLERANCE, as_float_array, check_directions, check_dimensions, short_repr
 
 __all__ = ["frame", "frame_rows", "to_world", "to_local"]
 
 
-@register_jitable
+def _rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    # Duff et al. 2017, listing 3: numba compiles this inside the kernels (see the overload below).
+    sign = math.copysign(1.0, nz)
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
+
+
 def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """The first two rows t, b of the frame about the unit normal (nx, ny, nz) (Duff et al. 2017, listing 3).
 
-    Scalar and numba-compilable; the third row is n itself.
+    Scalar; the third row is n itself.  Inside a numba kernel it compiles to the bare formula
+    (the kernels pass unit normals); from Python the three numbers are checked first.
+
+    Parameters
+    ----------
+    nx, ny, nz : float
+        A unit vector (norm 1 within 10**-3), finite real numbers.
+
+    Returns
+    -------
+    t, b : tuple of 3 floats each
+
+    Raises
+    ------
+    TypeError
+        If a component is not a real number (it names 'nx', 'ny' or 'nz').
+    ValueError
+        If a component is NaN or inf, or the vector is not a unit vector.
 
     Examples
     --------
@@ -35,10 +62,49 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
     >>> frame_rows(0.0, 0.0, 1.0)
     ((1.0, -0.0, -0.0), (-0.0, 1.0, -0.0))
     """
-    sign = math.copysign(1.0, nz)
-    a = -1.0 / (sign + nz)
-    b = nx * ny * a
-    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
+    values = []
+    for value, name in ((nx, "nx"), (ny, "ny"), (nz, "nz")):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            raise TypeError(f"'{name}' must be a real number; got {type(value).__name__} {short_repr(value)}")
+        try:
+            number = float(value)
+        except OverflowError:  # an int beyond float64
+            number = math.inf
+        if not math.isfinite(number):
+            raise ValueError(f"'{name}' must be finite; got {short_repr(value)}")
+        values.append(number)
+    _check_unit(np.array(values), "'nx', 'ny', 'nz'")
+    return _rows(*values)
+
+
+@overload(frame_rows, jit_options={}, inline="never", strict=False)
+def _frame_rows_in_kernels(nx, ny, nz):  # numba: the formula, trusting its (unit, finite) arguments
+    return _rows
+
+
+def _check_unit(vector: Float64Array, names: str) -> None:
+    """ValueError naming *names* unless the finite float64 3-vector *vector* has norm 1 within UNIT_TOLERANCE."""
+    scale = float(np.max(np.abs(vector)))
+    norm = scale * math.sqrt(float(np.sum((vector / scale) ** 2))) if scale > 0 else 0.0
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise ValueError(f"{names} must be a unit vector (norm 1 within {UNIT_TOLERANCE:g}); got a norm of {norm:.6g}")
+
+
+def _check_basis(basis: object) -> FloatArray:
+    """*basis* as a finite (3, 3) float array with orthonormal rows (within UNIT_TOLERANCE); errors name 'basis'."""
+    if basis is None:
+        raise TypeError("'basis' must be a (3, 3) array with orthonormal rows (from frame()); got None")
+    arr = as_float_array(basis, "basis")
+    if arr.shape != (3, 3):
+        raise ValueError(f"'basis' must have shape (3, 3); got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"'basis' must be finite (no NaN or inf); got {short_repr(arr)}")
+    wide = arr.astype(np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):  # huge entries: not orthonormal, said below
+        gram = wide @ wide.T
+    if not np.all(np.abs(gram - np.eye(3)) <= 2 * UNIT_TOLERANCE):
+        raise ValueError("'basis' must have orthonormal rows (a frame from frame()); B @ B.T is not the identity")
+    return arr
 
 
 def frame(normal: npt.ArrayLike) -> Float64Array:
@@ -47,8 +113,8 @@ def frame(normal: npt.ArrayLike) -> Float64Array:
     Parameters
     ----------
     normal : array_like, shape (3,)
-        A unit vector, trusted: not validated or normalised here (the samplers validate
-        theirs with ``symsphere._validation.check_normal``).
+        A unit vector (norm 1 within 10**-3; it is not normalised here: the samplers
+        normalise theirs first).  NaN, inf, a zero or a non-unit vector is a ValueError.
 
     Returns
     -------
@@ -66,8 +132,16 @@ def frame(normal: npt.ArrayLike) -> Float64Array:
     >>> bool(np.allclose(basis @ basis.T, np.eye(3))), round(float(np.linalg.det(basis)), 12)
     (True, 1.0)
     """
-    nx, ny, nz = (float(c) for c in np.asarray(normal, dtype=np.float64))
-    t, b = frame_rows(nx, ny, nz)
+    if normal is None:
+        raise TypeError("'normal' must be a unit 3-vector; got None")
+    arr = as_float_array(normal, "normal")
+    if arr.shape != (3,):
+        raise ValueError(f"'normal' must be a 3-vector; got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"'normal' must be finite (no NaN or inf); got {short_repr(normal)}")
+    nx, ny, nz = (float(c) for c in arr.astype(np.float64))
+    _check_unit(np.array([nx, ny, nz]), "'normal'")
+    t, b = _rows(nx, ny, nz)
     return np.array([t, b, (nx, ny, nz)])
 
 
@@ -85,7 +159,14 @@ def to_world(local: FloatArray, basis: Float64Array) -> FloatArray:
     Returns
     -------
     ndarray, shape (..., 3)
-        The same directions in world coordinates (numpy's result type of the two inputs).
+        The same directions in world coordinates (numpy's result type of the two inputs;
+        integers count as float64).
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming 'local' or 'basis': not real numbers, NaN or inf, a wrong shape, or rows of
+        *basis* that are not orthonormal (within 10**-3).
 
     Examples
     --------
@@ -101,7 +182,13 @@ def to_world(local: FloatArray, basis: Float64Array) -> FloatArray:
     >>> bool(np.allclose(d, symsphere.sample_hemisphere(24 * 4, normal=normal, rng=1)))
     True
     """
-    return local @ basis
+    return _checked(local, "local") @ _check_basis(basis)
+
+
+def _checked(vectors: object, name: str) -> FloatArray:
+    arr = check_directions(vectors, name)  # real, finite, shape (..., 3)
+    check_dimensions(arr, name)
+    return arr
 
 
 def to_local(world: FloatArray, basis: Float64Array) -> FloatArray:
@@ -132,4 +219,4 @@ def to_local(world: FloatArray, basis: Float64Array) -> FloatArray:
     >>> bool(np.allclose(to_world(to_local(w, basis), basis), w))
     True
     """
-    return world @ basis.T
+    return _checked(world, "world") @ _check_basis(basis).T

@@ -197,7 +197,10 @@ def polynomial_integral(coeffs: Polynomial, domain: Domain = "sphere") -> float:
          for key, coef in check_coeffs(coeffs).items()),
         Fraction(0),
     )
-    return float(total) * math.pi
+    try:
+        return float(total) * math.pi
+    except OverflowError:
+        raise ValueError("'coeffs' are too large: the integral overflows float64") from None
 
 
 def evaluate_polynomial(coeffs: Polynomial, d: npt.ArrayLike) -> Float64Array:

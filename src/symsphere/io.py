@@ -10,7 +10,12 @@ left as they were; if a rename fails part-way, the targets already replaced are
 restored from their previous versions.
 
 A target that is a symbolic link is written through: the file it points to is
-replaced and the link is kept.  Large outputs are written with ordinary writes
+replaced and the link is kept.  Only regular files (or names that do not exist yet)
+are replaced: a target that is, or links to, a directory, a character or block
+device, a FIFO or a socket is refused with an ``OSError`` naming it, before any
+temporary is made (``/dev/null`` is never renamed over, nor a FIFO blocked on).
+Temporaries that a killed run (SIGKILL) left are removed by the next write to the
+same target (:func:`remove_stale_temporaries`).  Large outputs are written with ordinary writes
 (no memory map), their space reserved first where the file system allows
 (``os.posix_fallocate``), so a full disk is an ``OSError`` (``ENOSPC``) at the
 start, never a ``SIGBUS`` part-way, and memory stays at one block.
@@ -20,20 +25,36 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import os
+import re
 import secrets
 import shutil
 import signal
+import stat
 import threading
+import time
 from collections.abc import Callable, Collection, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
 from ._typing import FloatArray
-from ._validation import check_callable, check_count, check_directions, check_dtype, check_path, short_repr
+from ._validation import (
+    TEMPORARY_KINDS,
+    UNIT_TOLERANCE,
+    check_callable,
+    check_count,
+    check_dtype,
+    check_output_path,
+    check_path,
+    check_unit_directions,
+    file_kind,
+    short_repr,
+)
 
 __all__ = [
     "DIRECTION_SUFFIXES",
@@ -41,6 +62,7 @@ __all__ = [
     "atomic_paths",
     "atomic_directory",
     "check_suffix",
+    "remove_stale_temporaries",
     "save_directions",
     "stream_directions",
 ]
@@ -112,8 +134,13 @@ def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]
 
     Notes
     -----
-    On normal exit every temporary is flushed to disk, and then all are renamed over
-    their targets, with SIGINT and SIGTERM held back meanwhile (in the main thread).
+    Every path, followed through symbolic links, must be absent or a regular file;
+    anything else (a directory, a device, a FIFO, a socket) is an ``OSError`` naming
+    it before any temporary is made.  On normal exit every temporary is flushed to
+    disk, and then all are renamed over their targets.  A SIGINT, SIGTERM or SIGHUP
+    that arrives once the renames have begun is held back and delivered when they
+    are done (Ctrl-C then raises ``KeyboardInterrupt`` with the files complete); one
+    that arrives before rolls everything back.
     If a rename fails, the targets already replaced get their previous contents back
     (or are removed if they did not exist), so that either all files are new or all
     are as before.  On any exception all temporaries are removed and the exception
@@ -147,30 +174,112 @@ def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]
 
 @contextlib.contextmanager
 def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
+    for path in paths:  # absent or a regular file (through symbolic links), in an existing directory
+        check_output_path(path, name, probe=False)
     targets = [Path(os.path.realpath(path)) for path in paths]  # through symbolic links
-    for path, target in zip(paths, targets):
-        if target.is_dir():  # "/" has not even a name to put a temporary beside
-            raise IsADirectoryError(errno.EISDIR, f"'{name}' names a directory, not a file", str(path))
     if len(set(targets)) != len(targets):
         raise ValueError(f"'{name}' must name distinct files; got {[str(t) for t in targets]}")
     temporaries: list[Path] = []
+    locks: list[int] = []
     try:
-        for target in targets:
-            temporaries.append(_create_temporary(target))
+        for path, target in zip(paths, targets):
+            remove_stale_temporaries(target)
+            try:
+                temporary, lock = _create_temporary(target)
+            except OSError as exc:  # name the user's file, not the temporary
+                raise OSError(exc.errno, exc.strerror, str(path)) from None
+            temporaries.append(temporary)
+            locks.append(lock)
         yield list(temporaries)
-        for temporary in temporaries:
-            with open(temporary, "rb+") as handle:
-                os.fsync(handle.fileno())  # the data is on disk before the name points at it
-        with _signals_held():
-            _replace_all(temporaries, targets)
+        for path, temporary in zip(paths, temporaries):
+            try:
+                with open(temporary, "rb+") as handle:
+                    os.fsync(handle.fileno())  # the data is on disk before the name points at it
+            except OSError as exc:
+                raise OSError(exc.errno, exc.strerror, str(path)) from None
+        with _signals_deferred():
+            _replace_all(temporaries, targets, paths)
     except BaseException:
         for temporary in temporaries:
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(temporary)
         raise
+    finally:
+        for lock in locks:
+            os.close(lock)
 
 
-def _create_temporary(target: Path) -> Path:
+STALE_SECONDS = 60.0
+"""How long a hidden temporary of ours must have been left unchanged, and unlocked, before a later write
+to the same target removes it (see :func:`remove_stale_temporaries`)."""
+
+
+def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
+    """Remove the temporaries that an earlier, killed write to *path* left beside it; return them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A target of :func:`atomic_path` or :func:`atomic_paths` (followed through symbolic links).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed.
+
+    Notes
+    -----
+    Only an uncatchable end (SIGKILL, power loss) leaves a temporary behind.  A file is removed only
+    if all of these hold: its name is exactly ``.NAME.<8 hex digits>.tmp`` (or ``.old``, ``.probe``)
+    for this target's NAME; it is a regular file owned by this user; it has not changed for
+    :data:`STALE_SECONDS`; and no process holds its lock (a writer holds an exclusive ``flock`` on
+    its temporary for as long as it writes, so a running write's file is never taken).  Every write
+    through this module calls it first, so the next run over the same output cleans up.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from symsphere.io import remove_stale_temporaries
+    >>> folder = tempfile.mkdtemp()
+    >>> left = os.path.join(folder, ".out.npy.0123abcd.tmp")
+    >>> _ = open(left, "w").write("a killed run's partial output")
+    >>> os.utime(left, (0, 0))                      # unchanged since 1970
+    >>> [p.name for p in remove_stale_temporaries(os.path.join(folder, "out.npy"))]
+    ['.out.npy.0123abcd.tmp']
+    """
+    target = Path(os.path.realpath(check_path(path, "path")))
+    pattern = re.compile(rf"\.{re.escape(target.name)}\.[0-9a-f]{{8}}\.(?:{'|'.join(TEMPORARY_KINDS)})")
+    removed: list[Path] = []
+    try:
+        entries = os.scandir(target.parent)
+    except OSError:  # no directory, no permission: the write itself will say so
+        return removed
+    now = time.time()
+    with entries:
+        for entry in entries:
+            if not pattern.fullmatch(entry.name):
+                continue
+            candidate = Path(entry.path)
+            try:
+                info = entry.stat(follow_symlinks=False)
+                if not stat.S_ISREG(info.st_mode) or info.st_uid != os.geteuid() or now - info.st_mtime < STALE_SECONDS:
+                    continue
+                descriptor = os.open(candidate, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+            except OSError:
+                continue
+            try:
+                fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)  # held by a live writer: not stale
+                os.unlink(candidate)
+                removed.append(candidate)
+            except OSError:
+                pass
+            finally:
+                os.close(descriptor)
+    return removed
+
+
+def _create_temporary(target: Path) -> tuple[Path, int]:
+    """A new empty temporary beside *target*, and a descriptor holding its lock (close it when done)."""
     while True:
         temporary = _temporary_name(target, "tmp")
         try:
@@ -178,19 +287,32 @@ def _create_temporary(target: Path) -> Path:
             descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except FileExistsError:
             continue
-        os.close(descriptor)
-        return temporary
+        with contextlib.suppress(OSError):  # a file system without flock: only the age protects it
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return temporary, descriptor
 
 
-def _replace_all(temporaries: list[Path], targets: list[Path]) -> None:
+def _check_still_replaceable(target: Path, path: Path) -> None:
+    """Just before the rename: *target* is still absent or a regular file (not swapped for a device)."""
+    try:
+        mode = os.lstat(target).st_mode
+    except FileNotFoundError:
+        return
+    if not stat.S_ISREG(mode):
+        raise OSError(errno.EINVAL, f"became {file_kind(mode)} while it was being written; not replaced", str(path))
+
+
+def _replace_all(temporaries: list[Path], targets: list[Path], paths: list[Path]) -> None:
     """Rename every temporary over its target; on a failure, put back what was there."""
     if len(targets) == 1:  # one rename is atomic by itself
+        _check_still_replaceable(targets[0], paths[0])
         os.replace(temporaries[0], targets[0])
         return
     backups: list[Path | None] = []
     done = 0
     try:
-        for target in targets:  # keep the previous versions under a second name (a hard link)
+        for target, path in zip(targets, paths):  # keep the previous versions under a second name (a hard link)
+            _check_still_replaceable(target, path)
             backup = None
             if target.exists():
                 backup = _temporary_name(target, "old")
@@ -217,18 +339,35 @@ def _replace_all(temporaries: list[Path], targets: list[Path]) -> None:
                     os.unlink(backup)
 
 
+_DEFERRED_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
 @contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """Hold SIGINT and SIGTERM back (delivered on exit) while the renames run, in the main thread."""
-    held = {signal.SIGINT, signal.SIGTERM}
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+def _signals_deferred() -> Iterator[None]:
+    """While the renames run: SIGINT, SIGTERM and SIGHUP are recorded, and delivered once they are done.
+
+    Python runs signal handlers in the main thread, whichever thread the signal reached (numba's and
+    tqdm's threads included), so the handlers are swapped for a recorder there; after the renames the
+    previous handlers are back and each recorded signal goes to its handler (``KeyboardInterrupt`` for
+    Python's default SIGINT handler): the files are complete by then.  Outside the main thread no
+    handler runs during the renames anyway.
+    """
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    arrived: list[int] = []
+    previous = {signum: signal.signal(signum, lambda signum, frame: arrived.append(signum)) for signum in _DEFERRED_SIGNALS}
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    for signum in dict.fromkeys(arrived):
+        handler = previous[signum]
+        if callable(handler):
+            handler(signum, None)
+        elif handler == signal.SIG_DFL:
+            signal.raise_signal(signum)
 
 
 @contextlib.contextmanager
@@ -348,8 +487,11 @@ def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, 
     Raises
     ------
     ValueError
-        If the suffix is neither ``.npy`` nor ``.csv``, or *directions* is not a finite
-        (n, 3) array with n >= 1.
+        If the suffix is neither ``.npy`` nor ``.csv``, or *directions* is not an (n, 3)
+        array, n >= 1, of unit vectors (norm 1 within 10**-3; no NaN, inf or zero rows).
+    OSError
+        If *path* (through symbolic links) is a directory, a device, a FIFO or a socket:
+        only regular files are replaced (see :func:`atomic_paths`).
     TypeError
         If *path* is not a file name or *directions* not an array of real numbers.
 
@@ -365,7 +507,7 @@ def save_directions(path: str | os.PathLike[str], directions: npt.ArrayLike, *, 
     0,0.59999999999999998,0.80000000000000004
     """
     check_suffix(path, name)
-    directions = check_directions(directions, "directions")
+    directions = check_unit_directions(directions, "directions")  # a zero or non-unit row is no direction
     if directions.dtype not in (np.float32, np.float64):  # float16 and other floats: written as float64
         directions = directions.astype(np.float64)
     if directions.ndim != 2 or len(directions) == 0:
@@ -526,7 +668,24 @@ def _checked_block(block: Any, dtype: np.dtype[Any], room: int) -> Any:
     if data.ndim != 2 or data.shape[1] != 3 or len(data) > room:
         raise ValueError(f"'blocks' must give (m, 3) arrays of n directions in all; got one of shape {data.shape}"
                          f" with {room} directions left")
+    bad = _first_non_unit_row(data, 2 * UNIT_TOLERANCE) if len(data) else -1
+    if bad >= 0:
+        raise ValueError(f"'blocks' must give unit vectors (no NaN, inf, zero or non-unit rows); got {data[bad].tolist()}")
     return data
+
+
+@numba.njit(cache=True)
+def _first_non_unit_row(data, tolerance):  # pragma: no cover - compiled
+    """The first row whose squared norm is not within *tolerance* of 1 (NaN and inf never are), or -1.
+
+    One pass in float64, a few ms for a chunk of 3 * 2**20 rows (numpy's einsum took 0.1 s: longer than
+    computing the directions).
+    """
+    for i in range(data.shape[0]):
+        x, y, z = float(data[i, 0]), float(data[i, 1]), float(data[i, 2])
+        if not abs(x * x + y * y + z * z - 1.0) <= tolerance:
+            return i
+    return -1
 
 
 def _reserve(descriptor: int, size: int) -> None:

@@ -58,7 +58,7 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
-from ._validation import check_choice, check_count, check_dtype, check_rng
+from ._validation import check_count, check_dtype, check_rng, short_repr
 from ._lebedev import LEBEDEV_ORDERS, LEBEDEV_SIZES, lebedev_size, lebedev_weights, sample_lebedev
 from .points import POINT_SETS, check_points, unit_square_points
 from .spherical_triangles import (
@@ -301,7 +301,9 @@ def get_peer(name: str) -> Peer:
     >>> get_peer("cosine").domain
     'hemisphere'
     """
-    return PEERS[check_choice(name, "peer", tuple(PEERS))]
+    if not isinstance(name, str) or name not in PEERS:
+        raise ValueError(f"'name' must be one of {sorted(PEERS)}; got {short_repr(name)}")
+    return PEERS[name]
 
 
 # =============================================================================

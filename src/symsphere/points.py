@@ -39,7 +39,7 @@ from numba import njit, prange
 
 from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
-from ._validation import as_float_array, check_choice, check_count, check_rng, check_sobol_size
+from ._validation import MAX_COUNT, as_float_array, check_choice, check_count, check_rng, check_size, check_sobol_size
 
 if TYPE_CHECKING:
     from scipy.stats.qmc import QMCEngine
@@ -127,6 +127,8 @@ or scipy.stats.qmc.QMCEngine
         self, points: PointsLike, rng: RNGLike, total: int, *, per_point: int = 1, n: int | None = None
     ) -> None:
         self.total = check_count(total, "total")
+        per_point = check_count(per_point, "per_point")  # every point set: a positive integer
+        check_size(self.total * per_point, "total * per_point", MAX_COUNT, "(the caller's n)")
         self._engine = check_points(points)
         # n: the caller's count (ceil(n / per_point) = total), for the messages; default total * per_point.
         check_sobol_size(points, self.total, per_point, n=n)  # at the call, not when the last chunk is drawn

@@ -184,7 +184,7 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
     points : array_like, shape (N, 3)
         Unit vectors (normalised here).
     weights : array_like, shape (N,), optional
-        Default 1/N each.  For an importance-sampling rule use 1/(N 4 pi pdf(x_i)).
+        Non-negative; default 1/N each.  For an importance-sampling rule use 1/(N 4 pi pdf(x_i)).
 
     Returns
     -------
@@ -215,6 +215,8 @@ def cap_discrepancy_squared(points: npt.ArrayLike, weights: npt.ArrayLike | None
         w = np.ascontiguousarray(_finite(weights, "weights"))
         if w.shape != (n,) or not np.all(np.isfinite(w)):
             raise ValueError(f"'weights' must be finite with shape ({n},), got {w.shape}")
+        if np.any(w < 0):  # a quadrature rule's weights; negative ones made D^2 meaningless (10.68 once)
+            raise ValueError(f"'weights' must be >= 0; got {float(w[w < 0][0]):.6g}")
     total = float(np.sum(w))
     start_threads()  # a parallel kernel: passive OpenMP waiting, as for the sampling kernels
     pair_sum = float(_weighted_distance_sum(x, w))

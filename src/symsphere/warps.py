@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Float64Array, FloatArray
-from ._validation import as_float_array, check_directions, check_unit_directions, check_uv
+from ._validation import as_float_array, check_directions, check_real_arrays, check_unit_directions, check_uv
 
 __all__ = [
     "square_to_uniform_sphere",
@@ -407,7 +407,7 @@ def _pick_scalar(condition, a, b):
 
 
 @_register_jitable
-def uniform_sphere_point(u, v):
+def _uniform_sphere_point(u, v):
     """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v.
 
     Scalars or arrays in, a tuple (x, y, z) out; numba compiles it (``register_jitable``).
@@ -425,7 +425,7 @@ def uniform_sphere_point(u, v):
 
 
 @_register_jitable
-def uniform_hemisphere_point(u, v):
+def _uniform_hemisphere_point(u, v):
     """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere).
 
     Examples
@@ -440,7 +440,7 @@ def uniform_hemisphere_point(u, v):
 
 
 @_register_jitable
-def concentric_disk_point(u, v):
+def _concentric_disk_point(u, v):
     """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk.
 
     Examples
@@ -462,7 +462,7 @@ def concentric_disk_point(u, v):
 
 
 @_register_jitable
-def cosine_hemisphere_point(u, v):
+def _cosine_hemisphere_point(u, v):
     """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho)).
 
     Examples
@@ -471,14 +471,97 @@ def cosine_hemisphere_point(u, v):
     >>> [float(c) for c in cosine_hemisphere_point(0.5, 0.5)]
     [0.0, 0.0, 1.0]
     """
-    x, y = concentric_disk_point(u, v)
+    x, y = _concentric_disk_point(u, v)
     rho = np.maximum(np.abs(2.0 * u - 1.0), np.abs(2.0 * v - 1.0))
     z = np.sqrt(np.maximum((1.0 - rho) * (1.0 + rho), 0.0))
     return x, y, z
 
 
+# The public elementwise functions: from Python they check (u, v) as the array maps check uv (finite,
+# in [0, 1], broadcasting together); inside numba kernels (the path tracer, the study) they are the
+# bare formulas above, through the overloads below.
+
+
+def uniform_sphere_point(u, v):
+    """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v.
+
+    Scalars or arrays (broadcasting together) of [0, 1] in, a tuple (x, y, z) out; numba compiles it
+    (inside a kernel the arguments are not checked).  NaN, inf or a value outside [0, 1] is a ValueError
+    naming 'u' or 'v'.
+
+    Examples
+    --------
+    >>> from symsphere.warps import uniform_sphere_point
+    >>> [round(float(c), 6) for c in uniform_sphere_point(0.25, 0.5)]
+    [-0.866025, 0.0, 0.5]
+    """
+    return _uniform_sphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
+
+
+def uniform_hemisphere_point(u, v):
+    """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere).
+
+    Arguments as for :func:`uniform_sphere_point`.
+
+    Examples
+    --------
+    >>> from symsphere.warps import uniform_hemisphere_point
+    >>> [round(float(c), 6) for c in uniform_hemisphere_point(0.5, 0.25)]
+    [0.0, 0.866025, 0.5]
+    """
+    return _uniform_hemisphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
+
+
+def concentric_disk_point(u, v):
+    """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk.
+
+    Arguments as for :func:`uniform_sphere_point`.
+
+    Examples
+    --------
+    >>> from symsphere.warps import concentric_disk_point
+    >>> [float(c) for c in concentric_disk_point(1.0, 0.5)]
+    [1.0, 0.0]
+    """
+    return _concentric_disk_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
+
+
+def cosine_hemisphere_point(u, v):
+    """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho)).
+
+    Arguments as for :func:`uniform_sphere_point`.
+
+    Examples
+    --------
+    >>> from symsphere.warps import cosine_hemisphere_point
+    >>> [float(c) for c in cosine_hemisphere_point(0.5, 0.5)]
+    [0.0, 0.0, 1.0]
+    """
+    return _cosine_hemisphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
+
+
+@_overload(uniform_sphere_point, jit_options={}, inline="never", strict=False)
+def _uniform_sphere_point_in_kernels(u, v):
+    return _uniform_sphere_point
+
+
+@_overload(uniform_hemisphere_point, jit_options={}, inline="never", strict=False)
+def _uniform_hemisphere_point_in_kernels(u, v):
+    return _uniform_hemisphere_point
+
+
+@_overload(concentric_disk_point, jit_options={}, inline="never", strict=False)
+def _concentric_disk_point_in_kernels(u, v):
+    return _concentric_disk_point
+
+
+@_overload(cosine_hemisphere_point, jit_options={}, inline="never", strict=False)
+def _cosine_hemisphere_point_in_kernels(u, v):
+    return _cosine_hemisphere_point
+
+
 def _uniform_sphere(uv):
-    return np.stack(uniform_sphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+    return np.stack(_uniform_sphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _uniform_sphere_inverse(d):
@@ -491,7 +574,7 @@ def _uniform_sphere_inverse(d):
 
 
 def _uniform_hemisphere(uv):
-    return np.stack(uniform_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+    return np.stack(_uniform_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _uniform_hemisphere_inverse(d):
@@ -567,7 +650,7 @@ def _octahedral_hemisphere_inverse(d):
 
 
 def _concentric(uv):
-    return np.stack(concentric_disk_point(uv[..., 0], uv[..., 1]), axis=-1)
+    return np.stack(_concentric_disk_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _concentric_inverse(p):
@@ -585,7 +668,7 @@ def _concentric_inverse(p):
 
 
 def _cosine_hemisphere(uv):
-    return np.stack(cosine_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+    return np.stack(_cosine_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
 
 
 def _cosine_hemisphere_inverse(d):

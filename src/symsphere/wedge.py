@@ -44,9 +44,11 @@ Numerics
 
 The elementwise functions :func:`cosine_wedge_point`, :func:`cosine_wedge_density`
 and :func:`cosine_wedge_uv` use numpy ufuncs only (no branches, no ``np.where``),
-so the same source runs on numpy arrays and, through
-``numba.extending.register_jitable``, inside scalar numba kernels.  They trust
-their inputs; the array functions validate.  A kernel module that inlines them
+so the same source runs on numpy arrays and, through ``numba.extending.overload``,
+inside scalar numba kernels.  Called from Python they validate their arguments as
+their array twins do (finite real numbers or arrays that broadcast together, in
+[0, 1] for u and v, unit vectors for x, y, z, in W for the inverse); inside a
+kernel they are the bare formulas, trusting the kernel's values.  A kernel module that inlines them
 with ``cache=True`` should list this file in its
 :func:`symsphere._numba_cache.invalidate_if_changed` dependencies.
 """
@@ -55,9 +57,9 @@ from __future__ import annotations
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import register_jitable
+from numba.extending import overload
 
-from ._validation import check_directions, check_unit_directions, check_uv
+from ._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
 from .symmetry import HEMISPHERE_MAPS
 
 __all__ = [
@@ -125,7 +127,7 @@ def square_to_cosine_wedge(uv: npt.ArrayLike) -> np.ndarray:
     """
     uv = check_uv(uv)
     uv64 = uv.astype(np.float64)
-    d = np.stack(cosine_wedge_point(uv64[..., 0], uv64[..., 1]), axis=-1)
+    d = np.stack(_point(uv64[..., 0], uv64[..., 1]), axis=-1)
     return d.astype(uv.dtype, copy=False)
 
 
@@ -161,7 +163,7 @@ def cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
     """
     d = check_unit_directions(d, "d")
     d64 = d.astype(np.float64)
-    density = cosine_wedge_density(d64[..., 0], d64[..., 1], d64[..., 2])
+    density = _density(d64[..., 0], d64[..., 1], d64[..., 2])
     return np.asarray(density, dtype=np.float64).astype(d.dtype, copy=False)
 
 
@@ -212,17 +214,16 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
     if not inside:
         raise ValueError("'d' must lie in the wedge W = {x >= y >= 0, z >= 0}")
     check_unit_directions(d, "d")  # a zero or non-unit vector would map to a wrong point
-    uv = np.stack(cosine_wedge_uv(x, y, z), axis=-1)
+    uv = np.stack(_uv(x, y, z), axis=-1)
     return uv.astype(d.dtype, copy=False)
 
 
 # --- the elementwise triple --------------------------------------------------------
-# numpy ufuncs only (no np.where, no branches): numpy runs them on float64 arrays,
-# numba compiles them to scalar code inside kernels (``register_jitable`` leaves the
-# Python functions unchanged).  They trust their inputs.
+# numpy ufuncs only (no np.where, no branches): numpy runs the formulas on float64 arrays,
+# numba compiles them to scalar code inside kernels (the overloads at the end).  The public
+# functions check their arguments first; the formulas trust theirs.
 
 
-@register_jitable
 def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     """Elementwise forward map: (u, v) in [0, 1]^2 to the direction (x, y, z) in W.
 
@@ -256,6 +257,11 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     >>> rim_distance(0.75, 0.3)     # sqrt(1 - u)
     0.5
     """
+    u, v = check_real_arrays((u, "u"), (v, "v"), unit_interval=True)
+    return _point(u, v)
+
+
+def _point(u, v):  # the formula (numpy or numba)
     r = np.sqrt(u)
     phi = v * _QUARTER_PI
     x = r * np.cos(phi)
@@ -263,11 +269,11 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     return x, y, np.sqrt(1.0 - u)
 
 
-@register_jitable
 def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     """Elementwise pdf: ``8 z / pi`` where x >= y >= 0 and z >= 0, else 0.
 
-    Inputs are not validated (use :func:`cosine_wedge_pdf` for that).
+    Checked as :func:`cosine_wedge_pdf` checks its input (finite unit vectors), except
+    inside a numba kernel.
 
     Parameters
     ----------
@@ -287,17 +293,21 @@ def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     >>> float(cosine_wedge_density(0.0, 0.6, 0.8))     # phi = pi/2: outside W
     0.0
     """
+    x, y, z = _unit(x, y, z)
+    return _density(x, y, z)
+
+
+def _density(x, y, z):  # the formula (numpy or numba)
     inside = (x >= y) & (y >= 0.0) & (z >= 0.0)
     return inside * (_WEDGE_DENSITY * np.maximum(z, 0.0))
 
 
-@register_jitable
 def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     """Elementwise inverse: a unit direction (x, y, z) of W to (u, v) in [0, 1]^2.
 
     ``u = x^2 + y^2``, ``v = (4/pi) atan2(y, x)``, both clipped into [0, 1]; z is
-    not needed (Malley's projection drops it).  Inputs are not validated (use
-    :func:`cosine_wedge_to_square` for that).
+    not needed (Malley's projection drops it).  Checked as :func:`cosine_wedge_to_square`
+    checks its input (finite unit vectors of W), except inside a numba kernel.
 
     Parameters
     ----------
@@ -314,6 +324,38 @@ def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     >>> [round(float(c), 12) for c in cosine_wedge_uv(0.6, 0.0, 0.8)]
     [0.36, 0.0]
     """
+    x, y, z = _unit(x, y, z)
+    d = np.stack(np.broadcast_arrays(x, y, z), axis=-1)
+    tol = 8 * np.finfo(np.float64).eps
+    if not np.all((d[..., 0] - d[..., 1] >= -tol) & (d[..., 1] >= -tol) & (d[..., 2] >= -tol)):
+        raise ValueError("'x', 'y', 'z' must lie in the wedge W = {x >= y >= 0, z >= 0}")
+    return _uv(x, y, z)
+
+
+def _uv(x, y, z):  # the formula (numpy or numba)
     u = np.minimum(x * x + y * y, 1.0)
     v = np.minimum(np.maximum(np.arctan2(y, x) * _FOUR_OVER_PI, 0.0), 1.0)
     return u, v
+
+
+def _unit(x, y, z):
+    """x, y, z (see _reals) whose vectors are unit vectors (norm 1 within 10**-3), else ValueError naming them."""
+    x, y, z = check_real_arrays((x, "x"), (y, "y"), (z, "z"))
+    check_unit_directions(np.stack(np.broadcast_arrays(x, y, z), axis=-1), "x, y, z")
+    return x, y, z
+
+
+# Inside numba kernels (the path tracer's cosine-weighted sampler): the bare formulas.
+@overload(cosine_wedge_point, jit_options={}, inline="never", strict=False)
+def _cosine_wedge_point_in_kernels(u, v):
+    return _point
+
+
+@overload(cosine_wedge_density, jit_options={}, inline="never", strict=False)
+def _cosine_wedge_density_in_kernels(x, y, z):
+    return _density
+
+
+@overload(cosine_wedge_uv, jit_options={}, inline="never", strict=False)
+def _cosine_wedge_uv_in_kernels(x, y, z):
+    return _uv

@@ -16,7 +16,12 @@ SIGTERM (``kill``, ``timeout``, batch schedulers, containers) and 129 on SIGHUP.
 Every error is one line on stderr, never a traceback (set the environment
 variable ``SYMSPHERE_TRACEBACK=1`` to see one for an unexpected error).  No
 partial output file is ever left behind: the files of a run appear together,
-complete, or not at all.
+complete, or not at all.  A signal that arrives before the output files are
+renamed into place rolls them back (exit 130/143/129, nothing written); one that
+arrives once the renames have begun lets the command finish: the files are
+complete, it exits 0 and says so on stderr.  Outputs must be regular files (or
+new names): a device, a FIFO or a directory at ``--out`` is refused before any
+work.  Work estimated to take more than a day is refused unless ``--allow-long``.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, integrate, iter_hemisphere, iter_sphere
-from .._validation import check_count, check_seed
+from .._validation import MAX_PATHS, MAX_PIXELS, check_count, check_output_path, check_seed, check_size, file_kind
 from ..integrands import INTEGRANDS
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..maps import METHODS
@@ -69,21 +74,98 @@ _CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHU
 
 
 def _raise_terminated(signum, frame):
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
     raise _Terminated(signum)
 
 
+class _Outputs:
+    """The files (or directory) a verb writes, and whether they are in place: a late signal then ends in success."""
+
+    def __init__(self) -> None:
+        self.paths: list[Path] = []
+        self.before: list[tuple[int, int] | None] = []
+        self.done = False
+
+    def watch(self, paths) -> None:
+        """Call just before the write: remember what is at *paths* now (followed through symbolic links)."""
+        self.paths = [Path(p) for p in paths]
+        self.before = [_identity(p) for p in self.paths]
+
+    def complete(self) -> bool:
+        """Whether the write has put every file in place (each name now points at a new file)."""
+        if self.done:
+            return True
+        after = [_identity(p) for p in self.paths]
+        return bool(self.paths) and all(a is not None and a != b for a, b in zip(after, self.before))
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
+
+
+_LONG_SECONDS = 86400.0  # work estimated beyond a day needs --allow-long
+_FASTEST_DIRECTIONS_PER_SECOND = 1e9  # sample: 40x the 2.3e7/s measured to a file (docs/reliability.md)
+_FASTEST_EVALUATIONS_PER_SECOND = 1e9  # integrate: 17x the 59 M/s measured (docs/integration.md); then a pilot
+_FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread measured (docs/rendering.md)
+
+
+def _check_duration(seconds: float, what: str, args) -> None:
+    """Refuse work estimated beyond a day unless --allow-long was given (a usage error, before any work)."""
+    if seconds > _LONG_SECONDS and not args.allow_long:
+        raise _UsageError(
+            f"{what} is estimated to take at least {_duration(seconds)}; add --allow-long to run it anyway"
+        )
+
+
+def _add_allow_long(verb) -> None:
+    verb.add_argument(
+        "--allow-long", action="store_true",
+        help="run even if the work is estimated to take more than a day (refused otherwise, before any work)",
+    )  # fmt: skip
+
+
 @contextlib.contextmanager
-def _signals_as_interrupts():
-    """While the command runs, SIGTERM and SIGHUP raise _Terminated (the main thread only: signal's rule)."""
+def _signals_as_interrupts(pending: list[int]):
+    """While the command runs, SIGINT raises KeyboardInterrupt and SIGTERM, SIGHUP _Terminated (the main
+    thread only: signal's rule), and every signal is also recorded in *pending*.
+
+    Python runs a handler at any bytecode, also inside a callback from C (numba's compiler calls back into
+    Python through ctypes), where the exception is printed as "Exception ignored" and dropped: the run went
+    on and exited 0 with a traceback.  Such a lost interrupt stays in *pending*; :func:`_check_pending` raises
+    it again at the next safe point (each block written, the end of a render), and the unraisable-exception
+    hook stays quiet about it.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signum: signal.signal(signum, _raise_terminated) for signum in _CLEAN_EXIT_SIGNALS}
+
+    def handler(signum, frame):
+        pending.append(signum)
+        _raise_terminated(signum, frame)
+
+    def unraisable(report, previous_hook=sys.unraisablehook):
+        if not (isinstance(report.exc_type, type) and issubclass(report.exc_type, KeyboardInterrupt)):
+            previous_hook(report)
+
+    previous = {signum: signal.signal(signum, handler) for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS)}
+    previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
         yield
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        sys.unraisablehook = previous_hook
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+def _check_pending(args) -> None:
+    """Raise a signal that arrived but whose exception was lost (see _signals_as_interrupts)."""
+    if args.pending:
+        _raise_terminated(args.pending[0], None)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -162,6 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
         "memory stays at one chunk for any N (default: 48 * 2**16)",
     )
+    _add_allow_long(sample)
     _add_cluster_options(sample)
     sample.set_defaults(handler=_run_sample)
 
@@ -196,6 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
     integrate.add_argument("--rtol", type=float, default=None, help="relative tolerance: double n until it is met")
     integrate.add_argument("--atol", type=float, default=None, help="absolute tolerance: double n until it is met")
     integrate.add_argument("--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)")
+    _add_allow_long(integrate)
     _add_cluster_options(integrate)
     integrate.set_defaults(handler=_run_integrate)
 
@@ -262,6 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, default=None, help="numba threads (default: all cores)")
     render.add_argument("--out", default="render.png", metavar="FILE.png", help="default: %(default)s")
     render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    _add_allow_long(render)
     _add_cluster_options(render)
     render.set_defaults(handler=_run_render)
 
@@ -362,16 +447,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     prog = f"symsphere {args.verb}"
+    args.outputs = _Outputs()
+    args.pending = []
     try:
-        with _signals_as_interrupts(), compile_notice(prog):
-            return _with_notes(args.handler, args, prog)
-    except _Terminated as exc:
-        name = signal.Signals(exc.signum).name
-        print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
-        return 128 + exc.signum
-    except KeyboardInterrupt:
+        with _signals_as_interrupts(args.pending), compile_notice(prog):
+            status = _with_notes(args.handler, args, prog)
+            if not args.outputs.complete():  # an interrupt lost inside a C callback: not a success
+                _check_pending(args)
+        if argv is None and status == 0 and args.outputs.paths:  # the program is about to exit: a signal
+            _ignore_signals()  # now must not turn a written output into a death by signal
+        return status
+    except KeyboardInterrupt as exc:
+        name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+        if argv is None:  # the program is about to exit: no second signal may turn this into a death by signal
+            _ignore_signals()
+        if args.outputs.complete():  # the renames had begun: the output is whole, and it stays
+            shown = ", ".join(str(p) for p in args.outputs.paths)
+            print(f"{prog}: {name} arrived after the output was complete; kept {shown}", file=sys.stderr)
+            return 0
+        if isinstance(exc, _Terminated):
+            print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
+            return _exit_now(128 + exc.signum, argv)
         print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        return _exit_now(130, argv)
     except (_UsageError, ValueError, TypeError) as exc:
         # The library's validators name the argument; a traceback would add nothing.
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
@@ -391,6 +489,22 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _exit_now(status: int, argv) -> int:
+    """Run as the program (no *argv*) after an interrupt: exit with *status* now.  The interpreter's own
+    exit could still die by the signal (the audit once saw exit -2 after this line was printed, an
+    interrupt having been dropped inside a numba callback); everything of ours is already cleaned up."""
+    if argv is None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
+
+
+def _ignore_signals() -> None:
+    for signum in (signal.SIGINT, *_CLEAN_EXIT_SIGNALS):
+        signal.signal(signum, signal.SIG_IGN)
 
 
 def _one_line(exc: object) -> str:
@@ -421,6 +535,7 @@ def _run_sample(args) -> int:
     if args.normal is not None and args.domain != "hemisphere":
         raise _UsageError("--normal is only valid with --domain hemisphere; add --domain hemisphere or drop --normal")
     check_suffix(args.out, "--out")  # before sampling, so that a typo costs nothing
+    check_output_path(args.out, "--out")  # a device, a FIFO, a missing directory: refused now (OSError)
     seed = args.seed
     if seed is None:
         seed = np.random.SeedSequence().entropy  # printed below, so the run can be repeated
@@ -429,6 +544,7 @@ def _run_sample(args) -> int:
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
     count = 48 if args.domain == "sphere" else 24
     check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
+    _check_duration(args.n / _FASTEST_DIRECTIONS_PER_SECOND, f"--n {args.n}", args)
     chunk = args.chunk if args.chunk is not None else count * 2**16
     if args.domain == "sphere":
         iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
@@ -439,10 +555,16 @@ def _run_sample(args) -> int:
     try:
         blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
         with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
+            args.outputs.watch([args.out])
+            def progress(count):
+                _check_pending(args)  # an interrupt lost while a kernel compiled: roll back now
+                bar.update(count)
+
             try:
-                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=bar.update)
+                stream_directions(args.out, args.n, args.dtype, blocks, name="--out", progress=progress)
             except OSError as exc:  # name the user's file, not the temporary next to it
                 raise OSError(exc.errno, exc.strerror, args.out) from exc
+            args.outputs.done = True
     finally:
         _close_client(client)
     elapsed = time.perf_counter() - start
@@ -499,7 +621,7 @@ def _run_integrate(args) -> int:
         with warnings.catch_warnings():  # n_max reached: the tolerance line below says so
             warnings.filterwarnings("ignore", message="integrate: the tolerance")
             if client is None:
-                _print_estimate(integrand, kwargs)  # the integrand's compiled kernel: the fused path
+                _print_estimate(integrand, kwargs, args)  # the integrand's compiled kernel: the fused path
                 result = integrate(integrand, **kwargs)
             else:
                 from .. import distributed  # function-level: dask is slow to import and optional
@@ -537,16 +659,20 @@ def _no_error_bar(result) -> str:
 _ESTIMATE_ABOVE = 48 * 2**22  # evaluations (~2 s): longer in-process runs first say how long they will take
 
 
-def _print_estimate(f, kwargs):
+def _print_estimate(f, kwargs, args):
     """For a long in-process integration: time a pilot of 48 * 2**14 evaluations, print the estimate."""
     n = kwargs["n"]
+    if kwargs.get("n_max") is not None or "rtol" in kwargs:  # to a tolerance: up to n_max (default 48 * 2**24)
+        n = max(n or 0, kwargs.get("n_max") or 48 * 2**24)
     if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
         return
+    _check_duration(n / _FASTEST_EVALUATIONS_PER_SECOND, f"{n} evaluations", args)  # before the pilot
     pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
     pilot.update(n=48 * 2**14, points="random", replicates=None, rng=0)
     start = time.perf_counter()
     integrate(f, **pilot)  # the arguments are checked at the real call: errors appear there, at once
     rate = pilot["n"] / max(time.perf_counter() - start, 1e-9)
+    _check_duration(n / rate, f"{n} evaluations at {rate:.3g} evaluations/s", args)
     print(
         f"symsphere integrate: {n} evaluations, estimated {_duration(n / rate)} at {rate:.3g} evaluations/s; "
         "Ctrl-C stops",
@@ -563,6 +689,7 @@ def _duration(seconds: float) -> str:
 
 def _run_demo(args) -> int:
     start = time.perf_counter()
+    args.outputs.watch([args.out])
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
     print(
         f"report: {report}  (figures: {report.with_name('figure.png')}, {report.with_name('render.png')}; "
@@ -577,8 +704,9 @@ def _run_render(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in (".png", ".pfm", ".npy"):
         raise _UsageError(f"--out must end in .png, .pfm or .npy, got {args.out!r}")
-    if not out.parent.is_dir():
-        raise _UsageError(f"--out: directory {str(out.parent)!r} does not exist")
+    outputs = [out.with_suffix(s) for s in (".png", ".pfm", ".npy")]  # what write_outputs writes
+    for path in outputs:  # before the render, not after minutes of work; errors name the path (OSError)
+        check_output_path(path, "--out")
     if args.seed is not None:
         check_seed(args.seed, "--seed")
     furnace_exact = _furnace_radiance() if args.scene == "furnace" else None
@@ -589,11 +717,21 @@ def _run_render(args) -> int:
     scene_file = Path(args.scene)
     if scene_file.suffix.lower() == ".xml":  # a Mitsuba 3 scene file: rendered with symsphere_path
         return _run_mitsuba_render(args, out)
-    if scene_file.suffix.lower() in (".toml", ".json") and not scene_file.is_file():
-        raise _UsageError(f"--scene: file {args.scene!r} does not exist")
+    if scene_file.suffix.lower() in (".toml", ".json"):
+        if not scene_file.exists():
+            raise _UsageError(f"--scene: file {args.scene!r} does not exist")
+        if not scene_file.is_file():  # a FIFO would block the reader, /dev/zero never ends
+            raise _UsageError(f"--scene: {args.scene!r} is {file_kind(os.stat(scene_file).st_mode)}, not a regular file")
     for name in ("width", "height", "spp", "threads"):  # render() checks them too, naming 'spp' not '--spp'
         if getattr(args, name) is not None:
             check_count(getattr(args, name), f"--{name}")
+    pixels = args.width * args.height  # before any allocation; render() checks the same, without the '--'
+    check_size(pixels, "--width * --height", MAX_PIXELS, f"({args.width} x {args.height} pixels)")
+    check_size(args.spp, "--spp", MAX_PATHS // pixels, f"for {args.width} x {args.height} pixels (int64 path indices)")
+    if args.scheduler is None:  # on a remote cluster the number of threads is not known here
+        threads = (args.threads or os.cpu_count() or 1) * (args.workers or 1)
+        _check_duration(pixels * args.spp / (_FASTEST_PATHS_PER_THREAD * threads),
+                        f"{pixels * args.spp} paths (--width x --height x --spp on {threads} threads)", args)
     options = dict(
         width=args.width,
         height=args.height,
@@ -615,7 +753,10 @@ def _run_render(args) -> int:
             result = distributed.render(args.scene, client=client, **options)
     finally:
         _close_client(client)
+    _check_pending(args)  # an interrupt lost while the kernels compiled: nothing is written
+    args.outputs.watch(outputs)
     paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
+    args.outputs.done = True
     method = f" ({result.method})" if result.method else ""
     if client is None:
         where = f"on {result.threads} threads (+{result.startup_seconds:.2f} s compile/load)"

@@ -14,6 +14,7 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 
 from __future__ import annotations
 
+import io
 import math
 import os
 from pathlib import Path
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from .._validation import check_finite_array, check_path, short_repr
+from .._validation import check_finite_array, check_path, read_regular_file, short_repr
 from ..io import atomic_paths
 
 __all__ = [
@@ -63,21 +64,20 @@ def _check_suffix(path: str | os.PathLike, allowed: tuple[str, ...], name: str =
     return suffix
 
 
-def _write(suffix: str, temporary: Path, image: np.ndarray, exposure: float) -> None:
-    """Write *image* (checked) in the format of *suffix* to the file *temporary*."""
+def _encode(suffix: str, image: np.ndarray, exposure: float) -> bytes:
+    """The bytes of *image* (checked) in the format of *suffix*: made before any temporary file exists."""
+    buffer = io.BytesIO()
     if suffix == ".png":
         from matplotlib.image import imsave
 
-        imsave(temporary, tonemap(image, exposure), format="png")
+        imsave(buffer, tonemap(image, exposure), format="png")
     elif suffix == ".pfm":
         height, width = image.shape[:2]
-        data = np.ascontiguousarray(image[::-1], dtype="<f4")
-        with open(temporary, "wb") as handle:
-            handle.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
-            handle.write(data.tobytes())
+        buffer.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
+        buffer.write(np.ascontiguousarray(image[::-1], dtype="<f4").tobytes())
     else:
-        with open(temporary, "wb") as handle:
-            np.save(handle, image)
+        np.save(buffer, image)
+    return buffer.getvalue()
 
 
 def _check_float32_range(image: np.ndarray) -> None:
@@ -231,10 +231,12 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     exposure = _check_exposure(exposure)
     if ".pfm" in suffixes:
         _check_float32_range(image)
+    # Encoded first (tone mapping, PNG compression): the temporaries exist only while the bytes are written.
+    encoded = [_encode(suffix, image, exposure) for suffix in suffixes]
     with atomic_paths(paths) as temporaries:
-        for suffix, temporary, path in zip(suffixes, temporaries, paths):
+        for data, temporary, path in zip(encoded, temporaries, paths):
             try:
-                _write(suffix, temporary, image, exposure)
+                temporary.write_bytes(data)
             except OSError as exc:  # name the user's file, not the temporary next to it
                 raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
     return [Path(path) for path in paths]
@@ -251,8 +253,7 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
     ...     load_pfm(save_pfm(pathlib.Path(folder) / "x.pfm", np.full((2, 3, 3), 0.25))).shape
     (2, 3, 3)
     """
-    with open(check_path(path, "path"), "rb") as handle:
-        raw = handle.read()
+    raw = read_regular_file(check_path(path, "path"), f"'path' {str(path)!r}")  # never blocks on a FIFO
     tokens, position = [], 0
     while len(tokens) < 4:  # magic, width, height, scale; then exactly one whitespace byte
         while position < len(raw) and raw[position : position + 1].isspace():

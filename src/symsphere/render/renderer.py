@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._validation import MAX_PATHS, check_count, check_index, check_seed, check_size, short_repr
+from .._validation import MAX_PATHS, MAX_PIXELS, check_count, check_index, check_seed, check_size, short_repr
 from . import _integrator as _k
 from .image import save_image_set
 from .scene import Scene
@@ -341,6 +341,8 @@ def plan_passes(
     width = check_count(width, "width")
     height = check_count(height, "height")
     spp = check_count(spp, "spp")
+    # The image first (else 'spp'=1 was "too large ... at most 0"), then the paths, before any allocation.
+    check_size(width * height, "width * height", MAX_PIXELS, f"({width} x {height} pixels, held in memory in float64)")
     check_size(spp, "spp", MAX_PATHS // (width * height), f"for {width}x{height} pixels (paths are counted in int64)")
     if not isinstance(sampler, str) or sampler not in SAMPLERS:
         raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {short_repr(sampler)}")

@@ -56,7 +56,7 @@ from pathlib import Path
 from collections.abc import Collection, Iterable, Mapping
 from typing import Any
 
-from .._validation import check_path, short_repr
+from .._validation import check_path, read_regular_file, short_repr
 from ._scene_checks import BLACK, SceneError, shown, vector
 from .scene import MATERIAL_KINDS, Camera, HalfSpace, Material, Quad, Scene, Sphere
 
@@ -88,6 +88,9 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     FileNotFoundError
         If *path* does not exist.
     ValueError
+        (:class:`~symsphere.render.SceneError`) If *path* is not a regular file (a FIFO, a
+        device such as ``/dev/zero``, a directory: refused by what it is before it is opened).
+    ValueError
         (:class:`~symsphere.render.SceneError`) If the file is not valid TOML/JSON
         (or is larger than :data:`MAX_SCENE_BYTES`, or nested too deeply) or not a
         valid scene; the message is ``scene file '<path>': <field> ...``.
@@ -110,8 +113,10 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     suffix = path.suffix.lower()
     if suffix not in (".toml", ".json"):
         raise ValueError(f"{where}: the suffix must be .toml or .json, got {path.suffix!r}")
-    with open(path, "rb") as handle:
-        raw = handle.read(MAX_SCENE_BYTES + 1)
+    try:  # a FIFO, a device: refused by what it is, before it is opened (a FIFO would block)
+        raw = read_regular_file(path, where, MAX_SCENE_BYTES)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
     if len(raw) > MAX_SCENE_BYTES:
         raise SceneError(f"{where}: larger than {MAX_SCENE_BYTES // 2**20} MiB; a scene file is a short text")
     try:

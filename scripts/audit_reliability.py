@@ -1,0 +1,412 @@
+"""The reliability audit of docs/reliability.md, rerunnable: hostile inputs, files that are not ours,
+signals, absurd sizes.  Prints one markdown table (and, with --verbose, every finding).
+
+    .venv/bin/python scripts/audit_reliability.py            # about 5 minutes on 2 shared cores
+    .venv/bin/python scripts/audit_reliability.py --quick    # the bad-input table only
+
+What it counts (a finding is anything but the last column's "0"):
+
+- bad inputs: every public function of the library below ``symsphere.render`` (the property tests'
+  table of valid arguments, ``tests/test_properties.py``) and ten of ``symsphere.render``, called with
+  valid arguments but one, replaced in turn by each of 34 fixed odd values (None, bools, strings, NaN,
+  inf, 2**70, empty, ragged, object and complex arrays, ...).  Each call must return finite output or
+  raise ValueError/TypeError whose one-line message names the argument, without a warning, within
+  10 s.  "crashes" are deaths of the process that runs the table (it is a child process); "hangs" are
+  calls past 10 s; "wrong types" other exceptions or warnings; "unnamed" errors that do not name the
+  argument; "non-finite" results with NaN or inf.
+- not ours: ``sample --out``, ``render --out`` and ``demo --out`` at a FIFO, at a clone of /dev/null
+  and of /dev/full (``mknod``, as root only), directly and through a symbolic link: the special file
+  must still be one afterwards, and the command must exit 1 or 2 with one line.
+- files that block: ``load_scene``/``load_pfm`` and ``render --scene`` on a FIFO, /dev/zero, /dev/urandom
+  (through links): each must fail within 30 s saying what the file is.
+- signals: ``sample`` (the target exists) and ``render`` sent SIGINT or SIGTERM at several times; after
+  each run nothing of ours (``.NAME.<hex>.tmp``, ``.old``, ``.probe``) may be left, the exit status must
+  be 0 (the output complete and new) or 130/143 (the target as before), with no traceback.
+- absurd sizes: commands that must exit 2 within 20 s naming the argument (or asking for --allow-long).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import signal
+import stat
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CLI = [sys.executable, "-m", "symsphere"]
+OURS = re.compile(r"^\..+\.[0-9a-f]{8}\.(tmp|old|probe)$")
+
+
+# --- bad inputs (run in a child process: a crash is counted, not suffered) ---------------------------
+
+
+def _odd_values():
+    import numpy as np
+
+    class Opaque:
+        def __repr__(self):
+            return "<opaque>"
+
+    return [
+        None, True, "x", b"x", "", 1.5, -1, 0, 2**70, -(2**70), float("nan"), float("inf"), -float("inf"), 1e308,
+        -1e-320, [], [[]], {}, Opaque(), np.float32(1.0), 1 + 1j, [1, 2], [[1, 2], [3]], np.zeros((0, 3)),
+        np.zeros((0, 2)), np.full((2, 3), np.nan), np.full((2, 2), np.inf), np.array(["a", "b", "c"]),
+        np.zeros(3, dtype=object), np.ones((2, 3), dtype=np.complex128), np.ones((2, 3), dtype=bool),
+        np.ones((1, 3), dtype=np.int8), np.ones((1, 3), dtype=np.float16), np.ones((2, 2, 3)) * 1e200,
+    ]  # fmt: skip
+
+
+def _render_table(folder):
+    import numpy as np
+
+    from symsphere import render as rd
+
+    image = np.full((3, 4, 3), 0.25)
+    scene = folder / "ball.json"
+    scene.write_text(json.dumps({
+        "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 40},
+        "materials": {"m": {"type": "diffuse", "albedo": 0.5, "emission": 1}},
+        "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "m"}],
+    }))  # fmt: skip
+    pfm = rd.save_pfm(folder / "a.pfm", image)
+    tiny = dict(width=4, height=3, spp=2, seed=1)
+    return [
+        ("render", rd.render, dict(scene="furnace", **tiny)),
+        ("plan_passes", rd.plan_passes, dict(scene="furnace", width=4, height=3, spp=2, sampler="cosine", method=None,
+                                             pixel_filter="box", seed=1)),  # fmt: skip
+        ("load_scene", rd.load_scene, dict(path=scene)),
+        ("load_pfm", rd.load_pfm, dict(path=pfm)),
+        ("tonemap", rd.tonemap, dict(image=image, exposure=1.0)),
+        ("linear_to_srgb", rd.linear_to_srgb, dict(c=image)),
+        ("save_png", rd.save_png, dict(path=folder / "b.png", image=image, exposure=1.0)),
+        ("save_npy", rd.save_npy, dict(path=folder / "b.npy", image=image)),
+        ("save_image_set", rd.save_image_set, dict(paths=[folder / "c.png", folder / "c.pfm"], image=image)),
+        ("furnace", rd.furnace, dict(albedo=0.5, emission=1.0)),
+    ]
+
+
+def _all_finite(result, allow_inf=False):
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_properties import _all_finite as finite  # the property tests' notion of finite output
+
+    return finite(result, allow_inf=allow_inf)
+
+
+def bad_input_table(verbose: bool) -> dict[str, int]:
+    import warnings
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    import test_properties as tp  # the valid arguments of every public library function
+
+    counts = dict(functions=0, calls=0, finite=0, clean=0, unnamed=0, wrong_types=0, non_finite=0, hangs=0)
+    folder = Path(tempfile.mkdtemp(prefix="symsphere-audit-"))
+    os.chdir(folder)  # relative names land here
+    table = []
+    for name, function in tp.FUNCTIONS:
+        arguments = tp._valid_arguments(name, function)
+        if arguments is not None:
+            table.append((name, function, arguments, lambda f, a: tp._call(f, a)))
+    for name, function, arguments in _render_table(folder):
+        table.append((name, function, arguments, lambda f, a: f(**a)))
+
+    def alarm(signum, frame):
+        raise TimeoutError
+
+    signal.signal(signal.SIGALRM, alarm)
+    from symsphere import render as rd
+
+    rd.render("furnace", width=4, height=3, spp=2, seed=1)  # compile (or load) the kernels before the clock runs
+    tp._kernels_compiled.__wrapped__()  # the property tests' warm-up: every sampling kernel, float32 and float64
+    may_be_inf = set(tp.MAY_BE_INF) | {"plan_passes"}  # documented: -inf marks "no clip plane" in a plan's tables
+    odd = _odd_values()
+    for name, function, valid, call in table:
+        counts["functions"] += 1
+        for replaced in sorted(valid):
+            for value in odd:
+                arguments = dict(valid, **{replaced: value})
+                counts["calls"] += 1
+                finding = None
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    signal.alarm(10)
+                    try:
+                        result = call(function, arguments)
+                        if hasattr(result, "__next__"):
+                            result = list(result)
+                    except TimeoutError:
+                        counts["hangs"] += 1
+                        finding = "hang"
+                    except (ValueError, TypeError) as exc:
+                        message = str(exc)
+                        aliases = {"kind": ("type",), "color": ("albedo", "reflectance", "tint")}.get(replaced, ())
+                        if name == "load_scene" and message.startswith("scene file "):
+                            aliases = ("scene file",)  # names the file the user gave: scene file 'x': ...
+                        named = replaced == "f" or any(n in message for n in (replaced, *aliases))
+                        if named and message.strip() and "\n" not in message.strip():
+                            counts["clean"] += 1
+                        else:
+                            counts["unnamed"] += 1
+                            finding = f"unnamed: {message[:120]!r}"
+                    except OSError:  # a path the operating system refuses: documented
+                        counts["clean"] += 1
+                    except BaseException as exc:  # noqa: BLE001 - the audit counts every other exception
+                        counts["wrong_types"] += 1
+                        finding = f"{type(exc).__name__}: {str(exc)[:120]}"
+                    else:
+                        if _all_finite(result, name in may_be_inf):
+                            counts["finite"] += 1
+                        else:
+                            counts["non_finite"] += 1
+                            finding = "non-finite result"
+                    finally:
+                        signal.alarm(0)
+                    if caught and finding is None:
+                        counts["wrong_types"] += 1
+                        finding = f"warning: {caught[0].category.__name__}: {str(caught[0].message)[:100]}"
+                if finding and verbose:
+                    print(f"  {name}({replaced}={tp.short_repr(value) if hasattr(tp, 'short_repr') else value!r}): "
+                          f"{finding}", file=sys.stderr)  # fmt: skip
+    return counts
+
+
+def run_bad_input_table(verbose: bool) -> dict[str, int]:
+    """The table in a child process: if it dies, that is a crash."""
+    code = (
+        "import json, sys; sys.path.insert(0, sys.argv[1])\n"
+        "import audit_reliability as a\n"
+        "print('AUDIT ' + json.dumps(a.bad_input_table(sys.argv[2] == '1')))\n"
+    )
+    child = subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent), "1" if verbose else "0"],
+                           capture_output=True, text=True)  # fmt: skip
+    if verbose:
+        sys.stderr.write(child.stderr)
+    lines = [line for line in child.stdout.splitlines() if line.startswith("AUDIT ")]
+    if child.returncode != 0 or not lines:
+        return dict(crashes=1, detail=f"exit {child.returncode}: {child.stderr[-300:]}")
+    counts = json.loads(lines[-1][6:])
+    counts["crashes"] = 0
+    return counts
+
+
+# --- files that are not ours -----------------------------------------------------------------------------
+
+
+def _specials(folder: Path) -> list[Path]:
+    made = [folder / "fifo"]
+    os.mkfifo(made[0])
+    if os.geteuid() == 0:
+        for name, minor in (("nullclone", 3), ("fullclone", 7)):
+            os.mknod(folder / name, 0o666 | stat.S_IFCHR, os.makedev(1, minor))
+            made.append(folder / name)
+    return made
+
+
+def not_ours(verbose: bool) -> dict[str, int]:
+    counts = dict(cases=0, replaced=0, unclear=0)
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        for special in _specials(folder):
+            kind = stat.S_IFMT(os.lstat(special).st_mode)
+            for verb, suffix, extra in (("sample", ".npy", ["--n", "96", "--seed", "1"]),
+                                        ("render", ".png", ["--width", "4", "--height", "3", "--spp", "2", "--no-progress"]),
+                                        ("demo", "", ["--n", "4800", "--no-progress"])):  # fmt: skip
+                for through_link in (False, True):
+                    out = folder / f"{special.name}-{verb}-{'link' if through_link else 'direct'}{suffix}"
+                    if through_link:
+                        out.symlink_to(special.name)
+                    else:
+                        os.link(special, out)  # a second name of the same special file, with the verb's suffix
+                    run = subprocess.run(CLI + [verb, *extra, "--out", str(out)], capture_output=True, text=True,
+                                         timeout=600, cwd=folder)  # fmt: skip
+                    counts["cases"] += 1
+                    if stat.S_IFMT(os.lstat(special).st_mode) != kind or stat.S_IFMT(os.stat(out).st_mode) != kind:
+                        counts["replaced"] += 1
+                        print(f"  replaced: {verb} --out {out.name}", file=sys.stderr)
+                        os.unlink(out) if out.exists() else None
+                    lines = [line for line in run.stderr.splitlines() if line.strip() and "%" not in line]
+                    if run.returncode not in (1, 2) or len(lines) != 1 or "Traceback" in run.stderr:
+                        counts["unclear"] += 1
+                        print(f"  {verb} --out {out.name}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
+                    elif verbose:
+                        print(f"  {verb} --out {out.name}: {lines[0]}", file=sys.stderr)
+    return counts
+
+
+def blocking_files(verbose: bool) -> dict[str, int]:
+    counts = dict(cases=0, hangs=0, unclear=0)
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        os.mkfifo(folder / "f.json")
+        os.mkfifo(folder / "f.pfm")
+        (folder / "z.json").symlink_to("/dev/zero")
+        (folder / "u.toml").symlink_to("/dev/urandom")
+        (folder / "z.pfm").symlink_to("/dev/zero")
+        for file in ("f.json", "z.json", "u.toml", "f.pfm", "z.pfm"):
+            loader = "load_pfm" if file.endswith(".pfm") else "load_scene"
+            commands = [[sys.executable, "-c", f"from symsphere.render import {loader}; {loader}({file!r})"]]
+            if not file.endswith(".pfm"):
+                commands.append(CLI + ["render", "--scene", file, "--out", "x.png"])
+            for command in commands:
+                counts["cases"] += 1
+                try:
+                    run = subprocess.run(command, capture_output=True, text=True, timeout=30, cwd=folder)
+                except subprocess.TimeoutExpired:
+                    counts["hangs"] += 1
+                    print(f"  hang: {command[-3:]}", file=sys.stderr)
+                    continue
+                said = run.stderr.strip().splitlines()[-1] if run.stderr.strip() else ""
+                if not re.search(r"FIFO|character device", said):
+                    counts["unclear"] += 1
+                    print(f"  {file}: {said!r}", file=sys.stderr)
+                elif verbose:
+                    print(f"  {file}: {said}", file=sys.stderr)
+    return counts
+
+
+# --- signals ----------------------------------------------------------------------------------------------
+
+
+def _ours(folder: Path) -> list[str]:
+    return [p.name for p in folder.iterdir() if OURS.match(p.name)]
+
+
+def signals(verbose: bool) -> dict[str, int]:
+    import numpy as np
+
+    counts = dict(runs=0, left_behind=0, inconsistent=0, tracebacks=0, during_start_up=0)
+    n = 48 * 2**16 * 8
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        plans = [("sample", signum, delay) for signum in (signal.SIGINT, signal.SIGTERM)
+                 for delay in (0.0, 0.1, 0.3, 0.6, 1.0, 1.5, 2.5)]  # fmt: skip
+        plans += [("render", signum, delay) for signum in (signal.SIGINT, signal.SIGTERM) for delay in (1.0, 4.0, 8.0)]
+        for verb, signum, delay in plans:
+            for stale in folder.iterdir():
+                stale.unlink()
+            if verb == "sample":
+                out = folder / "d.npy"
+                np.save(out, np.zeros((1, 3), np.float32))
+                command = CLI + ["sample", "--n", str(n), "--dtype", "float32", "--seed", "3", "--out", str(out)]
+            else:
+                out = folder / "img.png"
+                command = CLI + ["render", "--width", "32", "--height", "24", "--spp", "4800", "--no-progress",
+                                 "--out", str(out)]  # fmt: skip
+            before = out.read_bytes() if out.exists() else None
+            process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            deadline = time.monotonic() + 300
+            while verb == "sample" and process.poll() is None and time.monotonic() < deadline:
+                if any(p.name.endswith(".tmp") for p in folder.iterdir()):
+                    break
+                time.sleep(0.002)
+            time.sleep(delay)
+            if process.poll() is None:
+                process.send_signal(signum)
+            _, stderr = process.communicate(timeout=600)
+            counts["runs"] += 1
+            left = _ours(folder)
+            if left:
+                counts["left_behind"] += 1
+                print(f"  {verb} {signal.Signals(signum).name} at {delay} s: left {left}", file=sys.stderr)
+            if "Traceback" in stderr:
+                counts["tracebacks"] += 1
+            status = process.returncode
+            now = out.read_bytes() if out.exists() else None
+            consistent = (status == 0 and now is not None and now != before) or (
+                status == 128 + signum and now == before)
+            if not consistent and now == before and not left and (status == -signum or "KeyboardInterrupt" in stderr) \
+                    and "symsphere" not in stderr.replace("symsphere/", ""):
+                # Killed while Python imported the package, before main() installed its handlers: the
+                # default action of the signal (nothing was written yet).  Counted apart.
+                counts["during_start_up"] += 1
+                counts["tracebacks"] -= "Traceback" in stderr
+                if verbose:
+                    print(f"  {verb} {signal.Signals(signum).name} at {delay} s: during start-up", file=sys.stderr)
+            elif not consistent:
+                counts["inconsistent"] += 1
+                print(f"  {verb} {signal.Signals(signum).name} at {delay} s: exit {status}, "
+                      f"{'changed' if now != before else 'unchanged'}: {stderr[-200:]!r}", file=sys.stderr)  # fmt: skip
+            elif verbose:
+                print(f"  {verb} {signal.Signals(signum).name} at {delay} s: exit {status}", file=sys.stderr)
+    return counts
+
+
+# --- absurd sizes -----------------------------------------------------------------------------------------
+
+
+ABSURD = [
+    (["render", "--width", str(2**40), "--height", str(2**40), "--spp", "1"], "--width * --height"),
+    (["render", "--width", str(2**31), "--height", str(2**31)], "--width * --height"),
+    (["render", "--spp", str(10**15)], "--spp"),
+    (["render", "--spp", str(10**13)], "--allow-long"),
+    (["integrate", "--integrand", "exp", "--n", str(48 * 10**13)], "--allow-long"),
+    (["sample", "--n", str(48 * 10**13), "--out", "x.npy"], "--allow-long"),
+    (["sample", "--n", str(48 * 2**64), "--out", "x.npy"], "'n'"),
+]
+
+
+def absurd_sizes(verbose: bool) -> dict[str, int]:
+    counts = dict(cases=0, slow=0, unnamed=0)
+    with tempfile.TemporaryDirectory() as name:
+        for arguments, named in ABSURD:
+            counts["cases"] += 1
+            start = time.monotonic()
+            try:
+                run = subprocess.run(CLI + arguments, capture_output=True, text=True, timeout=60, cwd=name)
+            except subprocess.TimeoutExpired:
+                counts["slow"] += 1
+                continue
+            if time.monotonic() - start > 20:
+                counts["slow"] += 1
+                print(f"  slow ({time.monotonic() - start:.0f} s): {' '.join(arguments)}", file=sys.stderr)
+            if run.returncode != 2 or named not in run.stderr or "Traceback" in run.stderr:
+                counts["unnamed"] += 1
+                print(f"  {' '.join(arguments)}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
+            elif verbose:
+                print(f"  {' '.join(arguments)}: {run.stderr.strip()}", file=sys.stderr)
+    return counts
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="the bad-input table only")
+    parser.add_argument("--verbose", action="store_true", help="print every case, not only the findings")
+    args = parser.parse_args()
+    start = time.monotonic()
+    rows = []
+    table = run_bad_input_table(args.verbose)
+    if "detail" in table:
+        print(f"bad-input table crashed: {table['detail']}", file=sys.stderr)
+    rows.append(("bad inputs", f"{table.get('calls', '?')} calls of {table.get('functions', '?')} functions "
+                 f"({table.get('clean', '?')} clean errors, {table.get('finite', '?')} finite results)",
+                 f"crashes {table['crashes']}, hangs {table.get('hangs', '?')}, wrong types {table.get('wrong_types', '?')}, "
+                 f"unnamed {table.get('unnamed', '?')}, non-finite {table.get('non_finite', '?')}"))  # fmt: skip
+    if not args.quick:
+        c = not_ours(args.verbose)
+        rows.append(("not ours", f"{c['cases']} --out at FIFOs/devices, direct and via links",
+                     f"replaced {c['replaced']}, unclear {c['unclear']}"))
+        c = blocking_files(args.verbose)
+        rows.append(("files that block", f"{c['cases']} loads of FIFOs, /dev/zero, /dev/urandom",
+                     f"hangs {c['hangs']}, unclear {c['unclear']}"))
+        c = signals(args.verbose)
+        rows.append(("signals", f"{c['runs']} runs of sample/render sent SIGINT/SIGTERM",
+                     f"left behind {c['left_behind']}, inconsistent {c['inconsistent']}, tracebacks {c['tracebacks']} "
+                     f"(and {c['during_start_up']} killed during start-up, before any work)"))
+        c = absurd_sizes(args.verbose)
+        rows.append(("absurd sizes", f"{c['cases']} commands", f"slow {c['slow']}, unnamed {c['unnamed']}"))
+    print("| part | cases | findings |")
+    print("|------|-------|----------|")
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
+    print(f"\n({time.monotonic() - start:.0f} s; python {sys.version.split()[0]}, euid {os.geteuid()})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
