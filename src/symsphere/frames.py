@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 import numbers
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 from numba.extending import overload
@@ -62,7 +64,7 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
     >>> frame_rows(0.0, 0.0, 1.0)
     ((1.0, -0.0, -0.0), (-0.0, 1.0, -0.0))
     """
-    values = []
+    values: list[float] = []
     for value, name in ((nx, "nx"), (ny, "ny"), (nz, "nz")):
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
             raise TypeError(f"'{name}' must be a real number; got {type(value).__name__} {short_repr(value)}")
@@ -78,7 +80,7 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
 
 
 @overload(frame_rows, jit_options={}, inline="never", strict=False)
-def _frame_rows_in_kernels(nx, ny, nz):  # numba: the formula, trusting its (unit, finite) arguments
+def _frame_rows_in_kernels(nx: Any, ny: Any, nz: Any) -> Any:  # numba: the formula, trusting its (unit, finite) arguments
     return _rows
 
 

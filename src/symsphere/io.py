@@ -675,7 +675,7 @@ def _checked_block(block: Any, dtype: np.dtype[Any], room: int) -> Any:
 
 
 @numba.njit(cache=True)
-def _first_non_unit_row(data, tolerance):  # pragma: no cover - compiled
+def _first_non_unit_row(data: Any, tolerance: float) -> int:  # pragma: no cover - compiled
     """The first row whose squared norm is not within *tolerance* of 1 (NaN and inf never are), or -1.
 
     One pass in float64, a few ms for a chunk of 3 * 2**20 rows (numpy's einsum took 0.1 s: longer than

@@ -55,6 +55,8 @@ with ``cache=True`` should list this file in its
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 from numba.extending import overload
@@ -258,10 +260,11 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     0.5
     """
     u, v = check_real_arrays((u, "u"), (v, "v"), unit_interval=True)
-    return _point(u, v)
+    point: tuple[_Real, _Real, _Real] = _point(u, v)
+    return point
 
 
-def _point(u, v):  # the formula (numpy or numba)
+def _point(u: Any, v: Any) -> Any:  # the formula (numpy or numba)
     r = np.sqrt(u)
     phi = v * _QUARTER_PI
     x = r * np.cos(phi)
@@ -294,10 +297,11 @@ def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     0.0
     """
     x, y, z = _unit(x, y, z)
-    return _density(x, y, z)
+    density: _Real = _density(x, y, z)
+    return density
 
 
-def _density(x, y, z):  # the formula (numpy or numba)
+def _density(x: Any, y: Any, z: Any) -> Any:  # the formula (numpy or numba)
     inside = (x >= y) & (y >= 0.0) & (z >= 0.0)
     return inside * (_WEDGE_DENSITY * np.maximum(z, 0.0))
 
@@ -329,16 +333,17 @@ def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     tol = 8 * np.finfo(np.float64).eps
     if not np.all((d[..., 0] - d[..., 1] >= -tol) & (d[..., 1] >= -tol) & (d[..., 2] >= -tol)):
         raise ValueError("'x', 'y', 'z' must lie in the wedge W = {x >= y >= 0, z >= 0}")
-    return _uv(x, y, z)
+    uv: tuple[_Real, _Real] = _uv(x, y, z)
+    return uv
 
 
-def _uv(x, y, z):  # the formula (numpy or numba)
+def _uv(x: Any, y: Any, z: Any) -> Any:  # the formula (numpy or numba)
     u = np.minimum(x * x + y * y, 1.0)
     v = np.minimum(np.maximum(np.arctan2(y, x) * _FOUR_OVER_PI, 0.0), 1.0)
     return u, v
 
 
-def _unit(x, y, z):
+def _unit(x: _Real, y: _Real, z: _Real) -> tuple[Any, Any, Any]:
     """x, y, z (see _reals) whose vectors are unit vectors (norm 1 within 10**-3), else ValueError naming them."""
     x, y, z = check_real_arrays((x, "x"), (y, "y"), (z, "z"))
     check_unit_directions(np.stack(np.broadcast_arrays(x, y, z), axis=-1), "x, y, z")
@@ -347,15 +352,15 @@ def _unit(x, y, z):
 
 # Inside numba kernels (the path tracer's cosine-weighted sampler): the bare formulas.
 @overload(cosine_wedge_point, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_point_in_kernels(u, v):
+def _cosine_wedge_point_in_kernels(u: Any, v: Any) -> Any:
     return _point
 
 
 @overload(cosine_wedge_density, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_density_in_kernels(x, y, z):
+def _cosine_wedge_density_in_kernels(x: Any, y: Any, z: Any) -> Any:
     return _density
 
 
 @overload(cosine_wedge_uv, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_uv_in_kernels(x, y, z):
+def _cosine_wedge_uv_in_kernels(x: Any, y: Any, z: Any) -> Any:
     return _uv

@@ -70,7 +70,7 @@ def render_scene_file(path: str | Path, *, width: int | None, height: int | None
     declared = _declared_parameters(path)
     params = {k: v for k, v in (("width", width), ("height", height), ("spp", spp)) if k in declared and v is not None}
     try:
-        scene = mi.load_file(str(path), **params)
+        scene = mi.load_file(str(path), **params)  # type: ignore[arg-type]  # the stub knows only update_scene: bool
     except Exception as error:  # noqa: BLE001 - Mitsuba reports every problem as a RuntimeError
         raise ValueError(f"scene file {str(path)!r}: {_last_line(error)}") from None
     own = str(scene.integrator()) if scene.integrator() is not None else ""
