@@ -61,7 +61,7 @@ import tempfile
 
 import numpy as np
 
-from symsphere.render import Camera, Quad, Scene, Sphere, diffuse, dielectric
+from symsphere.render import Camera, Quad, Scene, Sphere, dielectric, diffuse
 
 __all__ = ["gap_room", "mitsuba_dict", "HUGE_RADIUS"]
 
@@ -183,7 +183,9 @@ def _zone_mesh(center, radius, pole, theta0, theta1, rings, segments=96):
         theta = theta0 + (theta1 - theta0) * i / rings
         for j in range(segments):
             phi = 2 * math.pi * j / segments
-            vertices.append(center + radius * (math.cos(theta) * pole + math.sin(theta) * (math.cos(phi) * t + math.sin(phi) * b)))
+            vertices.append(
+                center + radius * (math.cos(theta) * pole + math.sin(theta) * (math.cos(phi) * t + math.sin(phi) * b))
+            )
     vertices = np.array(vertices)
 
     def ring(i, j):

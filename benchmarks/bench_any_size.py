@@ -39,12 +39,16 @@ def interleaved(call_a, call_b, repeats):
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=400, help="calls per size (fewer, at least 100, for the largest)")
+    parser.add_argument(
+        "--repeats", type=int, default=400, help="calls per size (fewer, at least 100, for the largest)"
+    )
     parser.add_argument("--dtype", nargs="+", default=["float64", "float32"], choices=["float64", "float32"])
     parser.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
     args = parser.parse_args()
-    print(f"symsphere {symsphere.__version__}, numpy {np.__version__}, {platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} cores, load average {_load()}")
+    print(
+        f"symsphere {symsphere.__version__}, numpy {np.__version__}, {platform.processor() or platform.machine()}, "
+        f"{os.cpu_count()} cores, load average {_load()}"
+    )
     print("medians over interleaved calls; ratio = time(n) / time(multiple of 48) (of the minima); target <= 1.10\n")
     print("| dtype | multiple | n | fresh: µs, multiple | n | ratio (min) | out=: µs, multiple | n | ratio (min) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")

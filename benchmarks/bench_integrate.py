@@ -46,14 +46,21 @@ import numpy as np
 from numba import get_num_threads, njit, prange
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import cpu_name  # noqa: E402
+from _machine import cpu_name
 
-import symsphere  # noqa: E402
-from symsphere._fused import call_vector, call_xyz  # noqa: E402
-from symsphere._kernels import BATCH, map_batch, pcg64_advanced, pcg64_random, pcg64_seeded  # noqa: E402
-from symsphere._kernels import prepare_kernels, rotated_weights  # noqa: E402
-from symsphere.integrands import INTEGRANDS  # noqa: E402
-from symsphere.points import BasePoints  # noqa: E402
+import symsphere
+from symsphere._fused import call_vector, call_xyz
+from symsphere._kernels import (
+    BATCH,
+    map_batch,
+    pcg64_advanced,
+    pcg64_random,
+    pcg64_seeded,
+    prepare_kernels,
+    rotated_weights,
+)
+from symsphere.integrands import INTEGRANDS
+from symsphere.points import BasePoints
 
 A = np.array([0.7, -0.4, 0.5])
 
@@ -133,8 +140,11 @@ def main(argv=None):
     parser.add_argument("--log2-orbits", type=int, default=20, help="n = 48 * 2**this (default 20)")
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds; medians are reported")
     parser.add_argument("--json", type=Path, default=None, help="write the measurements here")
-    parser.add_argument("--early-threads", action="store_true",
-                        help="reproduce the old artifact: start numba's threads (spinning wait) before symsphere does")
+    parser.add_argument(
+        "--early-threads",
+        action="store_true",
+        help="reproduce the old artifact: start numba's threads (spinning wait) before symsphere does",
+    )
     args = parser.parse_args(argv)
     if args.early_threads:
         get_num_threads()
@@ -156,14 +166,19 @@ def main(argv=None):
         def run():
             with blas_threads(blas) if blas else contextlib.nullcontext():
                 return symsphere.integrate(f, n=n, rng=1).integral
+
         return run
 
     runs = {}  # each distinct numpy baseline is timed once per round
-    baselines = {"poly numpy f": numpy_run(poly_numpy), "exp: suite f": numpy_run(suite_exp.f),
-                 "exp: plain lambda": numpy_run(exp_numpy), "exp: plain lambda, BLAS 1 thread": numpy_run(exp_numpy, 1)}
+    baselines = {
+        "poly numpy f": numpy_run(poly_numpy),
+        "exp: suite f": numpy_run(suite_exp.f),
+        "exp: plain lambda": numpy_run(exp_numpy),
+        "exp: plain lambda, BLAS 1 thread": numpy_run(exp_numpy, 1),
+    }
     for key, run in baselines.items():
         runs[("numpy", key)] = run
-    for name, (numpy_f, compiled, (kernel, caller), _) in cases.items():
+    for name, (_numpy_f, compiled, (kernel, caller), _) in cases.items():
         runs[(name, "fused")] = lambda f=compiled: symsphere.integrate(f, n=n, rng=1).integral
         runs[(name, "limit")] = lambda k=kernel, c=caller: _limit(k, c, seed_words, orbits, parts, weights)
     values = {}
@@ -178,36 +193,71 @@ def main(argv=None):
             run()
             times[key].append(time.perf_counter() - start)
     medians = {key: statistics.median(t) for key, t in times.items()}
-    print(f"n = 48 * 2**{args.log2_orbits} = {n:,} directions, {get_num_threads()} threads, {cpu_name()}, "
-          f"medians of {args.rounds} interleaved rounds, load average {os.getloadavg()[0]:.1f}"
-          + (" (--early-threads)" if args.early_threads else ""))
-    print("| integrand | numpy f (s) | plain lambda (s) | lambda, BLAS 1 thread (s) | fused (s) | limit (s) | "
-          "numpy f M/s | best numpy M/s | fused M/s | limit M/s | fused / numpy f | fused / best numpy | fused / limit |")
+    print(
+        f"n = 48 * 2**{args.log2_orbits} = {n:,} directions, {get_num_threads()} threads, {cpu_name()}, "
+        f"medians of {args.rounds} interleaved rounds, load average {os.getloadavg()[0]:.1f}"
+        + (" (--early-threads)" if args.early_threads else "")
+    )
+    print(
+        "| integrand | numpy f (s) | plain lambda (s) | lambda, BLAS 1 thread (s) | fused (s) | limit (s) | "
+        "numpy f M/s | best numpy M/s | fused M/s | limit M/s | fused / numpy f | fused / best numpy | fused / limit |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     rows = []
     for name, (numpy_f, *_, plain) in cases.items():
-        own = medians[("numpy", "exp: suite f" if numpy_f is suite_exp.f else
-                       "poly numpy f" if numpy_f is poly_numpy else "exp: plain lambda")]
+        own = medians[
+            (
+                "numpy",
+                "exp: suite f"
+                if numpy_f is suite_exp.f
+                else "poly numpy f"
+                if numpy_f is poly_numpy
+                else "exp: plain lambda",
+            )
+        ]
         t_plain = medians[("numpy", "exp: plain lambda")] if plain is not None else own
         t_blas1 = medians[("numpy", "exp: plain lambda, BLAS 1 thread")] if plain is not None else own
         best = min(own, t_plain, t_blas1)
         t_fused, t_limit = medians[(name, "fused")], medians[(name, "limit")]
-        row = dict(integrand=name, numpy=own, plain_lambda=t_plain, lambda_blas1=t_blas1, best_numpy=best,
-                   fused=t_fused, limit=t_limit, speedup=own / t_fused, speedup_best=best / t_fused,
-                   of_limit=t_limit / t_fused, integral_fused=float(values[(name, "fused")]),
-                   integral_limit=float(values[(name, "limit")]))
+        row = dict(
+            integrand=name,
+            numpy=own,
+            plain_lambda=t_plain,
+            lambda_blas1=t_blas1,
+            best_numpy=best,
+            fused=t_fused,
+            limit=t_limit,
+            speedup=own / t_fused,
+            speedup_best=best / t_fused,
+            of_limit=t_limit / t_fused,
+            integral_fused=float(values[(name, "fused")]),
+            integral_limit=float(values[(name, "limit")]),
+        )
         rows.append(row)
         blas = "-" if plain is None else f"{t_blas1:.3f}"
         lam = "-" if plain is None else f"{t_plain:.3f}"
-        print(f"| {name} | {own:.3f} | {lam} | {blas} | {t_fused:.3f} | {t_limit:.3f} | {n / own / 1e6:.0f} | "
-              f"{n / best / 1e6:.0f} | {n / t_fused / 1e6:.0f} | {n / t_limit / 1e6:.0f} | {row['speedup']:.1f}x | "
-              f"{row['speedup_best']:.1f}x | {row['of_limit']:.2f}x |")
+        print(
+            f"| {name} | {own:.3f} | {lam} | {blas} | {t_fused:.3f} | {t_limit:.3f} | {n / own / 1e6:.0f} | "
+            f"{n / best / 1e6:.0f} | {n / t_fused / 1e6:.0f} | {n / t_limit / 1e6:.0f} | {row['speedup']:.1f}x | "
+            f"{row['speedup_best']:.1f}x | {row['of_limit']:.2f}x |"
+        )
     if args.json:
-        args.json.write_text(json.dumps(dict(
-            n=n, threads=get_num_threads(), cpu=cpu_name(), rounds=args.rounds, load_average=os.getloadavg(),
-            early_threads=args.early_threads, rows=rows,
-            integrals={f"{k[0]} | {k[1]}": float(v) for k, v in values.items()},
-            times={f"{k[0]} | {k[1]}": v for k, v in times.items()}), indent=2))
+        args.json.write_text(
+            json.dumps(
+                dict(
+                    n=n,
+                    threads=get_num_threads(),
+                    cpu=cpu_name(),
+                    rounds=args.rounds,
+                    load_average=os.getloadavg(),
+                    early_threads=args.early_threads,
+                    rows=rows,
+                    integrals={f"{k[0]} | {k[1]}": float(v) for k, v in values.items()},
+                    times={f"{k[0]} | {k[1]}": v for k, v in times.items()},
+                ),
+                indent=2,
+            )
+        )
 
 
 if __name__ == "__main__":

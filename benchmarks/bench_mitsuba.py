@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import cpu_name, cpu_snapshot, others_cpu  # noqa: E402
+from _machine import cpu_name, cpu_snapshot, others_cpu
 
 OURS = [
     ("bsdf", "random"),
@@ -122,7 +122,7 @@ def speed(args, mi):
                          "others_cpu_share": None if load is None else load["share_of_all_cpus"]})  # fmt: skip
         share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
         print(f"{name}: others' CPU share {share}", flush=True)
-        for row in rows[-len(cases):]:
+        for row in rows[-len(cases) :]:
             print(f"  {row['case']:<40} {row['median_s']:.3f} s  {row['paths_per_s'] / 1e6:.2f} Mpaths/s  "
                   f"x{row['ratio_to_path']:.3f}  compile +{row['compile_s']:.1f} s", flush=True)  # fmt: skip
     assert set(args.scenes) <= set(sm.SCENES)
@@ -152,7 +152,9 @@ def quality(args, mi):
         own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
         ref_ldr = _ldr(ref)
         strip = [ref]  # --images: the reference, then every case at the last budget, side by side
-        cases = [Case(mi, name, "ours", s, p) for s, p in OURS] + [Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS]
+        cases = [Case(mi, name, "ours", s, p) for s, p in OURS] + [
+            Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS
+        ]
         for case in cases:
             case.render(args.width, args.height, args.equal_spp, 0)  # compile
             results = {"equal_spp": []}
@@ -160,14 +162,28 @@ def quality(args, mi):
             for seed in range(1, args.seeds + 1):
                 image, seconds, actual = case.render(args.width, args.height, args.equal_spp, seed)
                 rate.append(args.width * args.height * actual / seconds)
-                results["equal_spp"].append((_rel_mse(image, ref) - own, float(flip_evaluator.evaluate(ref_ldr, _ldr(image), "LDR", applyMagma=False)[1]), actual, seconds))
+                results["equal_spp"].append(
+                    (
+                        _rel_mse(image, ref) - own,
+                        float(flip_evaluator.evaluate(ref_ldr, _ldr(image), "LDR", applyMagma=False)[1]),
+                        actual,
+                        seconds,
+                    )
+                )
             paths_per_s = statistics.median(rate)
             for budget in args.budgets:
                 spp = max(int(budget * paths_per_s / (args.width * args.height)) // 24 * 24, 24)
                 results[f"{budget:g}s"] = []
                 for seed in range(1, args.seeds + 1):
                     image, seconds, actual = case.render(args.width, args.height, spp, 100 + seed)
-                    results[f"{budget:g}s"].append((_rel_mse(image, ref) - own, float(flip_evaluator.evaluate(ref_ldr, _ldr(image), "LDR", applyMagma=False)[1]), actual, seconds))
+                    results[f"{budget:g}s"].append(
+                        (
+                            _rel_mse(image, ref) - own,
+                            float(flip_evaluator.evaluate(ref_ldr, _ldr(image), "LDR", applyMagma=False)[1]),
+                            actual,
+                            seconds,
+                        )
+                    )
             strip.append(image)
             row = {"scene": name, "case": case.label, "paths_per_s": paths_per_s, "reference_own_rel_mse": own}
             for key, values in results.items():
@@ -189,7 +205,9 @@ def report(record):
     """Markdown tables of a quality run: per scene, every case at equal spp and at the last budget."""
     lines = []
     rows = record.get("quality", [])
-    budgets = [k for k in rows[0] if k.endswith("s") and isinstance(rows[0][k], dict) and k != "equal_spp"] if rows else []
+    budgets = (
+        [k for k in rows[0] if k.endswith("s") and isinstance(rows[0][k], dict) and k != "equal_spp"] if rows else []
+    )
     last = budgets[-1] if budgets else None
     for scene in dict.fromkeys(r["scene"] for r in rows):
         mine = [r for r in rows if r["scene"] == scene]
@@ -205,7 +223,11 @@ def report(record):
             lines.append(f"| {r['case']} | {e['rel_mse']:.4g} ({e['spp']}) | {e['flip']:.4f} | {work[r['case']]:.3g} | "
                          f"{work[best_work] / work[r['case']]:.2f} | {b['rel_mse']:.4g} ({b['spp']}, {b['seconds']:.2f}) | "
                          f"{b['flip']:.4f} | {eff[r['case']]:.3g} | {eff[r['case']] / eff[best]:.2f} |")  # fmt: skip
-        lines += ["", f"(best Mitsuba sampler: at equal work {best_work.split(' · ')[-1]}, at {last} {best.split(' · ')[-1]})", ""]
+        lines += [
+            "",
+            f"(best Mitsuba sampler: at equal work {best_work.split(' · ')[-1]}, at {last} {best.split(' · ')[-1]})",
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -213,15 +235,21 @@ def main(argv=None):
     import symsphere.mitsuba as sm
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("what", choices=("speed", "quality", "all", "report"), help="report: print the markdown tables of --json FILE")
+    parser.add_argument(
+        "what", choices=("speed", "quality", "all", "report"), help="report: print the markdown tables of --json FILE"
+    )
     parser.add_argument("--scenes", nargs="+", default=list(sm.SCENES), choices=sm.SCENES)
     parser.add_argument("--width", type=int, default=256)
     parser.add_argument("--height", type=int, default=256)
-    parser.add_argument("--spp", type=int, default=48, help="speed: spp per render, a multiple of 24 (default %(default)s)")
+    parser.add_argument(
+        "--spp", type=int, default=48, help="speed: spp per render, a multiple of 24 (default %(default)s)"
+    )
     parser.add_argument("--rounds", type=int, default=5, help="speed: interleaved rounds (default %(default)s)")
     parser.add_argument("--ref-spp", type=int, default=2048, help="quality: reference spp (default %(default)s)")
     parser.add_argument("--equal-spp", type=int, default=48, help="quality: spp at equal spp (default %(default)s)")
-    parser.add_argument("--budgets", type=float, nargs="+", default=[1.0, 2.0, 4.0], help="quality: seconds (default 1 2 4)")
+    parser.add_argument(
+        "--budgets", type=float, nargs="+", default=[1.0, 2.0, 4.0], help="quality: seconds (default 1 2 4)"
+    )
     parser.add_argument("--seeds", type=int, default=2, help="quality: seeds per measurement (default %(default)s)")
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="quality: write DIR/<scene>.png, the reference and every case "
@@ -235,7 +263,10 @@ def main(argv=None):
     mi = _setup()
     record = {"cpu": cpu_name(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
               "mitsuba": mi.__version__}  # fmt: skip
-    print(f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}", flush=True)
+    print(
+        f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}",
+        flush=True,
+    )
     if args.what in ("speed", "all"):
         record["speed"] = speed(args, mi)
     if args.what in ("quality", "all"):

@@ -101,6 +101,7 @@ def render(*args, **kwargs):
     """symsphere.render.render with the subcommand's integrator unless one is given."""
     return _render(*args, **{**_INTEGRATOR, **kwargs})
 
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/: _machine, _mitsuba_scenes, bench_sample
 from _machine import cpu_name, cpu_snapshot, others_cpu  # noqa: E402
 
@@ -112,7 +113,9 @@ def _timed_rounds(width, height, spp, repeats, threads):
     seconds = {s: [] for s in SAMPLERS}
     for round_ in range(repeats):
         for sampler in SAMPLERS:
-            result = render("cornell", width=width, height=height, spp=spp, sampler=sampler, seed=round_, threads=threads)
+            result = render(
+                "cornell", width=width, height=height, spp=spp, sampler=sampler, seed=round_, threads=threads
+            )
             seconds[sampler].append(result.seconds)
     return {s: statistics.median(v) for s, v in seconds.items()}, {s: min(v) for s, v in seconds.items()}
 
@@ -258,7 +261,9 @@ def validation(args):
                 mean, se = pixels.mean(), pixels.std(ddof=1) / math.sqrt(pixels.size)
                 exact = 0.7 / (1 - rho)
                 kind = "translucent" if translucent else "diffuse"
-                print(f"| `{sampler}` | {kind} | {rho} | {exact:.4f} | {mean:.4f} ± {se:.4f} | {(mean - exact) / se:+.2f} |")
+                print(
+                    f"| `{sampler}` | {kind} | {rho} | {exact:.4f} | {mean:.4f} ± {se:.4f} | {(mean - exact) / se:+.2f} |"
+                )
     print()
     width, height, block, replicates = 32, 24, 8, 8
 
@@ -353,7 +358,6 @@ class _Mitsuba:
     def __init__(self, scene, width, height, threads):
         import drjit as dr
         import mitsuba as mi
-
         from _mitsuba_scenes import mitsuba_dict
 
         mi.set_variant("llvm_ad_rgb")
@@ -368,7 +372,9 @@ class _Mitsuba:
 
     def _pass(self, spp, seed):
         start = time.perf_counter()
-        image = np.array(self.mi.render(self.scene, spp=spp, seed=self.dr.opaque(self.mi.UInt32, seed)), dtype=np.float64)
+        image = np.array(
+            self.mi.render(self.scene, spp=spp, seed=self.dr.opaque(self.mi.UInt32, seed)), dtype=np.float64
+        )
         return image, time.perf_counter() - start
 
     @staticmethod
@@ -483,7 +489,9 @@ def _equal_time_scene(name, args, integrators, default_integrator, mitsuba_ok, m
         for strategy in _rotated(strategies, round_):
             image, seconds = strategy.render(args.equal_spp, seed)
             rel, flip = ref[strategy.renderer][0].metrics(image)
-            records[strategy.key]["equal_spp"].append(dict(seed=seed, spp=args.equal_spp, seconds=seconds, rel_mse=rel, flip=flip))
+            records[strategy.key]["equal_spp"].append(
+                dict(seed=seed, spp=args.equal_spp, seconds=seconds, rel_mse=rel, flip=flip)
+            )
         print(f"{name}: equal spp, seed {seed} done", file=sys.stderr)
     for strategy in strategies:
         runs = records[strategy.key]["equal_spp"]
@@ -618,7 +626,7 @@ def _contact_sheet(path, name, ref, keep, records, budget, width, height, refere
     axes = figure.subplots(rows, columns, squeeze=False)
     for ax in axes.ravel():
         ax.axis("off")
-    for ax, (title, image) in zip(axes.ravel(), tiles):
+    for ax, (title, image) in zip(axes.ravel(), tiles, strict=False):
         ax.imshow(tonemap(image), interpolation="nearest")
         ax.set_title(title, fontsize=6.5)
     figure.suptitle(f"{name}: every strategy at an equal time of {budget} s (seed 1), next to the references",
@@ -646,7 +654,7 @@ def equal_time(args):
     images_dir = Path(args.images_dir)
     header = dict(
         command=" ".join(["python", "benchmarks/bench_render.py", *sys.argv[1:]]),
-        date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        date=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         machine=f"{os.cpu_count()} CPUs, {cpu_name()}, Python {platform.python_version()}, "
         f"numba {numba.__version__} ({args.threads} threads)",
         integrators=[i or "bsdf (render() has no integrator parameter)" for i in integrators],
@@ -708,7 +716,9 @@ def _equal_time_answer(results):
             error = ""
             if a["rel_mse_se"] is not None and b["rel_mse_se"] is not None:
                 error = f" ± {ratio * math.hypot(a['rel_mse_se'] / a['rel_mse'], b['rel_mse_se'] / b['rel_mse']):.2f}"
-            per_seed = [r["rel_mse"] / q["rel_mse"] for r, q in zip(record["equal_spp"], base["equal_spp"])]
+            per_seed = [
+                r["rel_mse"] / q["rel_mse"] for r, q in zip(record["equal_spp"], base["equal_spp"], strict=False)
+            ]
             paired = f"{statistics.fmean(per_seed):.3f}"
             if len(per_seed) > 1:
                 paired += f" ± {statistics.stdev(per_seed) / math.sqrt(len(per_seed)):.3f}"
@@ -740,7 +750,7 @@ def _equal_time_targets(results):
         lines.append(
             f"{scene['scene']}: best strategy at {last} s {best_key}: efficiency {eff_ratio:.2f}x Mitsuba path "
             f"(target >= 2: {'met' if eff_ratio >= 2 else 'NOT met'}); paths/s with NEE vs Mitsuba: "
-            + (", ".join(f"{k.split('/')[0]} {v:.2f}x" for k, v in speed.items()) + 
+            + (", ".join(f"{k.split('/')[0]} {v:.2f}x" for k, v in speed.items()) +
                f" (target >= 2.5: {'met' if speed and min(speed.values()) >= 2.5 else 'NOT met by all'})"
                if speed else "no NEE integrator in this render() (target not evaluable)")
         )  # fmt: skip
@@ -753,12 +763,14 @@ def paths_vs_mitsuba(args):
     ok, reason = _mitsuba_status(args.no_mitsuba)
     integrators, _ = _integrator_choices()
     out = dict(command="python benchmarks/bench_render.py " + " ".join(sys.argv[1:]),
-               date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+               date=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
                machine=f"{os.cpu_count()} CPUs, {cpu_name()}, numba {numba.__version__} ({args.threads} threads)",
                spp=args.spp, rounds=args.rounds, scenes=[])  # fmt: skip
     for name in args.scenes:
         scene = _scene_for(name)
-        strategies = [_Ours(scene, s, i, args.width, args.height, args.threads) for s in args.samplers for i in integrators]
+        strategies = [
+            _Ours(scene, s, i, args.width, args.height, args.threads) for s in args.samplers for i in integrators
+        ]
         if ok:
             strategies.append(_Mitsuba(scene, args.width, args.height, args.threads))
         for strategy in strategies:
@@ -795,8 +807,12 @@ def main():
     p.add_argument("--height", type=int, default=192)
     p.add_argument("--spp", type=int, default=48)
     p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--integrator", choices=("path", "bsdf"), default="bsdf",
-                   help="bsdf (default) reproduces the tables of docs/rendering.md made before NEE")
+    p.add_argument(
+        "--integrator",
+        choices=("path", "bsdf"),
+        default="bsdf",
+        help="bsdf (default) reproduces the tables of docs/rendering.md made before NEE",
+    )
     p.set_defaults(run=speed)
     c = verbs.add_parser("convergence")
     c.add_argument("--width", type=int, default=128)
@@ -805,8 +821,12 @@ def main():
     c.add_argument("--levels", type=int, default=6, help="spp = 24 * 2^k, k < levels")
     c.add_argument("--replicates", type=int, default=3)
     c.add_argument("--image-spp", type=int, default=96, help="spp of the side-by-side images")
-    c.add_argument("--integrator", choices=("path", "bsdf"), default="bsdf",
-                   help="bsdf (default) reproduces the tables and images of docs/rendering.md made before NEE")
+    c.add_argument(
+        "--integrator",
+        choices=("path", "bsdf"),
+        default="bsdf",
+        help="bsdf (default) reproduces the tables and images of docs/rendering.md made before NEE",
+    )
     c.add_argument(
         "--replot", action="store_true", help="redraw the figure and tables from docs/images/render_convergence.json"
     )
@@ -820,8 +840,12 @@ def main():
     e.add_argument("--height", type=int, default=192)
     e.add_argument("--samplers", nargs="+", choices=SAMPLERS, help="default: all of SAMPLERS")
     e.add_argument("--integrators", nargs="+", choices=("path", "bsdf"), help="default: both")
-    e.add_argument("--baseline", choices=SAMPLERS, default="cosine",
-                   help="the closing table's reference sampler (default: %(default)s)")
+    e.add_argument(
+        "--baseline",
+        choices=SAMPLERS,
+        default="cosine",
+        help="the closing table's reference sampler (default: %(default)s)",
+    )
     e.add_argument("--budgets", nargs="+", type=float, default=[1.0, 2.0], help="seconds per render")
     e.add_argument("--equal-spp", type=int, default=24)
     e.add_argument("--seeds", type=int, default=3)

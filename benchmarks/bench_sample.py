@@ -56,9 +56,9 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from _machine import cpu_name, cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
 
 import symsphere
-from _machine import cpu_name, cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
 from symsphere import sample_hemisphere, sample_sphere
 
 FILL_VALUE = 0.5
@@ -130,12 +130,26 @@ def reference_cases(n, rng):
                 lambda d=dtype: np.empty((n, 3), dtype=d).fill(FILL_VALUE),
                 n,
             ),
-            Case("numpy", "numpy classic (z = 1 − 2u, φ = 2πv)", name, "ref", lambda d=dtype: classic_sphere(n, rng, d), n),
+            Case(
+                "numpy",
+                "numpy classic (z = 1 − 2u, φ = 2πv)",
+                name,
+                "ref",
+                lambda d=dtype: classic_sphere(n, rng, d),
+                n,
+            ),
             Case("numpy", "normalised Gaussians", name, "ref", lambda d=dtype: gaussian_sphere(n, rng, d), n),
         ]
     direction = uniform_direction(3)
     cases.append(
-        Case("scipy", "scipy.stats.uniform_direction(3).rvs", "float64", "ref", lambda: direction.rvs(n, random_state=rng), n)
+        Case(
+            "scipy",
+            "scipy.stats.uniform_direction(3).rvs",
+            "float64",
+            "ref",
+            lambda: direction.rvs(n, random_state=rng),
+            n,
+        )
     )
     return cases
 
@@ -159,7 +173,12 @@ def symsphere_cases(n, rng):
                 n,
             ),
             Case(
-                "symsphere", "sample_hemisphere", name, "fresh", lambda d=dtype: sample_hemisphere(n, rng=rng, dtype=d), n
+                "symsphere",
+                "sample_hemisphere",
+                name,
+                "fresh",
+                lambda d=dtype: sample_hemisphere(n, rng=rng, dtype=d),
+                n,
             ),
             Case(
                 "symsphere",
@@ -214,12 +233,33 @@ def integrate_cases(n, rng):
         return w @ weights  # numpy's BLAS, with its own threads
 
     return [
-        Case("integrate", "integrate(f(w) = z), random points", "float64", "fresh",
-             lambda: integrate(f, n=n, rng=rng), n, "per-orbit standard error"),
-        Case("integrate", "integrate(f(w) = z), points='sobol'", "float64", "fresh",
-             lambda: integrate(f, n=n, points="sobol", rng=rng), n, "8 scrambled replicates"),
-        Case("integrate", "integrate(f(w) = w @ a), random points", "float64", "fresh",
-             lambda: integrate(f_blas, n=n, rng=rng), n, "BLAS threads next to numba's"),
+        Case(
+            "integrate",
+            "integrate(f(w) = z), random points",
+            "float64",
+            "fresh",
+            lambda: integrate(f, n=n, rng=rng),
+            n,
+            "per-orbit standard error",
+        ),
+        Case(
+            "integrate",
+            "integrate(f(w) = z), points='sobol'",
+            "float64",
+            "fresh",
+            lambda: integrate(f, n=n, points="sobol", rng=rng),
+            n,
+            "8 scrambled replicates",
+        ),
+        Case(
+            "integrate",
+            "integrate(f(w) = w @ a), random points",
+            "float64",
+            "fresh",
+            lambda: integrate(f_blas, n=n, rng=rng),
+            n,
+            "BLAS threads next to numba's",
+        ),
         Case("integrate", "sample_sphere + f + mean (no error estimate)", "float64", "fresh", sample_and_average, n),
     ]
 
@@ -361,8 +401,15 @@ def profile_cases(n, rng):
     from numba import njit, prange
 
     from symsphere._kernels import (
-        _BATCH, _map_batch, _store_orbit, fill_orbits, fill_random_orbits, part_bounds,
-        pcg64_advanced, pcg64_random, pcg64_seeded,
+        _BATCH,
+        _map_batch,
+        _store_orbit,
+        fill_orbits,
+        fill_random_orbits,
+        part_bounds,
+        pcg64_advanced,
+        pcg64_random,
+        pcg64_seeded,
     )
     from symsphere.points import BasePoints
 
@@ -416,38 +463,101 @@ def profile_cases(n, rng):
         bounds = part_bounds(m)
         domain = "sphere" if count == 48 else "hemisphere"
         cases += [
-            Case("base points", f"{domain}: BasePoints('random', ...) (Python)", "float64", "piece",
-                 lambda c=count, k=m: BasePoints("random", rng, k, per_point=c).seed_words, 0,
-                 "root seed, the stream's seed words", whole),
-            Case("base points", f"{domain}: draws only (2 per point, parallel)", "float64", "piece",
-                 lambda s=source, b=bounds: draws_only(s.seed_words, b, sink), 0, f"{m} points", whole),
-            Case("map", f"{domain}: map only (vectorised, batches of {_BATCH})", "float64", "piece",
-                 lambda u=uv, b=bounds: map_only(u, b, sink), 0, f"{m} evaluations, nothing stored", whole),
+            Case(
+                "base points",
+                f"{domain}: BasePoints('random', ...) (Python)",
+                "float64",
+                "piece",
+                lambda c=count, k=m: BasePoints("random", rng, k, per_point=c).seed_words,
+                0,
+                "root seed, the stream's seed words",
+                whole,
+            ),
+            Case(
+                "base points",
+                f"{domain}: draws only (2 per point, parallel)",
+                "float64",
+                "piece",
+                lambda s=source, b=bounds: draws_only(s.seed_words, b, sink),
+                0,
+                f"{m} points",
+                whole,
+            ),
+            Case(
+                "map",
+                f"{domain}: map only (vectorised, batches of {_BATCH})",
+                "float64",
+                "piece",
+                lambda u=uv, b=bounds: map_only(u, b, sink),
+                0,
+                f"{m} evaluations, nothing stored",
+                whole,
+            ),
         ]
         for dtype in DTYPES:
             name = np.dtype(dtype).name
             out = np.full((n, 3), FILL_VALUE, dtype=dtype)
             rows = out.reshape(m, 3 * count)
             cases += [
-                Case("stores", f"{domain}: stores only", name, "piece",
-                     lambda b=bounds, r=rows, c=count: stores_only(b, c, r), n, "a fixed point, no draws, no map", whole),
-                Case("kernel", f"{domain}: kernel, points given (fill_orbits)", name, "piece",
-                     lambda u=uv, o=out, c=count: fill_orbits(u, "equal_area", c, None, o), n, "map + stores", whole),
-                Case("kernel", f"{domain}: kernel drawing its points (fill_random_orbits)", name, "piece",
-                     lambda s=source, o=out, c=count, k=m: fill_random_orbits(
-                         s.seed_words, 0, k, "equal_area", c, None, o), n, "draws + map + stores", whole),
+                Case(
+                    "stores",
+                    f"{domain}: stores only",
+                    name,
+                    "piece",
+                    lambda b=bounds, r=rows, c=count: stores_only(b, c, r),
+                    n,
+                    "a fixed point, no draws, no map",
+                    whole,
+                ),
+                Case(
+                    "kernel",
+                    f"{domain}: kernel, points given (fill_orbits)",
+                    name,
+                    "piece",
+                    lambda u=uv, o=out, c=count: fill_orbits(u, "equal_area", c, None, o),
+                    n,
+                    "map + stores",
+                    whole,
+                ),
+                Case(
+                    "kernel",
+                    f"{domain}: kernel drawing its points (fill_random_orbits)",
+                    name,
+                    "piece",
+                    lambda s=source, o=out, c=count, k=m: fill_random_orbits(
+                        s.seed_words, 0, k, "equal_area", c, None, o
+                    ),
+                    n,
+                    "draws + map + stores",
+                    whole,
+                ),
             ]
             if count == 24:
                 cases.append(
-                    Case("kernel", "hemisphere: kernel drawing its points, normal=(1,1,1)", name, "piece",
-                         lambda s=source, o=out, k=m: fill_random_orbits(
-                             s.seed_words, 0, k, "equal_area", 24, basis, o), n, "draws + map + rotated stores",
-                         "sample_hemisphere, normal=(1,1,1), out="))
+                    Case(
+                        "kernel",
+                        "hemisphere: kernel drawing its points, normal=(1,1,1)",
+                        name,
+                        "piece",
+                        lambda s=source, o=out, k=m: fill_random_orbits(s.seed_words, 0, k, "equal_area", 24, basis, o),
+                        n,
+                        "draws + map + rotated stores",
+                        "sample_hemisphere, normal=(1,1,1), out=",
+                    )
+                )
             if count == 48:
                 flat = out.reshape(-1)
                 cases.append(
-                    Case("limit", f"fill, numba prange ({numba.get_num_threads()} threads)", name, "piece",
-                         lambda f=flat: parallel_fill(f, FILL_VALUE), n, "the write limit with all threads"))
+                    Case(
+                        "limit",
+                        f"fill, numba prange ({numba.get_num_threads()} threads)",
+                        name,
+                        "piece",
+                        lambda f=flat: parallel_fill(f, FILL_VALUE),
+                        n,
+                        "the write limit with all threads",
+                    )
+                )
     return cases
 
 
@@ -544,7 +654,9 @@ def profile_table(cases, table_ratios):
             dtypes = (case.dtype,) if case.directions else ("float64", "float32")
             parts = []
             for dtype in dtypes:
-                whole = next((c for c in cases if c.kind != "piece" and c.label == case.part_of and c.dtype == dtype), None)
+                whole = next(
+                    (c for c in cases if c.kind != "piece" and c.label == case.part_of and c.dtype == dtype), None
+                )
                 parts.append("—" if whole is None else f"{case.median / whole.median:.0%}")
             share = f"{' / '.join(parts)} of `{case.part_of}`"
         lines.append(
@@ -566,16 +678,36 @@ TARGETS = (
     ("sample_sphere f32, out= ≥ 1 × Mitsuba warp→numpy", "sample_sphere, out=", "float32", "vs_mitsuba", 1),
     ("hemisphere normal f64, out= ≥ 0.8 × fill", "sample_hemisphere, normal=(1,1,1), out=", "float64", "vs_fill", 0.8),
     ("hemisphere normal f32, out= ≥ 0.8 × fill", "sample_hemisphere, normal=(1,1,1), out=", "float32", "vs_fill", 0.8),
-    ("hemisphere normal f64, fresh ≥ 0.9 × (empty+fill)", "sample_hemisphere, normal=(1,1,1)", "float64",
-     "vs_empty_fill", 0.9),
-    ("hemisphere normal f32, fresh ≥ 0.9 × (empty+fill)", "sample_hemisphere, normal=(1,1,1)", "float32",
-     "vs_empty_fill", 0.9),
+    (
+        "hemisphere normal f64, fresh ≥ 0.9 × (empty+fill)",
+        "sample_hemisphere, normal=(1,1,1)",
+        "float64",
+        "vs_empty_fill",
+        0.9,
+    ),
+    (
+        "hemisphere normal f32, fresh ≥ 0.9 × (empty+fill)",
+        "sample_hemisphere, normal=(1,1,1)",
+        "float32",
+        "vs_empty_fill",
+        0.9,
+    ),
     ("hemisphere normal f64 ≥ 20 × numpy classic", "sample_hemisphere, normal=(1,1,1)", "float64", "vs_classic", 20),
     ("hemisphere normal f32 ≥ 20 × numpy classic", "sample_hemisphere, normal=(1,1,1)", "float32", "vs_classic", 20),
-    ("hemisphere normal f32 ≥ 1 × Mitsuba hemisphere warp + frame", "sample_hemisphere, normal=(1,1,1)", "float32",
-     "vs_mitsuba", 1),
-    ("hemisphere normal f32, out= ≥ 1 × Mitsuba hemisphere warp + frame", "sample_hemisphere, normal=(1,1,1), out=",
-     "float32", "vs_mitsuba", 1),
+    (
+        "hemisphere normal f32 ≥ 1 × Mitsuba hemisphere warp + frame",
+        "sample_hemisphere, normal=(1,1,1)",
+        "float32",
+        "vs_mitsuba",
+        1,
+    ),
+    (
+        "hemisphere normal f32, out= ≥ 1 × Mitsuba hemisphere warp + frame",
+        "sample_hemisphere, normal=(1,1,1), out=",
+        "float32",
+        "vs_mitsuba",
+        1,
+    ),
 )
 
 
@@ -585,8 +717,15 @@ def target_rows(cases, table_ratios):
         case = next((c for c in cases if c.group == "symsphere" and c.label == label and c.dtype == dtype), None)
         value = None if case is None else table_ratios[id(case)][key]
         best = None if case is None else table_ratios[id(case)][key + "_min"]
-        rows.append({"target": what, "threshold": threshold, "ratio": value, "ratio_of_minima": best,
-                     "reached": None if value is None else value >= threshold})
+        rows.append(
+            {
+                "target": what,
+                "threshold": threshold,
+                "ratio": value,
+                "ratio_of_minima": best,
+                "reached": None if value is None else value >= threshold,
+            }
+        )
     return rows
 
 
@@ -605,8 +744,12 @@ def targets_table(rows):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--n", type=int, default=48 * 2**16, help="directions per call, a multiple of 48 (default: %(default)s)")
-    parser.add_argument("--repeats", type=int, default=21, help="timed rounds; medians are reported (default: %(default)s)")
+    parser.add_argument(
+        "--n", type=int, default=48 * 2**16, help="directions per call, a multiple of 48 (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=21, help="timed rounds; medians are reported (default: %(default)s)"
+    )
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON to FILE")
     parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba 3 cases")
     parser.add_argument("--no-profile", action="store_true", help="skip the profile pieces")
@@ -645,7 +788,7 @@ def main(argv=None):
             try:
                 more, meta = mitsuba_cases(n, rng)
                 cases += more
-            except Exception as error:  # noqa: BLE001 - an optional peer must not stop the benchmark
+            except Exception as error:
                 mitsuba_message += f"; skipped: {type(error).__name__}: {error}"
         else:
             mitsuba_message = "skipped: " + mitsuba_message
@@ -688,7 +831,11 @@ def main(argv=None):
         f"{meta['date']}; {meta['cpu']}, {meta['cpus']} CPUs; numba {meta['numba_threads']} threads "
         f"({meta['numba_threading_layer']}); symsphere {meta['symsphere']}, numpy {meta['numpy']}, "
         f"scipy {meta['scipy']}, numba {meta['numba']}, Python {meta['python']}"
-        + (f"; Mitsuba {meta['mitsuba']}, drjit {meta['drjit']} ({meta['drjit_threads']} threads)" if "mitsuba" in meta else "")
+        + (
+            f"; Mitsuba {meta['mitsuba']}, drjit {meta['drjit']} ({meta['drjit_threads']} threads)"
+            if "mitsuba" in meta
+            else ""
+        )
         + f"; load average {load_before[0]:.2f} before, {load_after[0]:.2f} after (this run included)"
         + (
             f"; other processes used {others['cpu_s']:.1f} CPU-s in the {others['wall_s']:.0f} s of timing "

@@ -38,7 +38,10 @@ def _numbers(payload, pattern, prefix="", parent=""):
     """{path: value} of the numbers in a JSON document whose key or parent key matches *pattern*."""
     found = {}
     if isinstance(payload, dict):
-        label = next((payload[k] for k in ("label", "name", "case", "integrand", "scene") if isinstance(payload.get(k), str)), None)
+        label = next(
+            (payload[k] for k in ("label", "name", "case", "integrand", "scene") if isinstance(payload.get(k), str)),
+            None,
+        )
         extra = "/".join(str(payload[k]) for k in ("dtype", "group") if isinstance(payload.get(k), str))
         here = prefix + (f"[{label}{'/' + extra if extra else ''}]" if label else "")
         for key, value in payload.items():
@@ -65,9 +68,15 @@ def main(argv=None):
     parser.add_argument("--base", required=True, help="the revision to compare against (any git revision)")
     parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (default: %(default)s)")
     parser.add_argument("--json", type=Path, help="write the per-round numbers here")
-    parser.add_argument("--keys", default="median", help="regular expression for the keys to compare (default: %(default)s)")
+    parser.add_argument(
+        "--keys", default="median", help="regular expression for the keys to compare (default: %(default)s)"
+    )
     parser.add_argument("--rate", action="store_true", help="the numbers are rates (higher is faster), not times")
-    parser.add_argument("script", nargs=argparse.REMAINDER, help="-- the benchmark script (relative to the repository) and its arguments")
+    parser.add_argument(
+        "script",
+        nargs=argparse.REMAINDER,
+        help="-- the benchmark script (relative to the repository) and its arguments",
+    )
     args = parser.parse_args(argv)
     script = args.script[1:] if args.script[:1] == ["--"] else args.script
     if not script:
@@ -75,7 +84,9 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="symsphere-compare-") as scratch:
         scratch = Path(scratch)
         base_tree = scratch / "base"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base_tree), args.base], check=True)
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base_tree), args.base], check=True
+        )
         try:
             trees = {"base": base_tree, "new": ROOT}
             caches = {name: scratch / f"numba-{name}" for name in trees}
@@ -85,7 +96,9 @@ def main(argv=None):
             for index in range(args.rounds):
                 order = ["base", "new"] if index % 2 == 0 else ["new", "base"]
                 for name in order:
-                    rounds[name].append(_run(trees[name], caches[name], script, scratch / f"{name}-{index}.json", args.keys))
+                    rounds[name].append(
+                        _run(trees[name], caches[name], script, scratch / f"{name}-{index}.json", args.keys)
+                    )
                 print(f"round {index + 1}/{args.rounds} done", file=sys.stderr)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base_tree)], check=False)
@@ -101,7 +114,9 @@ def main(argv=None):
         shown = f"{ratio:.2f}×" if ratio is not None else "—"
         print(f"| {key} | {base:.4g} | {new:.4g} | {shown} |")
     if args.json:
-        args.json.write_text(json.dumps({"base": args.base, "script": script, "rounds": rounds, "summary": summary}, indent=1))
+        args.json.write_text(
+            json.dumps({"base": args.base, "script": script, "rounds": rounds, "summary": summary}, indent=1)
+        )
 
 
 if __name__ == "__main__":

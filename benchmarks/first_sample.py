@@ -98,8 +98,13 @@ def importtime_table(max_depth=3, min_ms=20.0):
             continue
         self_us, cumulative_us, name = line[len("import time:") :].split("|")
         depth = (len(name) - len(name.lstrip(" ")) - 1) // 2
-        node = {"module": name.strip(), "depth": depth, "cumulative_s": int(cumulative_us) / 1e6,
-                "self_s": int(self_us) / 1e6, "children": []}
+        node = {
+            "module": name.strip(),
+            "depth": depth,
+            "cumulative_s": int(cumulative_us) / 1e6,
+            "self_s": int(self_us) / 1e6,
+            "children": [],
+        }
         while stack and stack[-1]["depth"] > depth:
             node["children"].insert(0, stack.pop())
         stack.append(node)
@@ -177,8 +182,20 @@ def cold_start(runs, json_path=None):
     symsphere_cli = [sys.executable, "-m", "symsphere"]
     rows, kernels = {}, {}
     commands = {
-        "first `symsphere render --scene cornell --width 64 --height 48 --spp 48`":
-            [*symsphere_cli, "render", "--scene", "cornell", "--width", "64", "--height", "48", "--spp", "48", "--seed", "1"],
+        "first `symsphere render --scene cornell --width 64 --height 48 --spp 48`": [
+            *symsphere_cli,
+            "render",
+            "--scene",
+            "cornell",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--spp",
+            "48",
+            "--seed",
+            "1",
+        ],
         "`symsphere demo` after install": [*symsphere_cli, "demo", "--no-progress"],
     }
     for _ in range(runs):
@@ -196,17 +213,25 @@ def cold_start(runs, json_path=None):
             cache = tempfile.mkdtemp(prefix="symsphere-numba-cold-")
             out = tempfile.mkdtemp(prefix="symsphere-cold-out-")
             try:
-                extra = ["--out", os.path.join(out, "render.png")] if "render" in command else ["--out", os.path.join(out, "demo")]
+                extra = (
+                    ["--out", os.path.join(out, "render.png")]
+                    if "render" in command
+                    else ["--out", os.path.join(out, "demo")]
+                )
                 wall, cpu, _ = _cold_command(command + extra, cache)
                 rows.setdefault(label, []).append((wall, cpu))
             finally:
                 _rmtree(cache)
                 _rmtree(out)
-    print(f"Cold start (empty NUMBA_CACHE_DIR), {sys.executable}, {os.cpu_count()} CPUs, median of {runs} runs, "
-          f"load average {os.getloadavg()[0]:.2f}:\n")
+    print(
+        f"Cold start (empty NUMBA_CACHE_DIR), {sys.executable}, {os.cpu_count()} CPUs, median of {runs} runs, "
+        f"load average {os.getloadavg()[0]:.2f}:\n"
+    )
     print("| step | wall s | CPU s |\n|---|---:|---:|")
     for label, values in rows.items():
-        print(f"| {label} | {statistics.median(v[0] for v in values):.2f} | {statistics.median(v[1] for v in values):.2f} |")
+        print(
+            f"| {label} | {statistics.median(v[0] for v in values):.2f} | {statistics.median(v[1] for v in values):.2f} |"
+        )
     print("\nKernels compiled by the steps in one process (numba's compile events; wall s, median):\n")
     print("| kernel (closure constants) | argument types | s |\n|---|---|---:|")
     for label, values in sorted(kernels.items(), key=lambda kv: -statistics.median(kv[1])):
@@ -221,7 +246,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=48 * 1024, help="directions of the first call (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=7, help="rounds of warm runs (default: %(default)s)")
-    parser.add_argument("--cold", type=int, default=2, help="cold runs, each with a new empty numba cache (default: %(default)s)")
+    parser.add_argument(
+        "--cold", type=int, default=2, help="cold runs, each with a new empty numba cache (default: %(default)s)"
+    )
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON to FILE")
     parser.add_argument("--cold-start", action="store_true", help="the cold-start table instead (module docstring)")
     args = parser.parse_args(argv)
@@ -307,11 +334,15 @@ def main(argv=None):
     print("\n".join(lines))
 
     table, imports = importtime_table()
-    print("\n`python -X importtime -c 'import symsphere'`, modules of >= 20 ms to depth 3 (a module is charged to its first importer):\n")
+    print(
+        "\n`python -X importtime -c 'import symsphere'`, modules of >= 20 ms to depth 3 (a module is charged to its first importer):\n"
+    )
     print(table)
 
     verdict = "reached" if first < TARGET_SECONDS else "NOT reached"
-    print(f"\nTarget: first sample in a new process with a warm cache < {TARGET_SECONDS:.0f} s: {first:.3f} s, {verdict}.")
+    print(
+        f"\nTarget: first sample in a new process with a warm cache < {TARGET_SECONDS:.0f} s: {first:.3f} s, {verdict}."
+    )
 
     if args.json:
         payload = {

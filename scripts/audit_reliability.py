@@ -79,8 +79,11 @@ def _render_table(folder):
     tiny = dict(width=4, height=3, spp=2, seed=1)
     return [
         ("render", rd.render, dict(scene="furnace", **tiny)),
-        ("plan_passes", rd.plan_passes, dict(scene="furnace", width=4, height=3, spp=2, sampler="cosine", method=None,
-                                             pixel_filter="box", seed=1)),  # fmt: skip
+        (
+            "plan_passes",
+            rd.plan_passes,
+            dict(scene="furnace", width=4, height=3, spp=2, sampler="cosine", method=None, pixel_filter="box", seed=1),
+        ),  # fmt: skip
         ("load_scene", rd.load_scene, dict(path=scene)),
         ("load_pfm", rd.load_pfm, dict(path=pfm)),
         ("tonemap", rd.tonemap, dict(image=image, exposure=1.0)),
@@ -156,7 +159,7 @@ def bad_input_table(verbose: bool) -> dict[str, int]:
                             finding = f"unnamed: {message[:120]!r}"
                     except OSError:  # a path the operating system refuses: documented
                         counts["clean"] += 1
-                    except BaseException as exc:  # noqa: BLE001 - the audit counts every other exception
+                    except BaseException as exc:
                         counts["wrong_types"] += 1
                         finding = f"{type(exc).__name__}: {str(exc)[:120]}"
                     else:
@@ -233,7 +236,9 @@ def not_ours(verbose: bool) -> dict[str, int]:
                     lines = [line for line in run.stderr.splitlines() if line.strip() and "%" not in line]
                     if run.returncode not in (1, 2) or len(lines) != 1 or "Traceback" in run.stderr:
                         counts["unclear"] += 1
-                        print(f"  {verb} --out {out.name}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
+                        print(
+                            f"  {verb} --out {out.name}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr
+                        )
                     elif verbose:
                         print(f"  {verb} --out {out.name}: {lines[0]}", file=sys.stderr)
     return counts
@@ -319,9 +324,15 @@ def signals(verbose: bool) -> dict[str, int]:
             status = process.returncode
             now = out.read_bytes() if out.exists() else None
             consistent = (status == 0 and now is not None and now != before) or (
-                status == 128 + signum and now == before)
-            if not consistent and now == before and not left and (status == -signum or "KeyboardInterrupt" in stderr) \
-                    and "symsphere" not in stderr.replace("symsphere/", ""):
+                status == 128 + signum and now == before
+            )
+            if (
+                not consistent
+                and now == before
+                and not left
+                and (status == -signum or "KeyboardInterrupt" in stderr)
+                and "symsphere" not in stderr.replace("symsphere/", "")
+            ):
                 # Killed while Python imported the package, before main() installed its handlers: the
                 # default action of the signal (nothing was written yet).  Counted apart.
                 counts["during_start_up"] += 1
@@ -389,15 +400,30 @@ def main() -> int:
                  f"unnamed {table.get('unnamed', '?')}, non-finite {table.get('non_finite', '?')}"))  # fmt: skip
     if not args.quick:
         c = not_ours(args.verbose)
-        rows.append(("not ours", f"{c['cases']} --out at FIFOs/devices, direct and via links",
-                     f"replaced {c['replaced']}, unclear {c['unclear']}"))
+        rows.append(
+            (
+                "not ours",
+                f"{c['cases']} --out at FIFOs/devices, direct and via links",
+                f"replaced {c['replaced']}, unclear {c['unclear']}",
+            )
+        )
         c = blocking_files(args.verbose)
-        rows.append(("files that block", f"{c['cases']} loads of FIFOs, /dev/zero, /dev/urandom",
-                     f"hangs {c['hangs']}, unclear {c['unclear']}"))
+        rows.append(
+            (
+                "files that block",
+                f"{c['cases']} loads of FIFOs, /dev/zero, /dev/urandom",
+                f"hangs {c['hangs']}, unclear {c['unclear']}",
+            )
+        )
         c = signals(args.verbose)
-        rows.append(("signals", f"{c['runs']} runs of sample/render sent SIGINT/SIGTERM",
-                     f"left behind {c['left_behind']}, inconsistent {c['inconsistent']}, tracebacks {c['tracebacks']} "
-                     f"(and {c['during_start_up']} killed during start-up, before any work)"))
+        rows.append(
+            (
+                "signals",
+                f"{c['runs']} runs of sample/render sent SIGINT/SIGTERM",
+                f"left behind {c['left_behind']}, inconsistent {c['inconsistent']}, tracebacks {c['tracebacks']} "
+                f"(and {c['during_start_up']} killed during start-up, before any work)",
+            )
+        )
         c = absurd_sizes(args.verbose)
         rows.append(("absurd sizes", f"{c['cases']} commands", f"slow {c['slow']}, unnamed {c['unnamed']}"))
     print("| part | cases | findings |")

@@ -30,10 +30,10 @@ import re
 import shutil
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 import zipfile
-import tarfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,13 +75,19 @@ def check_long_description(metadata: str) -> None:
     check(html is not None and "<h1" in html, "the long description does not render (readme_renderer)")
     relative = sorted({t for t in re.findall(r'(?:src|href)="([^"]+)"', html) if not re.match(r"https?://|#", t)})
     missing = [t for t in relative if not (ROOT / t.split("#")[0]).is_file()]
-    check(relative and not missing, f"the long description links to files that are not in the repository: {missing[:5]}")
+    check(
+        relative and not missing, f"the long description links to files that are not in the repository: {missing[:5]}"
+    )
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--demo", action="store_true", help="run `symsphere demo --n 480` too (slow: compiles the renderer)")
-    parser.add_argument("--keep", type=Path, default=None, help="work in DIR and keep it (default: a temporary directory)")
+    parser.add_argument(
+        "--demo", action="store_true", help="run `symsphere demo --n 480` too (slow: compiles the renderer)"
+    )
+    parser.add_argument(
+        "--keep", type=Path, default=None, help="work in DIR and keep it (default: a temporary directory)"
+    )
     args = parser.parse_args()
     work = args.keep or Path(tempfile.mkdtemp(prefix="symsphere-wheel-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -101,11 +107,16 @@ def main() -> int:
             metadata = archive.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
         check(any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the wheel has no LICENSE")
         check("License-Expression: BSD-3-Clause" in metadata, "no License-Expression in the wheel's METADATA")
-        check("Project-URL:" not in metadata and "Author: symsphere developers" in metadata, "a project URL, or no author")
+        check(
+            "Project-URL:" not in metadata and "Author: symsphere developers" in metadata, "a project URL, or no author"
+        )
         check_long_description(metadata)
         with tarfile.open(sdist) as archive:
             members = {Path(m).name for m in archive.getnames()}
-        check({"LICENSE", "CHANGELOG.md", "README.md"} <= members, f"the sdist lacks LICENSE or CHANGELOG.md: {sorted(members)[:20]}")
+        check(
+            {"LICENSE", "CHANGELOG.md", "README.md"} <= members,
+            f"the sdist lacks LICENSE or CHANGELOG.md: {sorted(members)[:20]}",
+        )
 
         print("a bare venv with the wheel only:")
         venv = work / "venv"
@@ -113,7 +124,20 @@ def main() -> int:
         run([sys.executable, "-m", "venv", "--without-pip", venv])  # pip comes from outside: faster
         python = venv / "bin" / "python"
         symsphere = venv / "bin" / "symsphere"
-        run([sys.executable, "-m", "pip", "--python", python, "install", "--quiet", "--no-compile", "--disable-pip-version-check", wheel])  # no .pyc: faster
+        run(
+            [
+                sys.executable,
+                "-m",
+                "pip",
+                "--python",
+                python,
+                "install",
+                "--quiet",
+                "--no-compile",
+                "--disable-pip-version-check",
+                wheel,
+            ]
+        )  # no .pyc: faster
         version = run([symsphere, "--version"]).stdout.strip()
         module = run([python, "-c", "import symsphere; print(symsphere.__version__)"]).stdout.strip()
         check(version == f"symsphere {module}" and f"Version: {module}" in metadata, f"{version!r} vs {module!r}")

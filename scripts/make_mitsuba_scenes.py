@@ -72,7 +72,7 @@ def _fmt(x: float) -> str:
     return f"{float(x):.9g}"
 
 
-def _add(parent: ET.Element, key: str, value) -> None:  # noqa: C901 - one branch per XML tag
+def _add(parent: ET.Element, key: str, value) -> None:
     import mitsuba as mi
 
     if isinstance(value, dict):
@@ -117,7 +117,9 @@ def write_xml(path: Path, scene: dict, comment: str) -> None:
         if key != "type":
             _add(root, key, value)
     ET.indent(root)
-    text = f"<!-- {comment} Written by scripts/make_mitsuba_scenes.py (symsphere). -->\n" + ET.tostring(root, encoding="unicode")
+    text = f"<!-- {comment} Written by scripts/make_mitsuba_scenes.py (symsphere). -->\n" + ET.tostring(
+        root, encoding="unicode"
+    )
     path.write_text(text + "\n", encoding="utf-8")
 
 
@@ -218,7 +220,12 @@ def cornell_box(mi):
         else:
             quads = _facing(quads, centre)
         write_obj(OUT / f"cornell_box_{name}.obj", quads)
-        shape = {"type": "obj", "filename": f"cornell_box_{name}.obj", "face_normals": True, "bsdf": _diffuse(colours[name], twosided=False)}
+        shape = {
+            "type": "obj",
+            "filename": f"cornell_box_{name}.obj",
+            "face_normals": True,
+            "bsdf": _diffuse(colours[name], twosided=False),
+        }
         if name == "light":
             shape["emitter"] = {"type": "area", "radiance": _rgb(*radiance)}
         scene[name] = shape
@@ -228,7 +235,11 @@ def cornell_box(mi):
 def veach_mis(mi):
     T = mi.ScalarTransform4f
     scene = {"type": "scene", "integrator": _integrator(), "sensor": _sensor(mi, (0, 2.0, 15.0), (0, 1.2, 0), 40)}
-    scene["floor"] = {"type": "rectangle", "to_world": T().translate([0, 0, 0]).rotate([1, 0, 0], -90).scale(20), "bsdf": _diffuse((0.4,))}
+    scene["floor"] = {
+        "type": "rectangle",
+        "to_world": T().translate([0, 0, 0]).rotate([1, 0, 0], -90).scale(20),
+        "bsdf": _diffuse((0.4,)),
+    }
     scene["back"] = {"type": "rectangle", "to_world": T().translate([0, 0, -6]).scale(20), "bsdf": _diffuse((0.4,))}
     eye, light_y, light_z = np.array([0, 2.0, 15.0]), 6.0, -3.0
     for k, alpha in enumerate((0.01, 0.04, 0.12, 0.3)):
@@ -251,7 +262,10 @@ def veach_mis(mi):
         scene[f"light{k}"] = {"type": "sphere", "center": [-3.75 + 2.5 * k, light_y, light_z], "radius": radius,
                               "emitter": {"type": "area", "radiance": _rgb(power / (radius * radius))}}  # fmt: skip
     scene["fill"] = {"type": "constant", "radiance": _rgb(0.02)}
-    return scene, "A Veach-style MIS scene: four plates of increasing roughness, four spherical lights of increasing size."
+    return (
+        scene,
+        "A Veach-style MIS scene: four plates of increasing roughness, four spherical lights of increasing size.",
+    )
 
 
 def door_room(mi):
@@ -270,7 +284,11 @@ def door_room(mi):
 
     white, warm = _diffuse((0.75,)), _diffuse((0.75, 0.6, 0.45))
     x0 = 3.2  # the door opening x in [x0, x0 + door] of the partition z = P
-    scene = {"type": "scene", "integrator": _integrator(), "sensor": _sensor(mi, (1.2, 1.5, D - 0.2), (3.0, 1.0, P), 60)}
+    scene = {
+        "type": "scene",
+        "integrator": _integrator(),
+        "sensor": _sensor(mi, (1.2, 1.5, D - 0.2), (3.0, 1.0, P), 60),
+    }
     scene |= {
         "floor": rect((0, 0, 0), (0, 0, D), (W, 0, 0), white),
         "ceiling": rect((0, H, 0), (W, 0, 0), (0, 0, D), white),
@@ -281,7 +299,12 @@ def door_room(mi):
         "wall_a": rect((0, 0, P), (x0, 0, 0), (0, H, 0), white),
         "wall_b": rect((x0 + door, 0, P), (W - x0 - door, 0, 0), (0, H, 0), white),
         "lintel": rect((x0, 2.1, P), (door, 0, 0), (0, H - 2.1, 0), white),
-        "door": rect((x0 + door, 0, P), (-door * math.cos(ajar), 0, door * math.sin(ajar)), (0, 2.1, 0), _diffuse((0.5, 0.35, 0.2))),
+        "door": rect(
+            (x0 + door, 0, P),
+            (-door * math.cos(ajar), 0, door * math.sin(ajar)),
+            (0, 2.1, 0),
+            _diffuse((0.5, 0.35, 0.2)),
+        ),
         "light": rect((1.0, H - 1e-3, 1.0), (3.0, 0, 0), (0, 0, 2.0), white, {"type": "area", "radiance": _rgb(15.0)}),
     }
     return scene, "A room lit indirectly: the light is in a second room, seen through a door standing ajar."
@@ -294,17 +317,42 @@ def textured(mi):
     v = np.linspace(0, 1, 256)
     stripes = 0.15 + 0.7 * (0.5 + 0.5 * np.sin(2 * np.pi * 12 * v))[None, :, None] * np.array([0.9, 0.8, 0.3])
     save_png(OUT / "textured_stripes.png", np.broadcast_to(stripes, (64, 256, 3)).copy())
-    checker = {"type": "checkerboard", "color0": _rgb(0.8, 0.8, 0.75), "color1": _rgb(0.15, 0.15, 0.2), "to_uv": T().scale([8, 8, 1])}
+    checker = {
+        "type": "checkerboard",
+        "color0": _rgb(0.8, 0.8, 0.75),
+        "color1": _rgb(0.15, 0.15, 0.2),
+        "to_uv": T().scale([8, 8, 1]),
+    }
     bitmap = {"type": "bitmap", "filename": "textured_stripes.png", "to_uv": T().scale([2, 1, 1])}
     scene = {"type": "scene", "integrator": _integrator(), "sensor": _sensor(mi, (0, 1.5, 5.0), (0, 0.7, 0), 45)}
     scene |= {
-        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(4), "bsdf": _diffuse(None, texture=checker)},
-        "wall": {"type": "rectangle", "to_world": T().translate([0, 2, -2]).scale([4, 2, 1]), "bsdf": _diffuse(None, texture=bitmap)},
-        "plastic": {"type": "sphere", "center": [-0.8, 0.6, 0.0], "radius": 0.6,
-                    "bsdf": {"type": "roughplastic", "alpha": 0.15, "diffuse_reflectance": _rgb(0.2, 0.5, 0.25)}},  # fmt: skip
-        "ball": {"type": "sphere", "center": [0.9, 0.45, 0.6], "radius": 0.45, "bsdf": _diffuse(None, texture=dict(checker, to_uv=T().scale([6, 3, 1])))},
-        "light": {"type": "rectangle", "to_world": T().translate([0.5, 3.5, 1.0]).rotate([1, 0, 0], 90).scale(0.8),
-                  "emitter": {"type": "area", "radiance": _rgb(14, 13, 11)}},  # fmt: skip
+        "floor": {
+            "type": "rectangle",
+            "to_world": T().rotate([1, 0, 0], -90).scale(4),
+            "bsdf": _diffuse(None, texture=checker),
+        },
+        "wall": {
+            "type": "rectangle",
+            "to_world": T().translate([0, 2, -2]).scale([4, 2, 1]),
+            "bsdf": _diffuse(None, texture=bitmap),
+        },
+        "plastic": {
+            "type": "sphere",
+            "center": [-0.8, 0.6, 0.0],
+            "radius": 0.6,
+            "bsdf": {"type": "roughplastic", "alpha": 0.15, "diffuse_reflectance": _rgb(0.2, 0.5, 0.25)},
+        },  # fmt: skip
+        "ball": {
+            "type": "sphere",
+            "center": [0.9, 0.45, 0.6],
+            "radius": 0.45,
+            "bsdf": _diffuse(None, texture=dict(checker, to_uv=T().scale([6, 3, 1]))),
+        },
+        "light": {
+            "type": "rectangle",
+            "to_world": T().translate([0.5, 3.5, 1.0]).rotate([1, 0, 0], 90).scale(0.8),
+            "emitter": {"type": "area", "radiance": _rgb(14, 13, 11)},
+        },  # fmt: skip
         "sky": {"type": "constant", "radiance": _rgb(0.15, 0.18, 0.22)},
     }
     return scene, "A textured scene: a checkerboard floor, a bitmap-textured wall, glossy and textured spheres."

@@ -41,7 +41,9 @@ def assert_within_eps(got, expected, k, *, scale=None, eps=EPS64):
     got = np.asarray(got, dtype=np.float64)
     expected = np.asarray(expected, dtype=np.float64)
     got, expected = np.broadcast_arrays(got, expected)
-    bound = np.broadcast_to(k * eps * (np.abs(expected) if scale is None else np.asarray(scale, dtype=np.float64)), got.shape)
+    bound = np.broadcast_to(
+        k * eps * (np.abs(expected) if scale is None else np.asarray(scale, dtype=np.float64)), got.shape
+    )
     excess = np.abs(got - expected) - bound
     worst = np.unravel_index(int(np.argmax(excess)), excess.shape) if excess.size else ()
     assert excess.size == 0 or excess[worst] <= 0, (

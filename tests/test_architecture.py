@@ -91,7 +91,9 @@ def _is_application(path: Path) -> bool:
     return "apps" in relative.parts or (len(relative.parts) == 1 and relative.name in SHIMS)
 
 
-@pytest.mark.parametrize("path", [p for p in SOURCES if not _is_application(p)], ids=lambda p: str(p.relative_to(PACKAGE)))
+@pytest.mark.parametrize(
+    "path", [p for p in SOURCES if not _is_application(p)], ids=lambda p: str(p.relative_to(PACKAGE))
+)
 def test_the_library_never_imports_the_applications(path):
     tree = ast.parse(path.read_text(encoding="utf-8"))
     for node in ast.walk(tree):
@@ -107,8 +109,9 @@ def test_the_library_never_imports_the_applications(path):
         )
 
 
-@pytest.mark.parametrize("path", [p for p in SOURCES if p.name not in GENERATED],
-                         ids=lambda p: str(p.relative_to(PACKAGE)))
+@pytest.mark.parametrize(
+    "path", [p for p in SOURCES if p.name not in GENERATED], ids=lambda p: str(p.relative_to(PACKAGE))
+)
 def test_modules_stay_readable(path):
     lines = len(path.read_text(encoding="utf-8").splitlines())
     assert lines <= MAX_LINES, f"{path.relative_to(PACKAGE)} has {lines} lines; split it by concept"
@@ -122,6 +125,8 @@ def test_the_checker_sees_a_violation(tmp_path):
     for name in ("__init__", "symmetry", "maps", "_kernels"):
         (package / f"{name}.py").write_text("")
     probe = package / "probe.py"
-    probe.write_text("from .symmetry import _fold\nimport symsphere.maps as m\nm._REGISTRY\nfrom ._kernels import fill\n")
+    probe.write_text(
+        "from .symmetry import _fold\nimport symsphere.maps as m\nm._REGISTRY\nfrom ._kernels import fill\n"
+    )
     found = _violations(probe, package)
     assert len(found) == 2, found

@@ -11,12 +11,12 @@ import math
 
 import numpy as np
 import pytest
+from references import LINEAR_NORM, cmax, cosine_pdf, linear_triangle_pdf, pole_pdf
 from scipy import optimize
 
 from symsphere import bins, stats
 from symsphere.bins import bin_probabilities, equal_area_bins
 from symsphere.stats import uniform_pdf
-from references import LINEAR_NORM, cmax, cosine_pdf, linear_triangle_pdf, pole_pdf
 
 INV_SQRT3 = 1.0 / math.sqrt(3.0)
 
@@ -59,7 +59,7 @@ def exact_triangle_bins(bins, kind):
             c0, c1 = cos_e[j], cos_e[j + 1]
             pts = sorted({a, b} | {p for p in (_crossing(c0, a, b), _crossing(c1, a, b)) if p})
             total = 0.0
-            for p, q in zip(pts[:-1], pts[1:]):
+            for p, q in zip(pts[:-1], pts[1:], strict=False):
                 m = cmax(0.5 * (p + q))
                 if m >= c1:
                     continue  # piece entirely outside T0
@@ -72,12 +72,16 @@ def exact_triangle_bins(bins, kind):
                         total += 4 / np.pi * (t(c0) - t(c1)) * (math.sin(q) - math.sin(p))
                 else:  # lower limit is the boundary cmax(phi)
                     if kind == "uniform":
+
                         def F(x):
                             return c1 * x - math.asin(math.sin(x) / s2)
+
                         total += 12 / np.pi * (F(q) - F(p))
                     elif kind == "linear":
+
                         def F(x):
                             return (c1**2 * x - x + math.atan(math.tan(x) / s2) / s2) / 2
+
                         total += LINEAR_NORM * (F(q) - F(p))
                     else:
                         total += 4 / np.pi * ((q - p) - t(c1) * (math.sin(q) - math.sin(p)))
@@ -107,9 +111,9 @@ def test_cosine_integral_per_bin(bins):
     assert abs(p.sum() - 1) < 1e-12
 
 
-@pytest.mark.parametrize("kind,pdf", [("uniform", uniform_pdf("triangle")),
-                                      ("linear", linear_triangle_pdf),
-                                      ("pole", pole_pdf)])
+@pytest.mark.parametrize(
+    "kind,pdf", [("uniform", uniform_pdf("triangle")), ("linear", linear_triangle_pdf), ("pole", pole_pdf)]
+)
 @pytest.mark.parametrize("bins", [(5, 7), (16, 16), (31, 31), (64, 64)])
 def test_triangle_bins_match_antiderivatives(kind, pdf, bins):
     """Bins cut by the T0 boundary, and the pole bins, are integrated to 1e-6 relative."""
@@ -152,8 +156,8 @@ def test_pole_substitution_matters():
 
 
 def test_pole_density_normalised():
-    for bins in [(4, 4), (16, 16), (64, 64)]:
-        assert abs(bin_probabilities(pole_pdf, "triangle", bins).sum() - 1) < 1e-6
+    for shape in [(4, 4), (16, 16), (64, 64)]:
+        assert abs(bin_probabilities(pole_pdf, "triangle", shape).sum() - 1) < 1e-6
 
 
 # ---------------------------------------------------------------------------

@@ -9,11 +9,10 @@ import warnings
 import numpy as np
 import pytest
 from numba import njit
+from references import scaled_for_load
 
 import symsphere
 from symsphere.points import BLOCK
-
-from references import scaled_for_load
 
 distributed = pytest.importorskip("distributed")
 from symsphere import distributed as ss_distributed  # noqa: E402
@@ -61,7 +60,12 @@ def test_integrate_equals_single_process(client, kwargs):
 
 def _same_run(a, b):
     return _same(a, b) and (a.n_evaluations, a.n_stages, a.converged, a.tolerance, a.confidence_interval) == (
-        b.n_evaluations, b.n_stages, b.converged, b.tolerance, b.confidence_interval)
+        b.n_evaluations,
+        b.n_stages,
+        b.converged,
+        b.tolerance,
+        b.confidence_interval,
+    )
 
 
 @pytest.mark.parametrize(
@@ -85,7 +89,8 @@ def test_integrate_to_tolerance_equals_single_process(client, kwargs):
             result = ss_distributed.integrate(exp_dot, client=client, chunk_blocks=chunk_blocks, **kwargs)
         assert _same_run(result, single)
         assert [str(w.message) for w in caught if "tolerance" in str(w.message)] == [
-            str(w.message) for w in single_warnings if "tolerance" in str(w.message)]
+            str(w.message) for w in single_warnings if "tolerance" in str(w.message)
+        ]
 
 
 @njit
@@ -111,7 +116,10 @@ def test_dask_array_equals_sample_sphere(client):
         array = ss_distributed.sample_sphere(n, chunks=chunks, rng=5, dtype=np.float32)
         assert np.array_equal(client.compute(array).result(), expected)
     hemi = ss_distributed.sample_hemisphere(24 * 3 * BLOCK, chunks=24 * BLOCK, normal=[1, 1, 0], points="halton", rng=6)
-    assert np.array_equal(client.compute(hemi).result(), symsphere.sample_hemisphere(24 * 3 * BLOCK, normal=[1, 1, 0], points="halton", rng=6))
+    assert np.array_equal(
+        client.compute(hemi).result(),
+        symsphere.sample_hemisphere(24 * 3 * BLOCK, normal=[1, 1, 0], points="halton", rng=6),
+    )
 
 
 def test_killed_worker_gives_identical_result(client):
@@ -144,11 +152,31 @@ def test_unreachable_scheduler_fails_fast():
 @pytest.mark.parametrize(
     "call, error, match",
     [
-        (lambda: ss_distributed.sample_sphere(48 * 10, chunks=480), ValueError, "'chunks'=480 is not a multiple of 196608"),
-        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, chunk_blocks=0), ValueError, "'chunk_blocks' must be positive"),
-        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, colour="red"), TypeError, "unexpected keyword arguments"),
-        (lambda: ss_distributed.integrate(exp_dot, client=object()), TypeError, "missing required keyword argument 'n'"),
-        (lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, n_max=96), ValueError, "'n_max' is only valid"),
+        (
+            lambda: ss_distributed.sample_sphere(48 * 10, chunks=480),
+            ValueError,
+            "'chunks'=480 is not a multiple of 196608",
+        ),
+        (
+            lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, chunk_blocks=0),
+            ValueError,
+            "'chunk_blocks' must be positive",
+        ),
+        (
+            lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, colour="red"),
+            TypeError,
+            "unexpected keyword arguments",
+        ),
+        (
+            lambda: ss_distributed.integrate(exp_dot, client=object()),
+            TypeError,
+            "missing required keyword argument 'n'",
+        ),
+        (
+            lambda: ss_distributed.integrate(exp_dot, client=object(), n=48, n_max=96),
+            ValueError,
+            "'n_max' is only valid",
+        ),
         (lambda: ss_distributed.integrate(exp_dot, client=object(), rtol=-1.0), ValueError, "'rtol' must be"),
     ],
 )
@@ -159,7 +187,6 @@ def test_bad_input(call, error, match):
 
 def test_render_on_cluster_equals_single_process(client):
     from symsphere.render import render
-
     from symsphere.render.renderer import plan_passes
 
     options = dict(width=64, height=48, spp=200, sampler="symmetric_sobol", seed=3)

@@ -25,7 +25,7 @@ import symsphere
 from symsphere.points import BLOCK
 
 pytest.importorskip("distributed")
-from symsphere import distributed as ss_distributed  # noqa: E402
+from symsphere import distributed as ss_distributed
 
 A = np.array([0.7, -0.4, 0.5])
 

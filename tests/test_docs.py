@@ -53,8 +53,7 @@ NOT_DOCUMENTED = {
 
 # Documented modules with public names that lack an example (or constants without a doc comment).
 # Delete an entry when its module is complete: the strict xfail then turns into a pass.
-INCOMPLETE = {
-}
+INCOMPLETE = {}
 
 
 def documented_modules():
@@ -130,7 +129,9 @@ def test_every_public_module_is_documented_or_exempt():
     documented = set(documented_modules())
     assert "symsphere" in documented and len(documented) == len(documented_modules())
     missing = [name for name in public_modules() if name not in documented and name not in NOT_DOCUMENTED]
-    assert not missing, f"add a line for each of {missing} to docs/api/index.rst (or to NOT_DOCUMENTED, with the reason)"
+    assert not missing, (
+        f"add a line for each of {missing} to docs/api/index.rst (or to NOT_DOCUMENTED, with the reason)"
+    )
     stale = sorted((set(NOT_DOCUMENTED) & documented) | (set(NOT_DOCUMENTED) - set(public_modules())))
     assert not stale, f"NOT_DOCUMENTED names modules that are documented or gone: {stale}"
 

@@ -10,12 +10,12 @@ import math
 
 import numpy as np
 import pytest
+from references import cap_rule
 from scipy import special
 
 import symsphere as ss
 from symsphere import harmonics as H
 from symsphere import integrands as I
-from references import cap_rule
 
 Z_AXIS = np.array([0.0, 0.0, 1.0])
 
@@ -53,7 +53,9 @@ def test_sh_known_values():
     for l in range(9):
         for m in range(-l, l + 1):
             np.testing.assert_allclose(basis[:, l * l + l + m], H.real_sh(l, m, d), rtol=0, atol=1e-15)
-            np.testing.assert_allclose(H.evaluate_polynomial(H.sh_polynomial(l, m), d), H.real_sh(l, m, d), rtol=0, atol=1e-13)
+            np.testing.assert_allclose(
+                H.evaluate_polynomial(H.sh_polynomial(l, m), d), H.real_sh(l, m, d), rtol=0, atol=1e-13
+            )
 
 
 def test_sh_addition_theorem():
@@ -62,7 +64,9 @@ def test_sh_addition_theorem():
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     basis = H.real_sh_basis(8, d)
     for l in range(9):
-        np.testing.assert_allclose((basis[:, l * l:(l + 1) ** 2] ** 2).sum(axis=1), (2 * l + 1) / (4 * np.pi), rtol=1e-13)
+        np.testing.assert_allclose(
+            (basis[:, l * l : (l + 1) ** 2] ** 2).sum(axis=1), (2 * l + 1) / (4 * np.pi), rtol=1e-13
+        )
 
 
 # --- moments and cubic harmonics ---------------------------------------------------

@@ -10,10 +10,10 @@ light a Gauss-Legendre rule on the polygon itself.
 
 import numpy as np
 import pytest
+from references import cap_rule
 
 import symsphere as ss
 from symsphere import integrands as I
-from references import cap_rule
 
 Z_AXIS = np.array([0.0, 0.0, 1.0])
 
@@ -26,7 +26,7 @@ def polygon_rule(vertices, order=24):
     W = np.outer(ws, ws)
     nodes, weights = [], []
     v0 = vertices[0]
-    for v1, v2 in zip(vertices[1:-1], vertices[2:]):
+    for v1, v2 in zip(vertices[1:-1], vertices[2:], strict=False):
         q = v0 + S[..., None] * (v1 - v0) + (S * T)[..., None] * (v2 - v1)
         jac = S * np.linalg.norm(np.cross(v1 - v0, v2 - v1))
         nodes.append(q.reshape(-1, 3))
@@ -60,7 +60,9 @@ def test_cubic4_forms_agree():
     # the brief's x^4 + y^4 + z^4 - 3/5 is (2/5) times the harmonic polynomial on the sphere
     d = np.random.default_rng(3).standard_normal((100, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    np.testing.assert_allclose(I.INTEGRANDS["cubic4"].f(d), 0.4 * I.evaluate_polynomial(I.cubic_harmonic(4), d), atol=1e-14)
+    np.testing.assert_allclose(
+        I.INTEGRANDS["cubic4"].f(d), 0.4 * I.evaluate_polynomial(I.cubic_harmonic(4), d), atol=1e-14
+    )
 
 
 # --- every integrand: exact value by adapted quadrature ---------------------------
@@ -117,7 +119,8 @@ def test_integrand_conventions():
         with pytest.raises(AttributeError):
             g.exact = 0.0  # frozen
     assert [g.name for g in I.suite("sphere")] + [g.name for g in I.suite("hemisphere")] == sorted(
-        I.INTEGRANDS, key=lambda k: (I.INTEGRANDS[k].domain != "sphere", list(I.INTEGRANDS).index(k)))
+        I.INTEGRANDS, key=lambda k: (I.INTEGRANDS[k].domain != "sphere", list(I.INTEGRANDS).index(k))
+    )
     assert len(I.suite()) == len(I.INTEGRANDS)
     # the brief's minimum: SH of degrees 1-8, invariant ones of degree 4/6/8, shifted ones, and the rest
     sh_degrees = {g.params["l"] for g in I.suite("sphere") if "l" in g.params}
@@ -248,7 +251,9 @@ def test_hemisphere_orbit_is_the_even_extension():
     for name in ("cosine", "exp_hemisphere", "sh3_0_hemisphere", "quad_light"):
         f = I.INTEGRANDS[name].f
         even = lambda d, f=f: f(np.stack([d[:, 0], d[:, 1], np.abs(d[:, 2])], axis=1))  # noqa: E731
-        np.testing.assert_allclose(I.orbit_average(f, p, "hemisphere"), I.orbit_average(even, p), rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(
+            I.orbit_average(f, p, "hemisphere"), I.orbit_average(even, p), rtol=1e-14, atol=1e-15
+        )
 
 
 # --- bad input -------------------------------------------------------------------------------

@@ -38,7 +38,12 @@ def test_hemisphere_irradiance_about_a_normal():
     normal = np.array([0.3, -0.9, 0.2])
     unit = normal / np.linalg.norm(normal)
     result = integrate(
-        lambda w: np.maximum(w @ unit, 0.0), domain="hemisphere", normal=normal, n=24 * 2**12, rng=4, confidence_level=LEVEL
+        lambda w: np.maximum(w @ unit, 0.0),
+        domain="hemisphere",
+        normal=normal,
+        n=24 * 2**12,
+        rng=4,
+        confidence_level=LEVEL,
     )
     low, high = result.confidence_interval
     assert low <= np.pi <= high

@@ -38,7 +38,7 @@ def test_atomic_path_keeps_target_on_any_exception(tmp_path):
     with pytest.raises(ZeroDivisionError):
         with atomic_path(out) as temporary:
             temporary.write_text("half")
-            1 / 0
+            _ = 1 / 0
     assert _leftovers(tmp_path) == []
     with atomic_path(out) as temporary:
         assert temporary.parent == tmp_path and temporary.name.startswith(".")

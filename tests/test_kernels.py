@@ -3,15 +3,13 @@
 import numpy as np
 import pytest
 from numba import njit
+from references import ELEMENTARY_ULPS, EPS32, EPS64, GAMMA3, assert_within_eps
 
-from symsphere import METHODS, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
-from symsphere import _kernels
+from symsphere import METHODS, _kernels, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere._blocks import reference_orbits
 from symsphere.frames import frame
 from symsphere.points import BLOCK, BasePoints
-from symsphere._blocks import reference_orbits
 from symsphere.symmetry import SPHERE_MAPS
-
-from references import ELEMENTARY_ULPS, EPS32, EPS64, GAMMA3, assert_within_eps
 
 # How far the kernels' map may be from the numpy path's, relative to each component, in EPS64
 # (the error model of tests/references.py; E = ELEMENTARY_ULPS per elementary function, 1/2 per
@@ -84,6 +82,7 @@ def test_random_points_are_numpys_pcg64_stream():
     assert np.array_equal(source.take(0, 3 * BLOCK), expected)
     assert np.array_equal(source.take(BLOCK + 3, BLOCK + 9), expected[BLOCK + 3 : BLOCK + 9])
     assert np.array_equal(source.take(np.int64(7), np.int32(9)), expected[7:9])  # numpy integers too
+
     # The kernels' own PCG64 (seeding, jump, step) continues numpy's stream from any index.
     @njit
     def draw(words, index, k):

@@ -3,11 +3,10 @@
 import mpmath
 import numpy as np
 import pytest
+from references import ELEMENTARY_ULPS, assert_within_eps
 from scipy import integrate
 
 from symsphere import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
-
-from references import ELEMENTARY_ULPS, assert_within_eps
 
 VERTICES = {  # (u, v) -> vertex of T0, the same for all three maps
     (0.0, 0.0): (0.0, 0.0, 1.0),

@@ -37,7 +37,9 @@ def test_editing_an_inlined_file_drops_the_cached_kernel(tmp_path, own_cache_dir
     source.mkdir()
     (source / "kernel.py").write_text(KERNEL)
     helper = source / "helper.py"
-    helper.write_text("from numba.extending import register_jitable\n\n@register_jitable\ndef scale(x):\n    return 3 * x\n")
+    helper.write_text(
+        "from numba.extending import register_jitable\n\n@register_jitable\ndef scale(x):\n    return 3 * x\n"
+    )
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["PYTHONPATH"] = os.pathsep.join([str(source), *sys.path])
     if own_cache_dir:
@@ -68,10 +70,14 @@ def test_importing_the_kernels_touches_no_cache(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["NUMBA_CACHE_DIR"] = str(tmp_path)
     code = "import symsphere, symsphere._kernels; import pathlib, sys; print(sum(p.is_file() for p in pathlib.Path(sys.argv[1]).rglob('*')))"
-    result = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.split()[-1] == "0"
     code = "import symsphere, pathlib, sys; symsphere.sample_sphere(48); print(len(list(pathlib.Path(sys.argv[1]).rglob('*.deps-sha256'))))"
-    result = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=300)
+    result = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=300
+    )
     assert result.returncode == 0, result.stderr
     assert int(result.stdout.split()[-1]) >= 1

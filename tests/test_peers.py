@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from references import ELEMENTARY_ULPS, EPS64, assert_power
 from scipy import stats as scipy_stats
 from scipy.stats import qmc
 
@@ -20,8 +21,6 @@ import symsphere as ss
 from symsphere import peers as P
 from symsphere.points import unit_square_points
 from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
-
-from references import ELEMENTARY_ULPS, EPS64, assert_power
 
 SIGNIFICANCE = 0.01
 # 6 direct peers + rotated Fibonacci + arvo (sphere) + arvo on T0 + equal_area on T0 + two-sample
@@ -35,9 +34,19 @@ MUST_DETECT_W = 0.06
 
 MAPS = {  # name -> (forward, inverse, pdf, domain)
     "classic": (P.square_to_uniform_sphere, P.uniform_sphere_to_square, P.uniform_sphere_pdf, "sphere"),
-    "classic_hemisphere": (P.square_to_uniform_hemisphere, P.uniform_hemisphere_to_square, P.uniform_hemisphere_pdf, "hemisphere"),
+    "classic_hemisphere": (
+        P.square_to_uniform_hemisphere,
+        P.uniform_hemisphere_to_square,
+        P.uniform_hemisphere_pdf,
+        "hemisphere",
+    ),
     "octahedral": (P.square_to_octahedral_sphere, P.octahedral_sphere_to_square, P.uniform_sphere_pdf, "sphere"),
-    "octahedral_hemisphere": (P.square_to_octahedral_hemisphere, P.octahedral_hemisphere_to_square, P.uniform_hemisphere_pdf, "hemisphere"),
+    "octahedral_hemisphere": (
+        P.square_to_octahedral_hemisphere,
+        P.octahedral_hemisphere_to_square,
+        P.uniform_hemisphere_pdf,
+        "hemisphere",
+    ),
     "cosine": (P.square_to_cosine_hemisphere, P.cosine_hemisphere_to_square, P.cosine_hemisphere_pdf, "hemisphere"),
     "arvo_t0": (
         lambda uv: P.square_to_spherical_triangle(uv, *P.T0_VERTICES),
@@ -76,8 +85,17 @@ def _check(result, w=MUST_DETECT_W):
 
 def test_registry():
     assert set(P.PEERS) == {
-        "classic", "classic_hemisphere", "gaussian", "octahedral", "octahedral_hemisphere",
-        "fibonacci", "fibonacci_rotated", "arvo", "cosine", "lebedev", "lebedev_rotated",
+        "classic",
+        "classic_hemisphere",
+        "gaussian",
+        "octahedral",
+        "octahedral_hemisphere",
+        "fibonacci",
+        "fibonacci_rotated",
+        "arvo",
+        "cosine",
+        "lebedev",
+        "lebedev_rotated",
     }
     for name, peer in P.PEERS.items():
         assert peer.name == name and peer.domain in ("sphere", "hemisphere")
@@ -95,7 +113,9 @@ def test_sample_conventions(name, dtype):
     d = peer.sample(n, rng=7, dtype=dtype)
     assert d.shape == (n, 3) and d.dtype == dtype
     assert np.all(np.isfinite(d))
-    np.testing.assert_allclose(np.linalg.norm(d.astype(np.float64), axis=1), 1, atol=1e-6 if dtype == np.float32 else 1e-14)
+    np.testing.assert_allclose(
+        np.linalg.norm(d.astype(np.float64), axis=1), 1, atol=1e-6 if dtype == np.float32 else 1e-14
+    )
     assert np.all(_in_domain(d, peer.domain))
     # the same seed (int, SeedSequence, Generator) gives the same output
     np.testing.assert_array_equal(d, peer.sample(n, rng=7, dtype=dtype))
@@ -132,8 +152,10 @@ def test_qmc_beats_random_on_a_smooth_integrand():
     a = np.array([0.7, -0.4, 0.5])
     exact = 4 * np.pi * np.sinh(np.linalg.norm(a)) / np.linalg.norm(a)
     for name in ("classic", "octahedral"):
-        err = {p: abs(4 * np.pi * np.exp(P.PEERS[name].sample(4096, rng=5, points=p) @ a).mean() / exact - 1)
-               for p in ("random", "sobol")}
+        err = {
+            p: abs(4 * np.pi * np.exp(P.PEERS[name].sample(4096, rng=5, points=p) @ a).mean() / exact - 1)
+            for p in ("random", "sobol")
+        }
         assert err["sobol"] < 1e-4 < err["random"], (name, err)
 
 
@@ -159,16 +181,30 @@ def test_map_corners():
     # and the products round once more: (E + 1) eps on unit vectors.
     corner = (ELEMENTARY_ULPS + 1) * EPS64
     np.testing.assert_allclose(P.square_to_uniform_sphere([[0, 0], [1, 0.3]]), [[0, 0, 1], [0, 0, -1]], atol=corner)
-    np.testing.assert_allclose(P.square_to_octahedral_sphere([[0.5, 0.5], [0, 0], [1, 1], [0, 1], [1, 0]]),
-                               [[0, 0, 1]] + [[0, 0, -1]] * 4, atol=corner)
-    np.testing.assert_allclose(P.square_to_octahedral_sphere([[1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0]]),
-                               [[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], atol=corner)
-    np.testing.assert_allclose(P.square_to_octahedral_hemisphere([[0.5, 0.5], [1, 1], [0, 1], [0, 0], [1, 0]]),
-                               [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], atol=corner)
-    np.testing.assert_allclose(P.square_to_cosine_hemisphere([[0.5, 0.5], [1, 0.5], [0.5, 1], [0, 0.5]]),
-                               [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0]], atol=corner)
+    np.testing.assert_allclose(
+        P.square_to_octahedral_sphere([[0.5, 0.5], [0, 0], [1, 1], [0, 1], [1, 0]]),
+        [[0, 0, 1]] + [[0, 0, -1]] * 4,
+        atol=corner,
+    )
+    np.testing.assert_allclose(
+        P.square_to_octahedral_sphere([[1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0]]),
+        [[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
+        atol=corner,
+    )
+    np.testing.assert_allclose(
+        P.square_to_octahedral_hemisphere([[0.5, 0.5], [1, 1], [0, 1], [0, 0], [1, 0]]),
+        [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
+        atol=corner,
+    )
+    np.testing.assert_allclose(
+        P.square_to_cosine_hemisphere([[0.5, 0.5], [1, 0.5], [0.5, 1], [0, 0.5]]),
+        [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0]],
+        atol=corner,
+    )
     A, B, C = P.T0_VERTICES
-    np.testing.assert_allclose(P.square_to_spherical_triangle([[0.3, 0], [0, 1], [1, 1]], A, B, C), [B, A, C], atol=1e-15)
+    np.testing.assert_allclose(
+        P.square_to_spherical_triangle([[0.3, 0], [0, 1], [1, 1]], A, B, C), [B, A, C], atol=1e-15
+    )
 
 
 @pytest.mark.parametrize("name", list(MAPS))
@@ -278,7 +314,9 @@ def test_arvo_relabelled_is_equal_area_pointwise():
     # the arc from the pole is sampled uniformly in cos(theta): exactly equal_area.
     A, B, C = P.T0_VERTICES
     uv = np.concatenate([np.random.default_rng(6).random((100_000, 2)), EDGE_UV])
-    np.testing.assert_allclose(P.square_to_spherical_triangle(uv, B, A, C), ss.square_to_triangle(uv), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        P.square_to_spherical_triangle(uv, B, A, C), ss.square_to_triangle(uv), rtol=0, atol=1e-12
+    )
 
 
 def test_arvo_as_labelled_is_a_different_map():
@@ -332,7 +370,9 @@ def _cosine_pdf(d):  # written out again: cos(theta)/pi above the horizon
     return np.where(d[:, 2] > 0, d[:, 2] / np.pi, 0.0)
 
 
-@pytest.mark.parametrize("name", ["classic", "classic_hemisphere", "gaussian", "octahedral", "octahedral_hemisphere", "cosine"])
+@pytest.mark.parametrize(
+    "name", ["classic", "classic_hemisphere", "gaussian", "octahedral", "octahedral_hemisphere", "cosine"]
+)
 def test_chi2_peer(name):
     peer = P.PEERS[name]
     d = peer.sample(N_CHI2, rng=20 + len(name))
@@ -345,7 +385,7 @@ def test_chi2_fibonacci_rotated():
     peer = P.PEERS["fibonacci_rotated"]
     children = np.random.SeedSequence(30).spawn(10_000)
     picks = np.random.default_rng(31).integers(0, 37, size=len(children))
-    d = np.array([peer.sample(37, rng=child)[k] for child, k in zip(children, picks)])
+    d = np.array([peer.sample(37, rng=child)[k] for child, k in zip(children, picks, strict=False)])
     # 10 000 independent sets (one sample each, a Python loop): 72 cells, w >= 0.096 at 99 % power
     _check(chi2_test(d, uniform_pdf("sphere"), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS), w=0.1)
 
@@ -383,10 +423,10 @@ def test_fibonacci_large_index_phase():
     bits = (i.astype(np.uint64) * np.uint64(P._GOLDEN_FRACTION_BITS)) >> np.uint64(11)
     frac = bits.astype(np.float64) * 2.0**-53
     scale = 200
-    golden_minus_1 = (math.isqrt(5 << (2 * scale)) - (1 << scale))  # 2^(scale+1) (Phi - 1), floored
-    for k, f in zip(i.tolist(), frac):
+    golden_minus_1 = math.isqrt(5 << (2 * scale)) - (1 << scale)  # 2^(scale+1) (Phi - 1), floored
+    for k, f in zip(i.tolist(), frac, strict=False):
         exact = ((k * golden_minus_1) >> 1) % (1 << scale) / 2.0**scale
-        assert abs(f - exact) < 1e-15 * max(1, k / 2**53) + 2 ** -53 + k * 2.0**-64
+        assert abs(f - exact) < 1e-15 * max(1, k / 2**53) + 2**-53 + k * 2.0**-64
     # the naive float64 product is visibly worse at i = 10^15
     naive = (10**15 * (np.sqrt(5) - 1) / 2) % 1.0
     exact = ((10**15 * golden_minus_1) >> 1) % (1 << scale) / 2.0**scale
@@ -474,8 +514,14 @@ def _monomial_integral(a, b, c):
     if a % 2 or b % 2 or c % 2:
         return 0.0
     double_factorial = lambda k: math.prod(range(k, 0, -2)) if k > 0 else 1  # noqa: E731
-    return 4 * math.pi * double_factorial(a - 1) * double_factorial(b - 1) * double_factorial(c - 1) / (
-        double_factorial(a + b + c + 1))
+    return (
+        4
+        * math.pi
+        * double_factorial(a - 1)
+        * double_factorial(b - 1)
+        * double_factorial(c - 1)
+        / (double_factorial(a + b + c + 1))
+    )
 
 
 @pytest.mark.parametrize("order", [3, 11, 35, 131])
@@ -527,11 +573,11 @@ def test_lebedev_rotated_layout_and_weights():
     base, base_w = P.sample_lebedev(5810), P.lebedev_weights(5810)
     assert math.isclose(w.sum(), 4 * math.pi, rel_tol=1e-13)
     for copy in range(3):  # each copy: the order-131 rule under its own rotation, weighted 1/3
-        block = d[5810 * copy: 5810 * (copy + 1)]
+        block = d[5810 * copy : 5810 * (copy + 1)]
         rotation, *_ = np.linalg.lstsq(base, block, rcond=None)
         np.testing.assert_allclose(base @ rotation, block, atol=1e-12)
         np.testing.assert_allclose(rotation.T @ rotation, np.eye(3), atol=1e-12)
-        np.testing.assert_allclose(w[5810 * copy: 5810 * (copy + 1)], base_w / 3)
+        np.testing.assert_allclose(w[5810 * copy : 5810 * (copy + 1)], base_w / 3)
     assert P.PEERS["lebedev_rotated"].largest_n(20_000) == 17_430
     assert P.PEERS["lebedev"].largest_n(20_000) == 5810
 
@@ -544,8 +590,10 @@ def test_lebedev_rotated_is_unbiased():
     # against the closed forms; Student t test, family significance 1e-3, Sidak over the 2 tests.
     # The unrotated rule's error on the same f shows that the test can see a bias of that size.
     a, centre, t = np.array([2.0, -1.0, 2.0]), np.array([1.0, 2.0, 2.0]) / 3.0, 0.3
-    cases = [(lambda x: np.exp(x @ a), 4 * np.pi * np.sinh(3.0) / 3.0),
-             (lambda x: (x @ centre > t).astype(np.float64), 2 * np.pi * (1 - t))]
+    cases = [
+        (lambda x: np.exp(x @ a), 4 * np.pi * np.sinh(3.0) / 3.0),
+        (lambda x: (x @ centre > t).astype(np.float64), 2 * np.pi * (1 - t)),
+    ]
     peer, count = P.PEERS["lebedev_rotated"], 2000
     threshold = scipy_stats.t.ppf(1 - (1 - (1 - 1e-3) ** 0.5) / 2, count - 1)
     for f, exact in cases:
@@ -560,7 +608,8 @@ def test_peer_estimate_is_the_weighted_mean():
     for name, points, n in (("octahedral", "sobol", 512), ("cosine", "random", 500), ("arvo", "random", 480)):
         peer = P.PEERS[name]
         d = peer.sample(n, rng=2, points=points)
-        assert math.isclose(peer.estimate(f, n, rng=2, points=points), float(np.mean(f(d) / peer.pdf(d))),
-                            rel_tol=1e-13)
+        assert math.isclose(
+            peer.estimate(f, n, rng=2, points=points), float(np.mean(f(d) / peer.pdf(d))), rel_tol=1e-13
+        )
     d = P.sample_lebedev(590)
     assert P.PEERS["lebedev"].estimate(f, 590) == float(np.sum(P.lebedev_weights(590) * f(d)))

@@ -6,8 +6,8 @@ scipy's own engines for Sobol' and Halton, and the definition of a jittered grid
 
 import numpy as np
 import pytest
-from scipy.stats import qmc
 from references import net_t_value
+from scipy.stats import qmc
 
 from symsphere.points import BLOCK, POINT_SETS, BasePoints, check_points, interlace_digits, unit_square_points
 
@@ -134,8 +134,10 @@ def test_interlaced_points_converge_faster_on_a_smooth_function():
     exact = (((np.exp(1 + 1j) - 1) / (1 + 1j)) * ((np.exp(2j) - 1) / 2j)).real
 
     def rmse(name):
-        errors = [np.mean(np.exp(uv[:, 0]) * np.cos(uv[:, 0] + 2 * uv[:, 1])) - exact
-                  for uv in (BasePoints(name, seed, total=2**12).take(0, 2**12) for seed in range(32))]
+        errors = [
+            np.mean(np.exp(uv[:, 0]) * np.cos(uv[:, 0] + 2 * uv[:, 1])) - exact
+            for uv in (BasePoints(name, seed, total=2**12).take(0, 2**12) for seed in range(32))
+        ]
         return np.sqrt(np.mean(np.square(errors)))
 
     plain = rmse("sobol")
@@ -150,8 +152,9 @@ def test_interlaced_points_keep_the_scheme_unbiased():
     # 0 ... 199, each of 8 replicates at n = 48 * 64 * 8) against closed forms, a smooth and a
     # discontinuous integrand: exp(w . a) (4 pi sinh|a| / |a|) and the indicator of a cap (2 pi (1 - t)).
     # Student t test of the mean, family significance 1e-3, Sidak-corrected over the 4 tests.
-    import symsphere
     from scipy import stats
+
+    import symsphere
 
     a, centre, t = np.array([0.3, -0.5, 0.6]), np.array([1.0, 2.0, 2.0]) / 3.0, 0.3
     cases = [
@@ -163,9 +166,11 @@ def test_interlaced_points_keep_the_scheme_unbiased():
     threshold = stats.t.ppf(1 - alpha / 2, seeds - 1)
     for name in ("sobol_interlaced2", "sobol_interlaced3"):
         for f, exact in cases:
-            estimates = np.array([
-                symsphere.integrate(f, n=48 * 64 * 8, points=name, rng=seed, replicates=8).integral
-                for seed in range(seeds)
-            ])
+            estimates = np.array(
+                [
+                    symsphere.integrate(f, n=48 * 64 * 8, points=name, rng=seed, replicates=8).integral
+                    for seed in range(seeds)
+                ]
+            )
             z = (estimates.mean() - exact) / (estimates.std(ddof=1) / np.sqrt(seeds))
             assert abs(z) < threshold, (name, exact, z)

@@ -33,8 +33,23 @@ from hypothesis import strategies as st  # noqa: E402
 from hypothesis.extra import numpy as hnp  # noqa: E402
 
 import symsphere  # noqa: E402
-from symsphere import frames, harmonics, integrands, maps, peers, quality, sampling, stats, symmetry, wedge  # noqa: E402
-from symsphere import bins, integration, spherical_triangles, square_warps, warps  # noqa: E402
+from symsphere import (  # noqa: E402  # noqa: E402
+    bins,
+    frames,
+    harmonics,
+    integrands,
+    integration,
+    maps,
+    peers,
+    quality,
+    sampling,
+    spherical_triangles,
+    square_warps,
+    stats,
+    symmetry,
+    warps,
+    wedge,
+)
 from symsphere import points as points_module  # noqa: E402
 
 _COMMON = dict(
@@ -202,7 +217,9 @@ def _check_contract(name, function, arguments, replaced):
     except (ValueError, TypeError) as exc:
         message = str(exc)
         assert message and "\n" not in message.strip(), f"{name}: not one line: {message!r}"
-        assert replaced in message or replaced == "f", f"{name}({replaced}=...): the message does not name it: {message!r}"
+        assert replaced in message or replaced == "f", (
+            f"{name}({replaced}=...): the message does not name it: {message!r}"
+        )
         return
     assert _all_finite(result, allow_inf=name in MAY_BE_INF), f"{name}({replaced}=...) returned NaN or inf: {result!r}"
 
@@ -218,7 +235,9 @@ def test_valid_arguments_give_finite_output(name, function):
 
 
 @pytest.mark.parametrize(
-    "name, function", [(n, f) for n, f in FUNCTIONS if n not in TRUSTED], ids=[n for n, _ in FUNCTIONS if n not in TRUSTED]
+    "name, function",
+    [(n, f) for n, f in FUNCTIONS if n not in TRUSTED],
+    ids=[n for n, _ in FUNCTIONS if n not in TRUSTED],
 )
 @given(data=st.data())
 def test_one_bad_argument_gives_a_clear_error_or_finite_output(name, function, data):
@@ -276,7 +295,9 @@ SCALAR_FUNCTIONS = [
     ("cosine_hemisphere_point", warps.cosine_hemisphere_point, ("u", "v")),
 ]
 SCALARS = st.one_of(
-    st.floats(allow_nan=True, allow_infinity=True), st.integers(-(2**80), 2**80), st.sampled_from([0.0, 1.0, -0.0, 1e-320])
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(2**80), 2**80),
+    st.sampled_from([0.0, 1.0, -0.0, 1e-320]),
 )
 
 
@@ -339,7 +360,12 @@ def test_frame_and_its_maps_validate(normal, vectors):
 # --- the renderer's inputs: images and scene files --------------------------------------------------
 
 JSON = st.recursive(
-    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=4) | st.sampled_from([10**400, -(10**40)]),
+    st.none()
+    | st.booleans()
+    | st.integers()
+    | st.floats()
+    | st.text(max_size=4)
+    | st.sampled_from([10**400, -(10**40)]),
     lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=4), children, max_size=4),
     max_leaves=12,
 )

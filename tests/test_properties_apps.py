@@ -71,7 +71,11 @@ IMAGE = np.full((3, 4, 3), 0.25)
 
 # A Material's fields have the names of the scene files in messages (as a scene file's user reads them);
 # a SceneError about scene_from_dict's data names the field of the data ("scene file 'x': missing [camera]").
-ALIASES = {"kind": ("kind", "type"), "color": ("color", "albedo", "reflectance", "tint"), "data": ("data", "scene file")}
+ALIASES = {
+    "kind": ("kind", "type"),
+    "color": ("color", "albedo", "reflectance", "tint"),
+    "data": ("data", "scene file"),
+}
 
 
 def _contract(name, call, arguments, replaced, allow=(), allow_inf=False):
@@ -182,7 +186,9 @@ _CAMERA = dict(position=(0.0, 0.0, 4.0), direction=(0.0, 0.0, -1.0), fov=40.0, u
 _SPHERE = dict(center=(0.0, 0.0, 0.0), radius=1.0, material="m", clip=None)
 _QUAD = dict(corner=(-1.0, -1.0, -2.0), edge1=(2.0, 0.0, 0.0), edge2=(0.0, 2.0, 0.0), material="m")
 _HALF = dict(point=(0.0, 0.0, 0.0), normal=(0.0, 1.0, 0.0))
-_MATERIAL = dict(kind="diffuse", color=(0.5, 0.5, 0.5), transmittance=(0.0, 0.0, 0.0), ior=1.5, emission=(1.0, 1.0, 1.0))
+_MATERIAL = dict(
+    kind="diffuse", color=(0.5, 0.5, 0.5), transmittance=(0.0, 0.0, 0.0), ior=1.5, emission=(1.0, 1.0, 1.0)
+)
 
 
 def _scene(camera=None, sphere=None, quad=None, material=None, **settings_):
@@ -457,9 +463,13 @@ def test_distributed_valid_arguments_give_the_local_result(client):
         local = getattr(symsphere, name)(**{k: v for k, v in arguments.items() if k != "chunks"})
         assert np.array_equal(call(**arguments), local), name
     arguments, call = cases["integrate"]
-    local = symsphere.integrate(**{k: v for k, v in arguments.items() if k not in ("client", "chunk_blocks", "progress")})
+    local = symsphere.integrate(
+        **{k: v for k, v in arguments.items() if k not in ("client", "chunk_blocks", "progress")}
+    )
     result = call(**arguments)
-    assert np.array_equal(result.integral, local.integral) and np.array_equal(result.standard_error, local.standard_error, equal_nan=True)
+    assert np.array_equal(result.integral, local.integral) and np.array_equal(
+        result.standard_error, local.standard_error, equal_nan=True
+    )
     arguments, call = cases["render"]
     image = call(**arguments).image
     assert image.shape == (3, 4, 3) and np.all(np.isfinite(image))

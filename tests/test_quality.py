@@ -164,4 +164,3 @@ def test_fit_slope_floors_zeros_without_warnings():
     assert math.isnan(fit_slope([10, 100], [1.0, 0.1]).standard_error)
     with pytest.raises(ValueError, match="distinct"):
         fit_slope([10, 10, 10], [1.0, 2.0, 3.0])
-

@@ -20,12 +20,11 @@ import warnings
 
 import numpy as np
 import pytest
+from references import scaled_for_load
 
 import symsphere
 from symsphere import harmonics, io, symmetry
 from symsphere.apps.cli import main
-
-from references import scaled_for_load
 
 CLI = [sys.executable, "-m", "symsphere"]
 
@@ -79,7 +78,9 @@ def test_npy_is_written_without_a_memory_map(tmp_path, monkeypatch):
     monkeypatch.setattr(np, "memmap", refuse)
     path = tmp_path / "d.npy"
     n = 48 * 300
-    io.stream_directions(path, n, np.float32, lambda out: symsphere.iter_sphere(n, chunk=48 * 64, rng=3, dtype=np.float32))
+    io.stream_directions(
+        path, n, np.float32, lambda out: symsphere.iter_sphere(n, chunk=48 * 64, rng=3, dtype=np.float32)
+    )
     np.testing.assert_array_equal(np.load(path), symsphere.sample_sphere(n, rng=3, dtype=np.float32))
 
 
@@ -194,7 +195,7 @@ def test_sample_peak_rss_does_not_grow_with_n(tmp_path):
 
 def _write_set(paths, texts):
     with io.atomic_paths(paths) as temporaries:
-        for temporary, text in zip(temporaries, texts):
+        for temporary, text in zip(temporaries, texts, strict=False):
             temporary.write_text(text)
 
 
@@ -243,7 +244,9 @@ def test_write_outputs_is_all_or_nothing_and_names_the_failing_file(tmp_path, mo
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
         return real_write_bytes(self, data)
 
-    monkeypatch.setattr(image_module, "_encode", lambda suffix, image, exposure: real_encode(suffix, image, exposure * 2))
+    monkeypatch.setattr(
+        image_module, "_encode", lambda suffix, image, exposure: real_encode(suffix, image, exposure * 2)
+    )
     monkeypatch.setattr(pathlib.Path, "write_bytes", full_disk_at_pfm)
     with pytest.raises(OSError) as caught:
         write_outputs(result, tmp_path / "f.png", exposure=0.5)
@@ -317,7 +320,9 @@ def test_absurd_dask_graphs_fail_fast():
     distributed = pytest.importorskip("symsphere.distributed")
     pytest.importorskip("dask")
     _fails_fast(lambda: distributed.sample_sphere(n=48 * 10**13), ValueError, "'chunks'", seconds=10)
-    _fails_fast(lambda: distributed.integrate(lambda d: d[:, 0], n=48 * 10**13, client=None), ValueError, "'chunk_blocks'")
+    _fails_fast(
+        lambda: distributed.integrate(lambda d: d[:, 0], n=48 * 10**13, client=None), ValueError, "'chunk_blocks'"
+    )
 
 
 def test_a_long_integration_prints_an_estimate_first(capsys, monkeypatch):
@@ -334,10 +339,9 @@ def test_a_long_integration_prints_an_estimate_first(capsys, monkeypatch):
 
 def _scene_text(settings="", sphere_radius="1"):
     return (
-        'camera = {position = [0, 0, 4], look_at = [0, 0, 0], fov = 40}\n'
+        "camera = {position = [0, 0, 4], look_at = [0, 0, 0], fov = 40}\n"
         'materials.lamp = {type = "diffuse", albedo = 0.5, emission = 1}\n'
-        f'spheres = [{{center = [0, 0, 0], radius = {sphere_radius}, material = "lamp"}}]\n'
-        + settings
+        f'spheres = [{{center = [0, 0, 0], radius = {sphere_radius}, material = "lamp"}}]\n' + settings
     )
 
 
@@ -365,7 +369,9 @@ def test_hostile_scene_files_give_one_line(tmp_path, capsys, name, text, words):
 
 
 def test_timeout_nan_with_scheduler_is_a_usage_error(capsys):
-    status = main(["integrate", "--integrand", "exp", "--n", "48", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "nan"])
+    status = main(
+        ["integrate", "--integrand", "exp", "--n", "48", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "nan"]
+    )
     assert status == 2
     assert "--timeout must be a positive number" in _one_line_error(capsys.readouterr().err)
 
@@ -394,7 +400,11 @@ def test_unexpected_errors_are_one_line(tmp_path, capsys, monkeypatch):
 
 def test_exception_types():
     deep = np.zeros((1,) * 33 + (3,))
-    for call in (lambda: symmetry.fold(deep), lambda: symsphere.sphere_pdf(deep), lambda: symsphere.hemisphere_pdf(deep)):
+    for call in (
+        lambda: symmetry.fold(deep),
+        lambda: symsphere.sphere_pdf(deep),
+        lambda: symsphere.hemisphere_pdf(deep),
+    ):
         with pytest.raises(ValueError, match="'d' has 34 dimensions"):
             call()
     with pytest.raises(ValueError, match="'l'"):
@@ -470,8 +480,7 @@ def test_triangle_pdf_float32_near_the_vertex_is_quiet():
 
 
 def test_huge_emission_is_rejected_not_rendered_as_inf():
-    from symsphere.render import SceneError, diffuse
-    from symsphere.render import scene_from_dict
+    from symsphere.render import SceneError, diffuse, scene_from_dict
 
     with pytest.raises(SceneError, match="emission must be at most"):
         scene_from_dict({

@@ -426,8 +426,12 @@ def test_cap_discrepancy_refuses_negative_weights():
 def test_rotated_hemisphere_rows_are_not_below_the_plane(dtype):
     from scipy.stats import qmc
 
-    cases = [([0.3, -0.5, 0.8], symsphere.sample_hemisphere(96, normal=[0.3, -0.5, 0.8],
-                                                              points=qmc.Sobol(2, scramble=False), dtype=dtype))]
+    cases = [
+        (
+            [0.3, -0.5, 0.8],
+            symsphere.sample_hemisphere(96, normal=[0.3, -0.5, 0.8], points=qmc.Sobol(2, scramble=False), dtype=dtype),
+        )
+    ]
     rng = np.random.default_rng(22)
     for seed in range(40):
         normal = rng.normal(size=3)

@@ -146,9 +146,7 @@ def test_hemisphere_about_normal(method):
     # the same points as about z, rotated: the local coordinates are the un-rotated sample
     local = d @ frame(unit).T
     np.testing.assert_allclose(local, sample_hemisphere(24 * 200, method=method, rng=4), atol=1e-15)
-    np.testing.assert_allclose(
-        hemisphere_pdf(d, method, normal=normal), hemisphere_pdf(local, method), rtol=1e-12
-    )
+    np.testing.assert_allclose(hemisphere_pdf(d, method, normal=normal), hemisphere_pdf(local, method), rtol=1e-12)
     assert np.all(hemisphere_pdf(-d[d @ unit > 1e-9], method, normal=normal) == 0)
 
 
@@ -175,7 +173,11 @@ def test_scheme_pdf_is_triangle_pdf_over_count(method):
         ({"n": 48.0}, TypeError, r"'n' must be an integer"),
         ({"n": True}, TypeError, r"'n' must be an integer"),
         ({"n": "48"}, TypeError, r"'n' must be an integer"),
-        ({"method": "uniform"}, ValueError, r"'uniform' is not a valid method; use one of \{'equal_area', 'paper1', 'paper2'\}"),
+        (
+            {"method": "uniform"},
+            ValueError,
+            r"'uniform' is not a valid method; use one of \{'equal_area', 'paper1', 'paper2'\}",
+        ),
         ({"points": "lattice"}, ValueError, r"'lattice' is not a valid points; use one of"),
         ({"points": 3}, TypeError, r"'points' must be one of"),
         ({"rng": 1.5}, TypeError, r"'rng' must be None, an int, a numpy SeedSequence or a numpy Generator"),
@@ -197,7 +199,9 @@ def test_bad_input(sampler, kwargs, error, match):
 
 def test_n_not_multiple_names_nearest_sizes():
     # The streaming samplers work in whole orbits (sample_sphere and sample_hemisphere take any n).
-    with pytest.raises(ValueError, match=r"'n_total'=100 is not a multiple of 48; the nearest valid sizes are 96 or 144"):
+    with pytest.raises(
+        ValueError, match=r"'n_total'=100 is not a multiple of 48; the nearest valid sizes are 96 or 144"
+    ):
         iter_sphere(100)
     with pytest.raises(ValueError, match=r"'n_total'=10 is not a multiple of 24; the nearest valid sizes are 24"):
         iter_hemisphere(10)

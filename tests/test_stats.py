@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 import pytest
+from references import cosine_pdf, in_t0, linear_triangle_pdf, pole_pdf
 from scipy import stats as scipy_stats
 
 from symsphere import stats
@@ -32,8 +33,6 @@ from symsphere.stats import (
     equal_area_bins,
     uniform_pdf,
 )
-
-from references import cosine_pdf, in_t0, linear_triangle_pdf, pole_pdf
 
 SIGNIFICANCE = 0.01
 TEST_COUNT = 10  # chi-square tests expected to pass, in this file (incl. slow)
@@ -125,8 +124,7 @@ def test_uniform_sphere_passes(dtype):  # 2 of TEST_COUNT
 
 
 def test_uniform_hemisphere_passes():  # 3
-    res = chi2_test(uniform_hemisphere(200_000, seed=2), uniform_pdf("hemisphere"),
-                    "hemisphere", **LEVEL)
+    res = chi2_test(uniform_hemisphere(200_000, seed=2), uniform_pdf("hemisphere"), "hemisphere", **LEVEL)
     assert res.passed, str(res)
 
 
@@ -141,8 +139,7 @@ def test_uniform_triangle_rejection_passes():  # 4
 
 
 def test_cosine_hemisphere_malley_passes():  # 5
-    res = chi2_test(cosine_hemisphere_malley(200_000, seed=4), cosine_pdf, "hemisphere",
-                    **LEVEL)
+    res = chi2_test(cosine_hemisphere_malley(200_000, seed=4), cosine_pdf, "hemisphere", **LEVEL)
     assert res.passed, str(res)
 
 
@@ -156,8 +153,7 @@ def test_pole_density_on_triangle_passes():  # 6
 def test_cosine_pooling_passes_and_pools():  # 7
     # Few samples on a fine grid: the bins near the horizon have expected < 5.
     n = 3000
-    res = chi2_test(cosine_hemisphere_malley(n, seed=6), cosine_pdf, "hemisphere",
-                    bins=(16, 8), **LEVEL)
+    res = chi2_test(cosine_hemisphere_malley(n, seed=6), cosine_pdf, "hemisphere", bins=(16, 8), **LEVEL)
     assert res.passed, str(res)
     e, o = res.expected.ravel(), res.observed.ravel().astype(float)
     small = e < 5
@@ -175,8 +171,7 @@ def test_cosine_pooling_passes_and_pools():  # 7
 
 def test_cap_density_with_zero_bins_passes():  # 8
     # cos edges 0, .25, .5, .75, 1: the two lower rows have expected count exactly 0.
-    res = chi2_test(cap_sampler(20_000, seed=7), cap_pdf, "hemisphere", bins=(8, 4),
-                    **LEVEL)
+    res = chi2_test(cap_sampler(20_000, seed=7), cap_pdf, "hemisphere", bins=(8, 4), **LEVEL)
     assert res.passed, str(res)
     assert np.all(res.expected[:, :2] == 0)
     assert res.dof == 8 * 2 - 1
@@ -228,15 +223,13 @@ def test_uniform_hemisphere_rejected_by_cosine_pdf():
 
 
 def test_pole_sampler_rejected_by_uniform_triangle():
-    res = chi2_test(pole_sampler(50_000, seed=13), uniform_pdf("triangle"), "triangle",
-                    **LEVEL)
+    res = chi2_test(pole_sampler(50_000, seed=13), uniform_pdf("triangle"), "triangle", **LEVEL)
     assert not res.passed and res.p_value < 1e-10
 
 
 def test_uniform_triangle_rejected_by_linear_pdf():
     # A mild deviation: the linear density varies only by a factor sqrt 3 over T0.
-    res = chi2_test(uniform_triangle_fold(200_000, seed=14), linear_triangle_pdf,
-                    "triangle", **LEVEL)
+    res = chi2_test(uniform_triangle_fold(200_000, seed=14), linear_triangle_pdf, "triangle", **LEVEL)
     assert not res.passed and res.p_value < 1e-10
 
 
@@ -250,10 +243,16 @@ def test_uniform_triangle_rejected_by_linear_pdf():
 def test_uniform_integral_is_one(domain, bins):
     p = bin_probabilities(uniform_pdf(domain), domain, bins)
     assert abs(p.sum() - 1) < 1e-6
-    res = chi2_test(uniform_sphere(1000, 0) if domain == "sphere" else
-                    uniform_hemisphere(1000, 0) if domain == "hemisphere" else
-                    uniform_triangle_fold(1000, 0),
-                    uniform_pdf(domain), domain, bins=bins)
+    res = chi2_test(
+        uniform_sphere(1000, 0)
+        if domain == "sphere"
+        else uniform_hemisphere(1000, 0)
+        if domain == "hemisphere"
+        else uniform_triangle_fold(1000, 0),
+        uniform_pdf(domain),
+        domain,
+        bins=bins,
+    )
     assert abs(res.integral - 1) < 1e-6
     assert abs(res.expected.sum() - 1000) < 1e-6 * 1000
 
@@ -264,13 +263,15 @@ def test_uniform_integral_is_one(domain, bins):
 
 
 def test_bin_assignment_at_phi_pi_and_poles():
-    d = np.array([
-        [-1.0, 0.0, 0.0],   # phi = +pi  -> wrapped to -pi: phi bin 0
-        [-1.0, -0.0, 0.0],  # phi = -pi: phi bin 0
-        [0.0, 0.0, 1.0],    # cos = 1 exactly: last cos bin
-        [0.0, 0.0, -1.0],   # cos = -1: first cos bin
-        [1.0, 0.0, 0.0],    # phi = 0: bin 2 of 4
-    ])
+    d = np.array(
+        [
+            [-1.0, 0.0, 0.0],  # phi = +pi  -> wrapped to -pi: phi bin 0
+            [-1.0, -0.0, 0.0],  # phi = -pi: phi bin 0
+            [0.0, 0.0, 1.0],  # cos = 1 exactly: last cos bin
+            [0.0, 0.0, -1.0],  # cos = -1: first cos bin
+            [1.0, 0.0, 0.0],  # phi = 0: bin 2 of 4
+        ]
+    )
     res = chi2_test(d, uniform_pdf("sphere"), bins=(4, 2))
     expected_counts = np.zeros((4, 2), dtype=int)
     expected_counts[0, 1] = 2
@@ -412,8 +413,11 @@ GOOD = uniform_sphere(100, 0)
 @pytest.mark.parametrize(
     "kwargs,exc,match",
     [
-        (dict(domain="torus"), ValueError,
-         r"'torus' is not a valid domain; use one of \{'sphere', 'hemisphere', 'triangle'\}"),
+        (
+            dict(domain="torus"),
+            ValueError,
+            r"'torus' is not a valid domain; use one of \{'sphere', 'hemisphere', 'triangle'\}",
+        ),
         (dict(bins=(0, 4)), ValueError, "'bins'"),
         (dict(bins=(4, -1)), ValueError, "'bins'"),
         (dict(bins=(4.5, 4)), TypeError, "'bins'"),
@@ -461,8 +465,7 @@ def test_uniform_pdf_values():
     d = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, -0.8], [0.3, 0.2, 0.9], [0.2, 0.3, 0.9]])
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     np.testing.assert_allclose(uniform_pdf("sphere")(d), 1 / (4 * np.pi))
-    np.testing.assert_allclose(uniform_pdf("hemisphere")(d), [1 / (2 * np.pi), 0, 1 / (2 * np.pi),
-                                                              1 / (2 * np.pi)])
+    np.testing.assert_allclose(uniform_pdf("hemisphere")(d), [1 / (2 * np.pi), 0, 1 / (2 * np.pi), 1 / (2 * np.pi)])
     np.testing.assert_allclose(uniform_pdf("triangle")(d), [12 / np.pi, 0, 12 / np.pi, 0])
 
 

@@ -31,7 +31,11 @@ def test_stage_equals_fixed_n_run(points):
     fixed = integrate(exp_numpy, n=result.n_evaluations, points=points, rng=4)
     assert result.integral == fixed.integral and result.standard_error == fixed.standard_error
     low, high = result.confidence_interval
-    assert (high - low) / 2 <= result.tolerance == pytest.approx(2e-5 * abs(result.integral) if points == "random" else 1e-7 * abs(result.integral))
+    assert (
+        (high - low) / 2
+        <= result.tolerance
+        == pytest.approx(2e-5 * abs(result.integral) if points == "random" else 1e-7 * abs(result.integral))
+    )
     stage = result.n_stages
     assert result.confidence_level == pytest.approx(1 - 0.05 / (stage * (stage + 1)))
 

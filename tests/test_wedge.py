@@ -6,9 +6,8 @@ import math
 import numpy as np
 import pytest
 from numba import njit
-from scipy import integrate
-
 from references import ELEMENTARY_ULPS, assert_power, assert_within_eps
+from scipy import integrate
 
 from symsphere.stats import chi2_test
 from symsphere.wedge import (

@@ -78,6 +78,7 @@ def __dir__() -> list[str]:
     # The lazy submodules too, so that tab completion finds them before their first use.
     return sorted(set(globals()) | set(_SUBMODULES))
 
+
 __all__ = [
     "HEMISPHERE_MAPS",
     "METHODS",

@@ -17,12 +17,10 @@ from types import FrameType
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
-
-from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 
 from . import frames
 from ._kernels import fill_orbits, fill_random_orbits
+from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_dtype
 from .maps import get_map
 from .points import BasePoints
@@ -71,7 +69,13 @@ def prepare(
 
 
 def fill_range(
-    source: BasePoints, start: int, stop: int, method: MapMethod, count: int, basis: Float64Array | None, out: FloatArray
+    source: BasePoints,
+    start: int,
+    stop: int,
+    method: MapMethod,
+    count: int,
+    basis: Float64Array | None,
+    out: FloatArray,
 ) -> FloatArray:
     """Write the orbits of base points ``start ... stop - 1`` of *source* into *out*."""
     return _fill(source, start, stop, method, count, basis, out, 0)

@@ -21,10 +21,18 @@ from . import frames
 from ._blocks import fill_range, warn_at_caller
 from ._fused import Compiled, compiled_integrand, fused_partials
 from ._kernels import fill_orbits
-from ._validation import check_choice, check_count, check_nonnegative, check_normal, check_real_values, check_rng, short_repr
+from ._typing import Float64Array, MapMethod, PointsLike, RNGLike
+from ._validation import (
+    check_choice,
+    check_count,
+    check_nonnegative,
+    check_normal,
+    check_real_values,
+    check_rng,
+    short_repr,
+)
 from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
-from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import DOMAINS
 
 Integrand = Callable[[Float64Array], npt.ArrayLike]
@@ -159,7 +167,7 @@ class IntegrationResult:
         else:
             rows += [("standard error", cells(self.standard_error, ".3g")),
                      (f"{self.confidence_level:.0%} interval", "".join(
-                         f"<td>[{a:.10g}, {b:.10g}]</td>" for a, b in zip(np.atleast_1d(low), np.atleast_1d(high))))]  # fmt: skip
+                         f"<td>[{a:.10g}, {b:.10g}]</td>" for a, b in zip(np.atleast_1d(low), np.atleast_1d(high), strict=False)))]  # fmt: skip
         body = "".join(f"<tr><th style='text-align:left'>{k}</th>{v}</tr>" for k, v in rows)
         caption = (f"{self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
                    f"({self.domain}, {self.method}, {escape(self.points)})")  # fmt: skip
@@ -211,7 +219,7 @@ def plan(
     if not (isinstance(confidence_level, float | int) and 0 < confidence_level < 1):
         raise ValueError(f"'confidence_level' must be in (0, 1), got {short_repr(confidence_level)}")
     if engine is not None or points == "random":
-        if not (replicates is None or (type(replicates) is int and replicates == 1)):  # noqa: E721 (no bool, no array)
+        if not (replicates is None or (type(replicates) is int and replicates == 1)):
             kind = "a QMCEngine" if engine is not None else "points='random'"
             raise ValueError(f"'replicates' must be None or 1 with {kind}, got {short_repr(replicates)}")
         replicates = 1
@@ -387,7 +395,9 @@ def to_tolerance(
     if points != "random":
         replicates = DEFAULT_REPLICATES if replicates is None else check_count(replicates, "replicates")
         if replicates < 2:
-            raise ValueError(f"'replicates' must be at least 2 with 'atol' or 'rtol' (an error estimate), got {replicates}")
+            raise ValueError(
+                f"'replicates' must be at least 2 with 'atol' or 'rtol' (an error estimate), got {replicates}"
+            )
     unit = count * (replicates or 1)
     n = unit * (16**2 if stratified else 256) if n is None else check_count(n, "n", multiple=unit)
     n_max = count * 2**24 if n_max is None else check_count(n_max, "n_max", multiple=count)
@@ -457,7 +467,7 @@ def _stage_result(
         while (replicate, reused) in kept and reused < work.blocks_per_replicate:
             reused += 1
         requests.append((replicate, reused, work.blocks_per_replicate))
-    for (replicate, reused, _), fresh in zip(requests, compute(work, requests)):
+    for (replicate, reused, _), fresh in zip(requests, compute(work, requests), strict=False):
         for block, partial in enumerate(fresh, start=reused):
             if partial[0] == BLOCK:
                 kept[(replicate, block)] = partial

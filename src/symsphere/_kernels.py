@@ -231,6 +231,7 @@ def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) ->
 _BATCH = 16
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
 
+
 @njit(inline="always")
 def _map_batch(u, v, code, base):
     """base[:, j] = the point of T0 of map *code* at (u[j], v[j]), for all j < _BATCH.
@@ -342,7 +343,7 @@ def part_count(m, parts):
 _GIVEN, _RANDOM = 0, 1
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _fill_kernel(source: int, code: int, kind: int) -> Any:
     """The serial kernel of one case: base points given (*source* = _GIVEN) or drawn (_RANDOM), map
     *code*, store *kind*.  It fills points ``lo ... hi - 1`` of the call (one part).
@@ -442,7 +443,13 @@ def _run(source, code, kind, m, parts, part_input, weights, rows, tail, offset):
 
 
 def fill_orbits(
-    uv: FloatArray, method: str, count: int, basis: Float64Array | None, out: FloatArray, parts: int = 0, offset: int = 0
+    uv: FloatArray,
+    method: str,
+    count: int,
+    basis: Float64Array | None,
+    out: FloatArray,
+    parts: int = 0,
+    offset: int = 0,
 ) -> FloatArray:
     """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
 
@@ -458,7 +465,18 @@ def fill_orbits(
     kind, weights = _store_kind(count, basis)
     rows, tail = _split(out, count)
     uv = np.ascontiguousarray(uv, dtype=np.float64)
-    _run(_GIVEN, METHOD_CODES[method], kind, len(uv), parts or _default_parts(len(uv)), lambda lo: uv, weights, rows, tail, offset)
+    _run(
+        _GIVEN,
+        METHOD_CODES[method],
+        kind,
+        len(uv),
+        parts or _default_parts(len(uv)),
+        lambda lo: uv,
+        weights,
+        rows,
+        tail,
+        offset,
+    )
     return out
 
 

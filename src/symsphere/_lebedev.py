@@ -24,14 +24,74 @@ from ._validation import check_count, check_dtype, check_rng
 __all__ = ["LEBEDEV_ORDERS", "LEBEDEV_SIZES", "lebedev_size", "lebedev_weights", "sample_lebedev"]
 
 LEBEDEV_ORDERS: tuple[int, ...] = (
-    3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31, 35, 41, 47, 53, 59, 65, 71, 77, 83, 89, 95,
-    101, 107, 113, 119, 125, 131,
+    3,
+    5,
+    7,
+    9,
+    11,
+    13,
+    15,
+    17,
+    19,
+    21,
+    23,
+    25,
+    27,
+    29,
+    31,
+    35,
+    41,
+    47,
+    53,
+    59,
+    65,
+    71,
+    77,
+    83,
+    89,
+    95,
+    101,
+    107,
+    113,
+    119,
+    125,
+    131,
 )
 """tuple of int: the orders (exact polynomial degrees) of ``scipy.integrate.lebedev_rule``."""
 
 LEBEDEV_SIZES: tuple[int, ...] = (
-    6, 14, 26, 38, 50, 74, 86, 110, 146, 170, 194, 230, 266, 302, 350, 434, 590, 770, 974, 1202, 1454,
-    1730, 2030, 2354, 2702, 3074, 3470, 3890, 4334, 4802, 5294, 5810,
+    6,
+    14,
+    26,
+    38,
+    50,
+    74,
+    86,
+    110,
+    146,
+    170,
+    194,
+    230,
+    266,
+    302,
+    350,
+    434,
+    590,
+    770,
+    974,
+    1202,
+    1454,
+    1730,
+    2030,
+    2354,
+    2702,
+    3074,
+    3470,
+    3890,
+    4334,
+    4802,
+    5294,
+    5810,
 )
 """tuple of int: the number of points of the rule of each order of :data:`LEBEDEV_ORDERS`."""
 
@@ -166,7 +226,7 @@ def _layout(n: int, randomize: bool) -> tuple[int, int]:
     raise ValueError(f"'n'={n} is not the size of a Lebedev rule{extra} ({hint}; see lebedev_size)")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _rule(size: int) -> tuple[Float64Array, Float64Array]:
     """(nodes (size, 3), weights (size,)) of scipy's Lebedev rule with *size* points; weights sum to 4 pi."""
     from scipy.integrate import lebedev_rule  # scipy >= 1.15; imported when first needed

@@ -80,7 +80,9 @@ def kernel_dependencies(dispatcher: Any) -> list[Path]:
     function = getattr(dispatcher, "py_func", dispatcher)
     code = getattr(function, "__code__", None)
     if code is None:
-        raise TypeError(f"'dispatcher' must be a numba dispatcher or a Python function, got {type(dispatcher).__name__}")
+        raise TypeError(
+            f"'dispatcher' must be a numba dispatcher or a Python function, got {type(dispatcher).__name__}"
+        )
     start = Path(code.co_filename).resolve()
     root = _package_root(start)
     files: set[Path] = set()

@@ -62,10 +62,7 @@ def check_count(n: object, name: str = "n", multiple: int = 1, maximum: int | No
         below = (n // multiple) * multiple
         above = below + multiple
         nearest = f"{below} or {above}" if below > 0 else f"{above}"
-        raise ValueError(
-            f"'{name}'={n} is not a multiple of {multiple}; "
-            f"the nearest valid sizes are {nearest}"
-        )
+        raise ValueError(f"'{name}'={n} is not a multiple of {multiple}; the nearest valid sizes are {nearest}")
     return n
 
 
@@ -243,10 +240,7 @@ def check_out(out: object, shape: Sequence[int], dtype: npt.DTypeLike, name: str
     if out.shape != tuple(shape):
         raise ValueError(f"'{name}' must have shape {tuple(shape)}, got {out.shape}")
     if out.dtype != dtype:
-        raise TypeError(
-            f"'{name}' has dtype {out.dtype} but dtype={dtype} was asked for; "
-            "they must match"
-        )
+        raise TypeError(f"'{name}' has dtype {out.dtype} but dtype={dtype} was asked for; they must match")
     if not (out.flags.c_contiguous and out.flags.writeable and out.flags.aligned):
         raise ValueError(f"'{name}' must be C-contiguous, writeable and aligned")
     return out
@@ -263,8 +257,7 @@ def check_rng(rng: object, name: str = "rng") -> np.random.Generator:
             raise ValueError(f"'{name}' must be a non-negative integer seed, got {rng}")
         return np.random.default_rng(int(rng))
     raise TypeError(
-        f"'{name}' must be None, an int, a numpy SeedSequence or a numpy Generator, "
-        f"got {type(rng).__name__}"
+        f"'{name}' must be None, an int, a numpy SeedSequence or a numpy Generator, got {type(rng).__name__}"
     )
 
 
@@ -411,7 +404,15 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     return arr
 
 
-__all__ += ["MAX_BINS", "MAX_COUNT", "MAX_DIMENSIONS", "MAX_QUADRATURE_ORDER", "MAX_PATHS", "MAX_POLYNOMIAL_DEGREE", "MAX_SH_DEGREE"]
+__all__ += [
+    "MAX_BINS",
+    "MAX_COUNT",
+    "MAX_DIMENSIONS",
+    "MAX_QUADRATURE_ORDER",
+    "MAX_PATHS",
+    "MAX_POLYNOMIAL_DEGREE",
+    "MAX_SH_DEGREE",
+]
 __all__ += ["MAX_PIXELS", "MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
 __all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
 
@@ -449,10 +450,7 @@ def check_samples(samples: object, name: str = "samples") -> FloatArray:
 def check_pdf(pdf: object) -> Density:
     """Return *pdf* if it is callable, else raise TypeError."""
     if not callable(pdf):
-        raise TypeError(
-            f"'pdf' must be a callable taking directions of shape (m, 3), "
-            f"got {type(pdf).__name__}"
-        )
+        raise TypeError(f"'pdf' must be a callable taking directions of shape (m, 3), got {type(pdf).__name__}")
     return cast("Density", pdf)
 
 
@@ -565,7 +563,9 @@ def check_coeffs(coeffs: object) -> Mapping[tuple[int, int, int], Any]:
             raise ValueError(f"'coeffs' keys must be exponent triples (a, b, c), got {_short(key)}")
         check_exponents(*key)
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-            raise TypeError(f"'coeffs' values must be real numbers; got {type(value).__name__} {_short(value)} at {key}")
+            raise TypeError(
+                f"'coeffs' values must be real numbers; got {type(value).__name__} {_short(value)} at {key}"
+            )
         try:
             finite = math.isfinite(value)
         except OverflowError:  # an int or Fraction beyond float64: exact, and finite
@@ -586,8 +586,7 @@ def check_triangle(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Floa
     area = 2.0 * math.atan2(abs(float(np.dot(A, np.cross(B, C)))), 1.0 + A @ B + B @ C + C @ A)
     if area < 1e-12:
         raise ValueError(
-            "'a', 'b', 'c' must span a non-degenerate spherical triangle "
-            "(distinct, not on one great circle)"
+            "'a', 'b', 'c' must span a non-degenerate spherical triangle (distinct, not on one great circle)"
         )
     return verts
 
@@ -709,7 +708,9 @@ def check_output_path(path: object, name: str = "path", *, probe: bool = True) -
     if mode is not None and not stat.S_ISREG(mode):
         shown = f" ({target})" if str(target) != os.path.abspath(given) else ""  # reached through a link
         raise OSError(
-            errno.EINVAL, f"is {file_kind(mode)}{shown}, not a regular file: only regular files are replaced", str(given)
+            errno.EINVAL,
+            f"is {file_kind(mode)}{shown}, not a regular file: only regular files are replaced",
+            str(given),
         )
     folder = target.parent
     if not folder.exists():

@@ -254,9 +254,7 @@ def _rectangle_integrals(pdf: Density, domain: str, rects: Float64Array, order: 
     cos = np.where(north[..., None], 1.0 - usq, usq - 1.0)
     sin = u * np.sqrt(np.maximum(2.0 - usq, 0.0))
     phi4 = phi[..., None]
-    nodes = np.stack(
-        np.broadcast_arrays(sin * np.cos(phi4), sin * np.sin(phi4), cos), axis=-1
-    ).reshape(-1, 3)
+    nodes = np.stack(np.broadcast_arrays(sin * np.cos(phi4), sin * np.sin(phi4), cos), axis=-1).reshape(-1, 3)
 
     values = _evaluate_pdf(pdf, nodes)
     integrals: Float64Array = (values.reshape(weight.shape) * weight).sum(axis=(1, 2, 3))
@@ -284,16 +282,11 @@ def _evaluate_pdf(pdf: Density, nodes: Float64Array) -> Float64Array:
     try:
         values = np.asarray(out, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise TypeError(
-            f"'pdf' must return an array of real numbers, got {type(out).__name__}"
-        ) from exc
+        raise TypeError(f"'pdf' must return an array of real numbers, got {type(out).__name__}") from exc
     if values.ndim == 0:
         values = np.full(m, float(values))
     if values.shape != (m,):
-        raise ValueError(
-            f"'pdf' must return shape (m,) = ({m},) for directions of shape ({m}, 3), "
-            f"got {values.shape}"
-        )
+        raise ValueError(f"'pdf' must return shape (m,) = ({m},) for directions of shape ({m}, 3), got {values.shape}")
     bad = ~np.isfinite(values)
     if np.any(bad):
         k = int(np.argmax(bad))

@@ -30,10 +30,10 @@ import time
 
 import numpy as np
 
-from ._validation import MAX_TASKS, check_count, check_positive_real, short_repr
 from ._blocks import fill_range, prepare
 from ._integration import block_partials, finish, plan, to_tolerance
 from ._threads import start_threads
+from ._validation import MAX_TASKS, check_count, check_positive_real, short_repr
 from .points import BLOCK
 
 __all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client", "close_client"]
@@ -42,7 +42,9 @@ DEFAULT_CHUNK_BLOCKS = 16
 """Blocks per task: 16 * 4096 orbits = 3 145 728 sphere directions (75 MB in float64)."""
 
 
-def sample_sphere(n, *, chunks=48 * BLOCK * DEFAULT_CHUNK_BLOCKS, method="equal_area", points="random", rng=None, dtype=np.float64):
+def sample_sphere(
+    n, *, chunks=48 * BLOCK * DEFAULT_CHUNK_BLOCKS, method="equal_area", points="random", rng=None, dtype=np.float64
+):
     """A dask array of the directions of :func:`symsphere.sample_sphere`.
 
     Parameters
@@ -73,7 +75,14 @@ def sample_sphere(n, *, chunks=48 * BLOCK * DEFAULT_CHUNK_BLOCKS, method="equal_
 
 
 def sample_hemisphere(
-    n, *, chunks=24 * BLOCK * DEFAULT_CHUNK_BLOCKS, normal=None, method="equal_area", points="random", rng=None, dtype=np.float64
+    n,
+    *,
+    chunks=24 * BLOCK * DEFAULT_CHUNK_BLOCKS,
+    normal=None,
+    method="equal_area",
+    points="random",
+    rng=None,
+    dtype=np.float64,
 ):
     """A dask array of the directions of :func:`symsphere.sample_hemisphere` (see :func:`sample_sphere`).
 
@@ -175,8 +184,11 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
             return to_tolerance(f, n=n, **arguments, **tolerance, compute=compute)
     work = plan(f, **arguments)
     requests = [(replicate, 0, work.blocks_per_replicate) for replicate in range(work.replicates)]
-    _check_tasks(work.replicates * -(-work.blocks_per_replicate // chunk_blocks), "chunk_blocks",
-                 f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}")
+    _check_tasks(
+        work.replicates * -(-work.blocks_per_replicate // chunk_blocks),
+        "chunk_blocks",
+        f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}",
+    )
     _check_progress(progress)
     _check_client(client)  # after the arguments of the run, before any work
     with _client_or_local(client) as active:
@@ -394,7 +406,19 @@ def close_client(client):
 
 
 def _integrate_arguments(kwargs):
-    allowed = {"domain", "n", "method", "points", "normal", "rng", "replicates", "confidence_level", "atol", "rtol", "n_max"}
+    allowed = {
+        "domain",
+        "n",
+        "method",
+        "points",
+        "normal",
+        "rng",
+        "replicates",
+        "confidence_level",
+        "atol",
+        "rtol",
+        "n_max",
+    }
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise TypeError(f"integrate() got unexpected keyword arguments {unknown}; allowed: {sorted(allowed)}")

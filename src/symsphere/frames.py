@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 import numbers
-
 from typing import Any
 
 import numpy as np
@@ -23,7 +22,7 @@ import numpy.typing as npt
 from numba.extending import overload
 
 from ._typing import Float64Array, FloatArray
-from ._validation import UNIT_TOLERANCE, as_float_array, check_directions, check_dimensions, short_repr
+from ._validation import UNIT_TOLERANCE, as_float_array, check_dimensions, check_directions, short_repr
 
 __all__ = ["frame", "frame_rows", "to_world", "to_local"]
 
@@ -80,7 +79,9 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
 
 
 @overload(frame_rows, jit_options={}, inline="never", strict=False)
-def _frame_rows_in_kernels(nx: Any, ny: Any, nz: Any) -> Any:  # numba: the formula, trusting its (unit, finite) arguments
+def _frame_rows_in_kernels(
+    nx: Any, ny: Any, nz: Any
+) -> Any:  # numba: the formula, trusting its (unit, finite) arguments
     return _rows
 
 

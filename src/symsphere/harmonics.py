@@ -29,7 +29,15 @@ import numpy as np
 import numpy.typing as npt
 
 from ._typing import Domain, Float64Array, Polynomial
-from ._validation import check_choice, check_coeffs, check_directions, check_exponents, check_lm, check_unit_directions, short_repr
+from ._validation import (
+    check_choice,
+    check_coeffs,
+    check_directions,
+    check_exponents,
+    check_lm,
+    check_unit_directions,
+    short_repr,
+)
 
 __all__ = [
     "real_sh",
@@ -171,7 +179,9 @@ def monomial_integral(a: int, b: int, c: int, domain: Domain = "sphere") -> floa
     >>> monomial_integral(2, 0, 0) / math.pi, monomial_integral(0, 0, 1, "hemisphere") / math.pi
     (1.3333333333333333, 1.0)
     """
-    return float(_monomial_integral_over_pi(*check_exponents(a, b, c), check_choice(domain, "domain", _DOMAINS))) * math.pi
+    return (
+        float(_monomial_integral_over_pi(*check_exponents(a, b, c), check_choice(domain, "domain", _DOMAINS))) * math.pi
+    )
 
 
 def polynomial_integral(coeffs: Polynomial, domain: Domain = "sphere") -> float:
@@ -193,8 +203,10 @@ def polynomial_integral(coeffs: Polynomial, domain: Domain = "sphere") -> float:
     domain = check_choice(domain, "domain", _DOMAINS)
     # Summed exactly (a float coefficient is converted to the Fraction it equals), rounded once.
     total = sum(
-        (Fraction(coef) * _monomial_integral_over_pi(*check_exponents(*key), domain)
-         for key, coef in check_coeffs(coeffs).items()),
+        (
+            Fraction(coef) * _monomial_integral_over_pi(*check_exponents(*key), domain)
+            for key, coef in check_coeffs(coeffs).items()
+        ),
         Fraction(0),
     )
     try:
@@ -277,15 +289,19 @@ def _monomial_integral_over_pi(a: int, b: int, c: int, domain: str) -> Fraction:
     if a % 2 or b % 2:
         return Fraction(0)
     if c % 2 == 0:
-        sphere = Fraction(4 * _double_factorial(a - 1) * _double_factorial(b - 1) * _double_factorial(c - 1),
-                          _double_factorial(a + b + c + 1))
+        sphere = Fraction(
+            4 * _double_factorial(a - 1) * _double_factorial(b - 1) * _double_factorial(c - 1),
+            _double_factorial(a + b + c + 1),
+        )
         return sphere if domain == "sphere" else sphere / 2
     if domain == "sphere":
         return Fraction(0)
     # G((a+1)/2) G((b+1)/2) = pi (a-1)!! (b-1)!! / 2^((a+b)/2); G((c+1)/2) = ((c-1)/2)!;
     # G((a+b+c+3)/2) = ((a+b+c+1)/2)!  (a + b + c + 1 is even).
-    return Fraction(_double_factorial(a - 1) * _double_factorial(b - 1) * math.factorial((c - 1) // 2),
-                    2 ** ((a + b) // 2) * math.factorial((a + b + c + 1) // 2))
+    return Fraction(
+        _double_factorial(a - 1) * _double_factorial(b - 1) * math.factorial((c - 1) // 2),
+        2 ** ((a + b) // 2) * math.factorial((a + b + c + 1) // 2),
+    )
 
 
 def _poly_eval(coeffs: Polynomial, d: Float64Array) -> Float64Array:
@@ -324,7 +340,7 @@ def _legendre_q_coefficients(l: int, am: int) -> list[Fraction]:
     for k in range(am + 2, l + 1):
         zq = [Fraction(0)] + [(2 * k - 1) * c for c in q]
         prev = q_prev + [Fraction(0)] * (len(zq) - len(q_prev))
-        q, q_prev = [(s - (k + am - 1) * t) / (k - am) for s, t in zip(zq, prev)], q
+        q, q_prev = [(s - (k + am - 1) * t) / (k - am) for s, t in zip(zq, prev, strict=False)], q
     return q
 
 

@@ -43,7 +43,14 @@ import numpy.typing as npt
 from scipy import integrate, special
 
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
-from ._validation import check_choice, check_directions, check_nonnegative, check_normal, check_positive, check_real_values
+from ._validation import (
+    check_choice,
+    check_directions,
+    check_nonnegative,
+    check_normal,
+    check_positive,
+    check_real_values,
+)
 from .harmonics import (
     cubic_harmonic,
     evaluate_polynomial,
@@ -183,9 +190,7 @@ def suite(domain: Domain | None = None) -> list[Integrand]:
 # =============================================================================
 
 
-def lambert_irradiance(
-    vertices: npt.ArrayLike, normal: npt.ArrayLike | None = None, radiance: float = 1.0
-) -> float:
+def lambert_irradiance(vertices: npt.ArrayLike, normal: npt.ArrayLike | None = None, radiance: float = 1.0) -> float:
     """Irradiance at the origin from a polygonal light of constant radiance (Lambert 1760).
 
     ``E = (L/2) |sum_i Theta_i (n . Gamma_i)|``, where for the edge from
@@ -239,9 +244,7 @@ def lambert_irradiance(
     return irradiance
 
 
-def sphere_light_irradiance(
-    center: npt.ArrayLike, distance: float, radius: float, radiance: float = 1.0
-) -> float:
+def sphere_light_irradiance(center: npt.ArrayLike, distance: float, radius: float, radiance: float = 1.0) -> float:
     """Irradiance from a spherical light entirely above the surface z = 0.
 
     The light subtends the cone of half-angle alpha, ``sin(alpha) = R/D``,
@@ -340,8 +343,12 @@ def _unit3(v: npt.ArrayLike) -> Float64Array:
 
 
 def _frozen(**kwargs: Any) -> Mapping[str, Any]:
-    return MappingProxyType({k: (np.array(v, dtype=np.float64) if isinstance(v, (list, tuple, np.ndarray)) else v)
-                             for k, v in kwargs.items()})
+    return MappingProxyType(
+        {
+            k: (np.array(v, dtype=np.float64) if isinstance(v, (list, tuple, np.ndarray)) else v)
+            for k, v in kwargs.items()
+        }
+    )
 
 
 def _kernel(expression: str, **constants: float) -> Any:
@@ -359,9 +366,11 @@ def _kernel(expression: str, **constants: float) -> Any:
     lines = [f"    {name} = {float(value)!r}" for name, value in constants.items()]
     source = "def kernel(x, y, z):\n" + "\n".join(lines + [f"    return {expression}"]) + "\n"
     namespace: dict[str, Any] = {"vexp": vexp}
-    exec(compile(source, "<symsphere.integrands kernel>", "exec"), namespace)  # noqa: S102 - our own template
+    exec(compile(source, "<symsphere.integrands kernel>", "exec"), namespace)
     dispatcher = njit(error_model="numpy")(namespace["kernel"])
-    setattr(dispatcher, "symsphere_source", source)  # integrate() writes it into a cached specialised kernel (symsphere._fused)
+    # integrate() writes it into a cached specialised kernel (symsphere._fused); setattr: a numba Dispatcher
+    # has no such attribute for mypy.
+    setattr(dispatcher, "symsphere_source", source)  # noqa: B010
     return dispatcher
 
 
@@ -413,7 +422,11 @@ def _exp_hemisphere_integral(a: Float64Array) -> float:
     rho = math.hypot(a[0], a[1])
     value, _ = integrate.quad(
         lambda z: math.exp(a[2] * z) * special.i0(rho * math.sqrt(max(0.0, 1.0 - z * z))),
-        0.0, 1.0, epsabs=0.0, epsrel=1e-13, limit=200,
+        0.0,
+        1.0,
+        epsabs=0.0,
+        epsrel=1e-13,
+        limit=200,
     )
     return float(2.0 * math.pi * value)
 
@@ -465,9 +478,16 @@ def _sh_integrand(
     name = base if domain == "sphere" else f"{base}_hemisphere"
     how = "0 (orthogonal to Y_00)" if domain == "sphere" else "moment formula"
     return Integrand(
-        name, domain, lambda d: shift + real_sh(l, m, d), exact,
-        f"real spherical harmonic {label}; exact: {how}", True, False, orbit_exact,
-        _frozen(l=l, m=m, shift=shift), _polynomial_kernel(poly, shift),
+        name,
+        domain,
+        lambda d: shift + real_sh(l, m, d),
+        exact,
+        f"real spherical harmonic {label}; exact: {how}",
+        True,
+        False,
+        orbit_exact,
+        _frozen(l=l, m=m, shift=shift),
+        _polynomial_kernel(poly, shift),
     )
 
 
@@ -485,10 +505,16 @@ def _cubic_integrand(degree: Literal[4, 6, 8], shift: float = 0.0) -> Integrand:
         label = f"{shift:g} + {label}"
     name = f"cubic{degree}" if not shift else f"shifted_cubic{degree}"
     return Integrand(
-        name, "sphere", lambda d: evaluate_polynomial(coeffs, d),
+        name,
+        "sphere",
+        lambda d: evaluate_polynomial(coeffs, d),
         polynomial_integral(coeffs, "sphere"),
         f"cubic harmonic: {label}; invariant under the 48 maps; exact: moment formula",
-        True, True, False, _frozen(degree=degree, shift=shift), _polynomial_kernel(coeffs),
+        True,
+        True,
+        False,
+        _frozen(degree=degree, shift=shift),
+        _polynomial_kernel(coeffs),
     )
 
 
@@ -497,16 +523,31 @@ def _build_integrands() -> dict[str, Integrand]:
     # (a) pure harmonics: exact 0.  orbit_exact: those with no O_h-invariant component
     # (odd l, l = 2, and odd under a sign change of x or y), see docs/integrands.md.
     for l, m, exact_orbit in [
-        (1, -1, True), (1, 0, True), (2, 0, True), (2, 1, True), (2, -2, True), (3, -2, True),
-        (3, 0, True), (4, 0, False), (4, -2, True), (5, 3, True), (6, 0, False), (6, 4, False),
-        (7, -5, True), (8, 0, False), (8, -5, True),
+        (1, -1, True),
+        (1, 0, True),
+        (2, 0, True),
+        (2, 1, True),
+        (2, -2, True),
+        (3, -2, True),
+        (3, 0, True),
+        (4, 0, False),
+        (4, -2, True),
+        (5, 3, True),
+        (6, 0, False),
+        (6, 4, False),
+        (7, -5, True),
+        (8, 0, False),
+        (8, -5, True),
     ]:
         out.append(_sh_integrand(l, m, orbit_exact=exact_orbit))
     # (b) invariant cubic harmonics and (c) shifted versions.
     out += [_cubic_integrand(4), _cubic_integrand(6), _cubic_integrand(8)]
     out += [_cubic_integrand(4, 1.0), _cubic_integrand(6, 1.0), _cubic_integrand(8, 1.0)]
-    out += [_sh_integrand(2, 1, shift=1.0, orbit_exact=True), _sh_integrand(4, 0, shift=1.0),
-            _sh_integrand(7, 2, shift=1.0, orbit_exact=True)]
+    out += [
+        _sh_integrand(2, 1, shift=1.0, orbit_exact=True),
+        _sh_integrand(4, 0, shift=1.0),
+        _sh_integrand(7, 2, shift=1.0, orbit_exact=True),
+    ]
 
     # Phong lobe, n = 20, about an off-axis direction.
     r = _unit3([0.3, -0.2, 0.9])
@@ -520,19 +561,38 @@ def _build_integrands() -> dict[str, Integrand]:
     assert n == 20  # t^20 = (t^4)^4 t^4 below
     phong_kernel = _kernel(
         f"scale * (max(0.0, {dot}) * max(0.0, {dot}) * max(0.0, {dot}) * max(0.0, {dot})) ** 5",
-        scale=(n + 1) / (2 * math.pi), **constants,
+        scale=(n + 1) / (2 * math.pi),
+        **constants,
     )
-    out.append(Integrand(
-        "phong", "sphere", phong, 1.0,
-        "normalised Phong lobe 21/(2 pi) max(0, w.r)^20, r = (0.3, -0.2, 0.9)/|.|; exact: 1",
-        True, False, False, _frozen(direction=r, exponent=n), phong_kernel,
-    ))
-    out.append(Integrand(
-        "phong_hemisphere", "hemisphere", phong, _phong_hemisphere_integral(r, n),
-        "the Phong lobe over z >= 0 (it crosses the horizon slightly: 1 - 8.8e-11); "
-        "exact: 1D quadrature about r, to ~1e-15",
-        True, False, False, _frozen(direction=r, exponent=n), phong_kernel,
-    ))
+    out.append(
+        Integrand(
+            "phong",
+            "sphere",
+            phong,
+            1.0,
+            "normalised Phong lobe 21/(2 pi) max(0, w.r)^20, r = (0.3, -0.2, 0.9)/|.|; exact: 1",
+            True,
+            False,
+            False,
+            _frozen(direction=r, exponent=n),
+            phong_kernel,
+        )
+    )
+    out.append(
+        Integrand(
+            "phong_hemisphere",
+            "hemisphere",
+            phong,
+            _phong_hemisphere_integral(r, n),
+            "the Phong lobe over z >= 0 (it crosses the horizon slightly: 1 - 8.8e-11); "
+            "exact: 1D quadrature about r, to ~1e-15",
+            True,
+            False,
+            False,
+            _frozen(direction=r, exponent=n),
+            phong_kernel,
+        )
+    )
 
     # Spherical cap indicator.
     c = _unit3([0.5, 0.3, 0.8])
@@ -546,12 +606,21 @@ def _build_integrands() -> dict[str, Integrand]:
     dot, constants = _dot("c", c)
     cap_kernel = _kernel(f"1.0 if {dot} >= cos_alpha else 0.0", cos_alpha=cos_alpha, **constants)
     for domain in _DOMAINS:
-        out.append(Integrand(
-            "cap" if domain == "sphere" else "cap_hemisphere", domain, cap, cap_area,
-            "indicator of the cap w.c >= cos 0.4, c = (0.5, 0.3, 0.8)/|.| (inside the "
-            "hemisphere); exact: 2 pi (1 - cos alpha)",
-            False, False, False, _frozen(axis=c, cos_alpha=cos_alpha), cap_kernel,
-        ))
+        out.append(
+            Integrand(
+                "cap" if domain == "sphere" else "cap_hemisphere",
+                domain,
+                cap,
+                cap_area,
+                "indicator of the cap w.c >= cos 0.4, c = (0.5, 0.3, 0.8)/|.| (inside the "
+                "hemisphere); exact: 2 pi (1 - cos alpha)",
+                False,
+                False,
+                False,
+                _frozen(axis=c, cos_alpha=cos_alpha),
+                cap_kernel,
+            )
+        )
 
     # exp(w . a): all components.
     a = np.array([0.7, -0.4, 0.5])
@@ -562,25 +631,56 @@ def _build_integrands() -> dict[str, Integrand]:
 
     dot, constants = _dot("a", a)
     exp_kernel = _kernel(f"vexp({dot})", **constants)
-    out.append(Integrand(
-        "exp", "sphere", expo, 4 * math.pi * math.sinh(norm_a) / norm_a,
-        "exp(w.a), a = (0.7, -0.4, 0.5); exact: 4 pi sinh|a| / |a|",
-        True, False, False, _frozen(a=a), exp_kernel,
-    ))
-    out.append(Integrand(
-        "exp_hemisphere", "hemisphere", expo, _exp_hemisphere_integral(a),
-        "exp(w.a) over z >= 0; exact: 2 pi int_0^1 exp(a_z z) I0(|a_xy| sqrt(1 - z^2)) dz by quadrature, ~1e-15",
-        True, False, False, _frozen(a=a), exp_kernel,
-    ))
+    out.append(
+        Integrand(
+            "exp",
+            "sphere",
+            expo,
+            4 * math.pi * math.sinh(norm_a) / norm_a,
+            "exp(w.a), a = (0.7, -0.4, 0.5); exact: 4 pi sinh|a| / |a|",
+            True,
+            False,
+            False,
+            _frozen(a=a),
+            exp_kernel,
+        )
+    )
+    out.append(
+        Integrand(
+            "exp_hemisphere",
+            "hemisphere",
+            expo,
+            _exp_hemisphere_integral(a),
+            "exp(w.a) over z >= 0; exact: 2 pi int_0^1 exp(a_z z) I0(|a_xy| sqrt(1 - z^2)) dz by quadrature, ~1e-15",
+            True,
+            False,
+            False,
+            _frozen(a=a),
+            exp_kernel,
+        )
+    )
 
     # Hemisphere: cos theta and harmonics with the odd-c moment formula.
-    out.append(Integrand(
-        "cosine", "hemisphere", lambda d: np.asarray(d, dtype=np.float64)[..., 2], math.pi,
-        "cos(theta) = z; exact: pi", True, False, False, _frozen(), _kernel("z"),
-    ))
-    out += [_sh_integrand(3, 0, "hemisphere"), _sh_integrand(5, 0, "hemisphere"),
-            _sh_integrand(2, 1, "hemisphere", orbit_exact=True),
-            _sh_integrand(4, 0, "hemisphere", shift=1.0)]
+    out.append(
+        Integrand(
+            "cosine",
+            "hemisphere",
+            lambda d: np.asarray(d, dtype=np.float64)[..., 2],
+            math.pi,
+            "cos(theta) = z; exact: pi",
+            True,
+            False,
+            False,
+            _frozen(),
+            _kernel("z"),
+        )
+    )
+    out += [
+        _sh_integrand(3, 0, "hemisphere"),
+        _sh_integrand(5, 0, "hemisphere"),
+        _sh_integrand(2, 1, "hemisphere", orbit_exact=True),
+        _sh_integrand(4, 0, "hemisphere", shift=1.0),
+    ]
 
     # Irradiance from a spherical light.
     light_c = _unit3([-0.4, 0.2, 1.0])
@@ -594,22 +694,33 @@ def _build_integrands() -> dict[str, Integrand]:
         return radiance * np.maximum(d[..., 2], 0.0) * (d @ c >= cos_light)
 
     light_dot, constants = _dot("c", light_c)
-    out.append(Integrand(
-        "sphere_light", "hemisphere", sphere_light,
-        sphere_light_irradiance(light_c, distance, radius, radiance),
-        "irradiance L cos(theta) 1[w hits a sphere of radius 1.5 at distance 5 towards "
-        "(-0.4, 0.2, 1)], L = 3; exact: pi L (R/D)^2 cos(beta)",
-        False, False, False,
-        _frozen(center=light_c, distance=distance, radius=radius, radiance=radiance, cos_alpha=cos_light),
-        _kernel(f"radiance * max(z, 0.0) * (1.0 if {light_dot} >= cos_light else 0.0)",
-                radiance=radiance, cos_light=cos_light, **constants),
-    ))
+    out.append(
+        Integrand(
+            "sphere_light",
+            "hemisphere",
+            sphere_light,
+            sphere_light_irradiance(light_c, distance, radius, radiance),
+            "irradiance L cos(theta) 1[w hits a sphere of radius 1.5 at distance 5 towards "
+            "(-0.4, 0.2, 1)], L = 3; exact: pi L (R/D)^2 cos(beta)",
+            False,
+            False,
+            False,
+            _frozen(center=light_c, distance=distance, radius=radius, radiance=radiance, cos_alpha=cos_light),
+            _kernel(
+                f"radiance * max(z, 0.0) * (1.0 if {light_dot} >= cos_light else 0.0)",
+                radiance=radiance,
+                cos_light=cos_light,
+                **constants,
+            ),
+        )
+    )
 
     # Irradiance from a quad light (a parallelogram above the horizon), Lambert's formula.
     centre = np.array([0.4, -0.3, 2.0])
     e1, e2 = np.array([1.2, 0.0, 0.4]), np.array([0.0, 0.9, -0.3])
-    quad = np.array([centre - e1 / 2 - e2 / 2, centre + e1 / 2 - e2 / 2,
-                     centre + e1 / 2 + e2 / 2, centre - e1 / 2 + e2 / 2])
+    quad = np.array(
+        [centre - e1 / 2 - e2 / 2, centre + e1 / 2 - e2 / 2, centre + e1 / 2 + e2 / 2, centre - e1 / 2 + e2 / 2]
+    )
     quad_radiance = 2.0
     inside = _polygon_inside(quad)
 
@@ -619,13 +730,20 @@ def _build_integrands() -> dict[str, Integrand]:
         d = np.asarray(d, dtype=np.float64)
         return radiance * np.maximum(d[..., 2], 0.0) * inside(d)
 
-    out.append(Integrand(
-        "quad_light", "hemisphere", quad_light, lambert_irradiance(quad, radiance=quad_radiance),
-        "irradiance L cos(theta) 1[w passes through a parallelogram light], L = 2; "
-        "exact: Lambert's formula",
-        False, False, False, _frozen(vertices=quad, radiance=quad_radiance),
-        _quad_kernel(quad, quad_radiance),
-    ))
+    out.append(
+        Integrand(
+            "quad_light",
+            "hemisphere",
+            quad_light,
+            lambert_irradiance(quad, radiance=quad_radiance),
+            "irradiance L cos(theta) 1[w passes through a parallelogram light], L = 2; exact: Lambert's formula",
+            False,
+            False,
+            False,
+            _frozen(vertices=quad, radiance=quad_radiance),
+            _quad_kernel(quad, quad_radiance),
+        )
+    )
     return {g.name: g for g in out}
 
 

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy.typing as npt
 
-from ._integration import IntegrationResult, Integrand, block_partials, finish, plan, to_tolerance
+from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 
 __all__ = ["IntegrationResult", "integrate"]

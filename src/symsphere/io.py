@@ -182,7 +182,7 @@ def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
     temporaries: list[Path] = []
     locks: list[int] = []
     try:
-        for path, target in zip(paths, targets):
+        for path, target in zip(paths, targets, strict=False):
             remove_stale_temporaries(target)
             try:
                 temporary, lock = _create_temporary(target)
@@ -191,7 +191,7 @@ def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
             temporaries.append(temporary)
             locks.append(lock)
         yield list(temporaries)
-        for path, temporary in zip(paths, temporaries):
+        for path, temporary in zip(paths, temporaries, strict=False):
             try:
                 with open(temporary, "rb+") as handle:
                     os.fsync(handle.fileno())  # the data is on disk before the name points at it
@@ -311,7 +311,9 @@ def _replace_all(temporaries: list[Path], targets: list[Path], paths: list[Path]
     backups: list[Path | None] = []
     done = 0
     try:
-        for target, path in zip(targets, paths):  # keep the previous versions under a second name (a hard link)
+        for target, path in zip(
+            targets, paths, strict=False
+        ):  # keep the previous versions under a second name (a hard link)
             _check_still_replaceable(target, path)
             backup = None
             if target.exists():
@@ -321,11 +323,11 @@ def _replace_all(temporaries: list[Path], targets: list[Path], paths: list[Path]
                 except OSError:  # a file system without hard links: a copy
                     shutil.copyfile(target, backup)
             backups.append(backup)
-        for temporary, target in zip(temporaries, targets):
+        for temporary, target in zip(temporaries, targets, strict=False):
             os.replace(temporary, target)
             done += 1
     except BaseException:
-        for target, backup in zip(targets[:done], backups):
+        for target, backup in zip(targets[:done], backups, strict=False):
             with contextlib.suppress(OSError):
                 if backup is None:
                     os.unlink(target)
@@ -356,7 +358,9 @@ def _signals_deferred() -> Iterator[None]:
         yield
         return
     arrived: list[int] = []
-    previous = {signum: signal.signal(signum, lambda signum, frame: arrived.append(signum)) for signum in _DEFERRED_SIGNALS}
+    previous = {
+        signum: signal.signal(signum, lambda signum, frame: arrived.append(signum)) for signum in _DEFERRED_SIGNALS
+    }
     try:
         yield
     finally:
@@ -371,9 +375,7 @@ def _signals_deferred() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def atomic_directory(
-    path: str | os.PathLike[str], *, replaceable: Collection[str] | None = None
-) -> Iterator[Path]:
+def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[str] | None = None) -> Iterator[Path]:
     """Yield a fresh temporary directory that replaces the directory *path* on success.
 
     Parameters
@@ -452,7 +454,9 @@ def _names(replaceable: object) -> set[str]:
     except TypeError:
         names = [None]
     if not all(isinstance(entry, str) for entry in names):
-        raise TypeError(f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}")
+        raise TypeError(
+            f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}"
+        )
     return set(names)
 
 
@@ -666,11 +670,15 @@ def _checked_block(block: Any, dtype: np.dtype[Any], room: int) -> Any:
         raise TypeError(f"'blocks' must give arrays of real numbers of shape (m, 3); got {short_repr(block)}")
     data = np.ascontiguousarray(data, dtype=dtype)
     if data.ndim != 2 or data.shape[1] != 3 or len(data) > room:
-        raise ValueError(f"'blocks' must give (m, 3) arrays of n directions in all; got one of shape {data.shape}"
-                         f" with {room} directions left")
+        raise ValueError(
+            f"'blocks' must give (m, 3) arrays of n directions in all; got one of shape {data.shape}"
+            f" with {room} directions left"
+        )
     bad = _first_non_unit_row(data, 2 * UNIT_TOLERANCE) if len(data) else -1
     if bad >= 0:
-        raise ValueError(f"'blocks' must give unit vectors (no NaN, inf, zero or non-unit rows); got {data[bad].tolist()}")
+        raise ValueError(
+            f"'blocks' must give unit vectors (no NaN, inf, zero or non-unit rows); got {data[bad].tolist()}"
+        )
     return data
 
 

@@ -144,8 +144,9 @@ or scipy.stats.qmc.QMCEngine
             engine_class = qmc.Halton if self._kind == "halton" else qmc.Sobol
             scramble_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_SCRAMBLE_KEY,))
             # An interlaced set scrambles 2 x factor Sobol' coordinates, then interlaces them (take()).
-            self._engine = engine_class(d=2 * _INTERLACED.get(self._kind, 1), scramble=True,
-                                        rng=np.random.default_rng(scramble_seed))
+            self._engine = engine_class(
+                d=2 * _INTERLACED.get(self._kind, 1), scramble=True, rng=np.random.default_rng(scramble_seed)
+            )
         # The random stream's seed, for the kernels (below).
         self.seed_words: npt.NDArray[np.unsignedinteger[Any]] | None = None
         if self._engine is not None:

@@ -21,8 +21,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ._threads import start_threads
-from ._validation import as_float_array, check_positive_real
 from ._typing import Float64Array
+from ._validation import as_float_array, check_positive_real
 
 __all__ = ["LOG_FLOOR", "SlopeFit", "cap_discrepancy", "cap_discrepancy_squared", "fit_slope", "rmse"]
 
@@ -58,13 +58,16 @@ def rmse(estimates: npt.ArrayLike, exact: float | npt.ArrayLike) -> np.ndarray:
     try:
         deviation = estimates - exact_values
     except ValueError:
-        raise ValueError(f"'exact' of shape {exact_values.shape} does not broadcast against 'estimates' "
-                         f"of shape {estimates.shape}") from None
+        raise ValueError(
+            f"'exact' of shape {exact_values.shape} does not broadcast against 'estimates' of shape {estimates.shape}"
+        ) from None
     with np.errstate(over="raise"):
         try:
             error: npt.NDArray[Any] = np.sqrt(np.mean(deviation**2, axis=-1))
         except FloatingPointError:
-            raise ValueError("'estimates' and 'exact' are too far apart: their squared errors overflow float64") from None
+            raise ValueError(
+                "'estimates' and 'exact' are too far apart: their squared errors overflow float64"
+            ) from None
     return error
 
 
@@ -246,7 +249,6 @@ def cap_discrepancy(points: npt.ArrayLike, weights: npt.ArrayLike | None = None)
     0.119573
     """
     return math.sqrt(max(cap_discrepancy_squared(points, weights), 0.0))
-
 
 
 @numba.njit(cache=True)

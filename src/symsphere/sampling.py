@@ -27,9 +27,9 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _blocks, frames
+from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_normal, check_out, check_unit_directions
 from .maps import get_map
-from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from .symmetry import fold
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
@@ -325,7 +325,9 @@ def _iterate(
     out: FloatArray | None,
 ) -> Iterator[FloatArray]:
     # Validate now, not at the first next(): a generator function would defer the errors.
-    n_total, dtype, method, source, basis = _blocks.prepare(n_total, count, normal, method, points, rng, dtype, name="n_total")
+    n_total, dtype, method, source, basis = _blocks.prepare(
+        n_total, count, normal, method, points, rng, dtype, name="n_total"
+    )
     per_chunk = check_count(chunk, "chunk", multiple=count) // count
     total = n_total // count
     if out is not None:

@@ -29,9 +29,7 @@ __all__ = [
     "square_to_t0_arvo",
 ]
 
-T0_VERTICES = np.array(
-    [[0.0, 0.0, 1.0], [2**-0.5, 0.0, 2**-0.5], [3**-0.5, 3**-0.5, 3**-0.5]]
-)
+T0_VERTICES = np.array([[0.0, 0.0, 1.0], [2**-0.5, 0.0, 2**-0.5], [3**-0.5, 3**-0.5, 3**-0.5]])
 """float array (3, 3): the vertices A = (0, 0, 1), B = (1, 0, 1)/sqrt 2, C = (1, 1, 1)/sqrt 3 of T0."""
 T0_VERTICES.setflags(write=False)
 

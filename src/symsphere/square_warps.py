@@ -54,8 +54,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ._typing import Domain, FloatArray, MapMethod
 from . import sampling
+from ._typing import Domain, FloatArray, MapMethod
 from ._validation import check_choice, check_unit_directions, check_uv
 from .maps import get_map
 from .symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold

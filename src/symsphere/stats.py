@@ -16,9 +16,8 @@ here too).
 
 from __future__ import annotations
 
-import numbers
-
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -29,17 +28,17 @@ from scipy import stats as _scipy_stats
 
 from ._typing import ChiDomain, Density, Float64Array, FloatArray, IntArray, RNGLike
 from ._validation import (
-    short_repr,
+    MAX_QUADRATURE_ORDER,
     check_bins,
     check_choice,
     check_count,
-    MAX_QUADRATURE_ORDER,
     check_directions,
     check_open_unit,
     check_pdf,
     check_positive_real,
     check_rng,
     check_samples,
+    short_repr,
 )
 from .bins import bin_probabilities, equal_area_bins
 
@@ -137,10 +136,8 @@ class Chi2Result:
         lo, hi = self.ratio_range
         lines = [
             f"chi2 test on the {self.domain}: {'PASSED' if self.passed else 'FAILED'}",
-            f"  {self.n_samples} samples in {n_phi} x {n_cos} bins (phi x cos theta), "
-            f"{self.dof} degrees of freedom",
-            f"  statistic {self.statistic:.6g}, p-value {self.p_value:.4g}, "
-            f"threshold {self.threshold:.4g}",
+            f"  {self.n_samples} samples in {n_phi} x {n_cos} bins (phi x cos theta), {self.dof} degrees of freedom",
+            f"  statistic {self.statistic:.6g}, p-value {self.p_value:.4g}, threshold {self.threshold:.4g}",
             f"  pdf integral over the domain {self.integral:.10f}",
             f"  observed/expected per bin {lo:.3g} - {hi:.3g}",
             f"  {self.message}",
@@ -160,7 +157,9 @@ class Chi2Result:
             ("observed / expected", "{:.3g} &ndash; {:.3g} per bin".format(*self.ratio_range)),
             ("pdf integral", f"{self.integral:.10f}"),
         ]
-        body = "".join(f"<tr><th style='text-align:left'>{k}</th><td style='text-align:left'>{v}</td></tr>" for k, v in rows)
+        body = "".join(
+            f"<tr><th style='text-align:left'>{k}</th><td style='text-align:left'>{v}</td></tr>" for k, v in rows
+        )
         return f"<table><caption>&chi;&sup2; test on the {escape(self.domain)}: {escape(self.message)}</caption>{body}</table>"
 
 
@@ -458,9 +457,7 @@ def one_per_orbit(directions: npt.ArrayLike, orbit_size: Literal[48, 24], rng: R
     if isinstance(orbit_size, bool) or not isinstance(orbit_size, numbers.Integral) or orbit_size not in (48, 24):
         raise ValueError(f"'orbit_size' must be 48 (sphere) or 24 (hemisphere), got {short_repr(orbit_size)}")
     if directions.ndim != 2 or len(directions) % orbit_size:
-        raise ValueError(
-            f"'directions' must have shape (m * {orbit_size}, 3), got {directions.shape}"
-        )
+        raise ValueError(f"'directions' must have shape (m * {orbit_size}, 3), got {directions.shape}")
     orbits = directions.reshape(-1, orbit_size, 3)
     members = check_rng(rng).integers(orbit_size, size=len(orbits))
     return orbits[np.arange(len(orbits)), members]
@@ -527,10 +524,7 @@ def _histogram(
         )
     if np.any(outside):
         k = int(np.argmax(outside))
-        problems.append(
-            f"{int(outside.sum())} of {n} samples lie outside {where}, "
-            f"e.g. sample {k} = {d64[k].tolist()}"
-        )
+        problems.append(f"{int(outside.sum())} of {n} samples lie outside {where}, e.g. sample {k} = {d64[k].tolist()}")
 
     phi, cos = _to_phi_cos(v[~(bad_norm | outside)])
     phi_edges, cos_edges = equal_area_bins(domain, (1, 1))  # the domain's rectangle

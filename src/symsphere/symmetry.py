@@ -39,7 +39,7 @@ def _build_maps() -> np.ndarray:
         for i, sources in enumerate(_ROW_SOURCES):
             for j, (sx, sy) in enumerate(_COLUMN_SIGNS):
                 k = 24 * half + 4 * i + j
-                for out_pos, (src, sign) in enumerate(zip(sources, (sx, sy, z_sign))):
+                for out_pos, (src, sign) in enumerate(zip(sources, (sx, sy, z_sign), strict=False)):
                     maps[k, src, out_pos] = sign
     maps.setflags(write=False)
     return maps

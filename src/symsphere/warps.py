@@ -59,8 +59,6 @@ _INV_4PI = 1.0 / (4.0 * math.pi)
 _INV_2PI = 1.0 / (2.0 * math.pi)
 
 
-
-
 def square_to_uniform_sphere(uv: npt.ArrayLike) -> FloatArray:
     """Map the unit square onto the sphere: z = 1 - 2u, phi = 2 pi v.
 

@@ -3,7 +3,6 @@
 The demo verb is tested in test_demo.py, the study verb in test_study.py.
 """
 
-import os
 import subprocess
 import sys
 

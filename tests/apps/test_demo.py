@@ -68,8 +68,6 @@ def test_demo_rejects_invalid_values(tmp_path, capsys, arguments, named):
     assert _leftovers(tmp_path) == []
 
 
-
-
 # --- run_demo ---------------------------------------------------------------------
 
 

@@ -17,7 +17,6 @@ from symsphere.apps.study.samplers import all_samplers
 from symsphere.apps.study.samplers import samplers as domain_samplers
 from symsphere.integrands import INTEGRANDS
 
-
 # --- configuration ------------------------------------------------------------------------
 
 
@@ -80,9 +79,14 @@ def test_qmc_config_sizes_and_samplers():
 
     config = CONFIGS["qmc"]
     labels = {s.label for s in all_samplers(config)}
-    assert {"symsphere_equal_area/sobol_interlaced2", "symsphere_equal_area/sobol_interlaced3",
-            "octahedral/sobol_interlaced2", "lebedev/random", "lebedev_rotated/random",
-            "fibonacci_rotated/random"} <= labels
+    assert {
+        "symsphere_equal_area/sobol_interlaced2",
+        "symsphere_equal_area/sobol_interlaced3",
+        "octahedral/sobol_interlaced2",
+        "lebedev/random",
+        "lebedev_rotated/random",
+        "fibonacci_rotated/random",
+    } <= labels
     for sampler in all_samplers(config):
         for k in config.ks:
             budget, n = 48 * 2**k, sampler.n_for(k)
@@ -165,8 +169,14 @@ def test_small_study_end_to_end(tmp_path, capsys):
         assert float(row["rmse"]) >= 0 and math.isfinite(float(row["rmse"]))
         assert float(row["mean_seconds"]) > 0 and int(row["repetitions"]) == config.repetitions
     # Unbiased and convergent: the QMC scheme on exp at the largest n.
-    best = [r for r in rows if r["integrand"] == "exp" and r["sampler"] == "symsphere_equal_area"
-            and r["points"] == "sobol" and int(r["k"]) == config.k_max]
+    best = [
+        r
+        for r in rows
+        if r["integrand"] == "exp"
+        and r["sampler"] == "symsphere_equal_area"
+        and r["points"] == "sobol"
+        and int(r["k"]) == config.k_max
+    ]
     assert float(best[0]["relative_rmse"]) < 1e-3
 
     fields, summary = _read_csv(out / "summary.csv")
@@ -203,10 +213,20 @@ def test_small_study_end_to_end(tmp_path, capsys):
 def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
     # shifted_sh2_1 = 1 + Y_21 is integrated exactly by every orbit: RMSE at rounding level.
     config = StudyConfig(
-        name="tiny", k_min=1, k_max=3, repetitions=2, integrands=("shifted_sh2_1",),
-        scheme_methods=("equal_area",), scheme_points=("random",), sphere_peers=(("classic", "random"),),
-        hemisphere_peers=(), discrepancy_k_max=1, discrepancy_repetitions=1, chi2_samples=1000,
-        density_samples=4800, warp_samples=1000,
+        name="tiny",
+        k_min=1,
+        k_max=3,
+        repetitions=2,
+        integrands=("shifted_sh2_1",),
+        scheme_methods=("equal_area",),
+        scheme_points=("random",),
+        sphere_peers=(("classic", "random"),),
+        hemisphere_peers=(),
+        discrepancy_k_max=1,
+        discrepancy_repetitions=1,
+        chi2_samples=1000,
+        density_samples=4800,
+        warp_samples=1000,
     )
     out = tmp_path / "tiny"
     run_study(out, config=config, progress=False)
@@ -226,16 +246,23 @@ def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
     assert (out / "notes.txt").read_text() == "mine"
 
 
-
-
 @pytest.mark.slow
 def test_tiny_study_with_interlaced_points_and_lebedev(tmp_path):
     config = StudyConfig(
-        name="tiny-qmc", k_min=1, k_max=3, repetitions=2, integrands=("exp",),
-        scheme_methods=("equal_area",), scheme_points=("sobol", "sobol_interlaced2"),
+        name="tiny-qmc",
+        k_min=1,
+        k_max=3,
+        repetitions=2,
+        integrands=("exp",),
+        scheme_methods=("equal_area",),
+        scheme_points=("sobol", "sobol_interlaced2"),
         sphere_peers=(("classic", "random"), ("lebedev", "random"), ("lebedev_rotated", "random")),
-        hemisphere_peers=(), discrepancy_k_max=2, discrepancy_repetitions=1, chi2_samples=1000,
-        density_samples=4800, warp_samples=1000,
+        hemisphere_peers=(),
+        discrepancy_k_max=2,
+        discrepancy_repetitions=1,
+        chi2_samples=1000,
+        density_samples=4800,
+        warp_samples=1000,
     )
     out = tmp_path / "tiny-qmc"
     run_study(out, config=config, progress=False)

@@ -6,11 +6,10 @@ papers in tests/test_peers.py: same base points, same rotations, same directions
 
 import numpy as np
 import pytest
+from references import ELEMENTARY_ULPS, GAMMA3, assert_within_eps
 
 from symsphere.apps.study._compiled import COMPILED_PEERS, compiled_sample
 from symsphere.peers import PEERS
-
-from references import ELEMENTARY_ULPS, GAMMA3, assert_within_eps
 
 # How far a compiled peer (numba: libm's sin, cos) may be from the numpy peer (numpy's SIMD sin, cos),
 # absolutely (unit vectors), in eps: the error model of tests/references.py, E = ELEMENTARY_ULPS.
@@ -20,8 +19,12 @@ from references import ELEMENTARY_ULPS, GAMMA3, assert_within_eps
 # perhaps with FMA, the kernel's sum): |R d| = |d| plus a 3-term dot product per path, 2 GAMMA3;
 # lebedev_rotated: the same nodes and rotations, only the two dot products: 2 GAMMA3.
 _E = ELEMENTARY_ULPS
-PEER_EPS = {"classic": 2 * _E + 1, "octahedral": 2 * _E + 1, "fibonacci_rotated": 2 * _E + 1 + 2 * GAMMA3,
-            "lebedev_rotated": 2 * GAMMA3}
+PEER_EPS = {
+    "classic": 2 * _E + 1,
+    "octahedral": 2 * _E + 1,
+    "fibonacci_rotated": 2 * _E + 1 + 2 * GAMMA3,
+    "lebedev_rotated": 2 * GAMMA3,
+}
 
 
 @pytest.mark.parametrize(
@@ -74,10 +77,14 @@ def test_study_estimate_of_a_compiled_peer_is_the_peers_estimate():
     from symsphere.apps.study.samplers import Sampler
 
     f = lambda d: np.exp(d @ np.array([0.3, -0.5, 0.6]))  # noqa: E731
-    for name, points, n in (("octahedral", "sobol_interlaced2", 1024), ("fibonacci_rotated", "random", 1000),
-                            ("lebedev_rotated", "random", 2 * 5810)):
+    for name, points, n in (
+        ("octahedral", "sobol_interlaced2", 1024),
+        ("fibonacci_rotated", "random", 1000),
+        ("lebedev_rotated", "random", 2 * 5810),
+    ):
         sampler = Sampler.of_peer(PEERS[name], points)
         # The same f (numpy's exp) on directions PEER_EPS apart: |a| PEER_EPS <= 10 eps per term,
         # plus the two means' rounding (pairwise sums: about log2(n) / 2 eps each): < 45 eps = 1e-14.
-        assert np.isclose(sampler.estimate(f, n, 3), PEERS[name].estimate(f, n, rng=3, points=points),
-                          rtol=1e-14, atol=0)
+        assert np.isclose(
+            sampler.estimate(f, n, 3), PEERS[name].estimate(f, n, rng=3, points=points), rtol=1e-14, atol=0
+        )

@@ -95,7 +95,9 @@ _ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 def test_docs_cite_only_files_that_exist(page):
     text = (_ROOT / page).read_text(encoding="utf-8")
     # Repository paths; not patterns (tests/test_<module>.py, render/{scene, ...}.py) nor build output.
-    cited = set(re.findall(r"(?<![\w/.])((?:src|tests|docs|benchmarks|scripts|examples|\.ci)/[\w./-]*\w)(?![\w<{*])", text))
+    cited = set(
+        re.findall(r"(?<![\w/.])((?:src|tests|docs|benchmarks|scripts|examples|\.ci)/[\w./-]*\w)(?![\w<{*])", text)
+    )
     cited = {c for c in cited if not c.startswith("docs/_build")}
     cited |= set(re.findall(r"\]\(((?!https?:|#)[^)#\s]+)", text))  # Markdown links
     # and any `dir/file.ext` in backquotes (the old first line of design.md cited `shared/DESIGN.md`)
@@ -167,7 +169,11 @@ def test_every_verb_lists_its_choices(capsys):
 
 def test_version_agrees_with_the_metadata(capsys):
     assert main(["--version"]) == 0
-    assert capsys.readouterr().out.strip() == f"symsphere {ss.__version__}" == f"symsphere {importlib.metadata.version('symsphere')}"
+    assert (
+        capsys.readouterr().out.strip()
+        == f"symsphere {ss.__version__}"
+        == f"symsphere {importlib.metadata.version('symsphere')}"
+    )
 
 
 def test_errors_end_with_what_to_do(capsys, tmp_path):

@@ -24,7 +24,7 @@ def _probe() -> str | None:
     try:
         mi.set_variant("llvm_ad_rgb")
         dr.eval(dr.arange(mi.Float, 4) * 2)
-    except Exception as error:  # noqa: BLE001 - Dr.Jit reports a missing libLLVM as a RuntimeError or ImportError
+    except Exception as error:
         return f"Mitsuba's llvm_ad_rgb variant does not run ({error}); Debian: apt-get install libllvm19"
     return None
 

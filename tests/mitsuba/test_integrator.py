@@ -53,9 +53,9 @@ def test_random_equals_the_renderers_bitwise(llvm):
     index[:4] = [0, 1, 2, 2**32 - 1]
     with np.errstate(over="ignore"):  # numpy scalars warn on the wrap-around the hashes rely on
         ref_mix = [int(nb.mix64(k)) for k in keys]
-        ref_key = [int(nb.pixel_key(k, int(i % 1000))) for k, i in zip(keys, index)]
+        ref_key = [int(nb.pixel_key(k, int(i % 1000))) for k, i in zip(keys, index, strict=False)]
         ref_below = [int(nb.below(k, 24)) for k in keys]
-        ref_sobol = [nb.owen_sobol2(i, k) for i, k in zip(index, keys)]
+        ref_sobol = [nb.owen_sobol2(i, k) for i, k in zip(index, keys, strict=False)]
     k = mi.UInt64(keys)
     assert [int(v) for v in dj.mix64(k)] == ref_mix
     assert [int(v) for v in dj.pixel_key(k, mi.UInt32((index % 1000).astype(np.uint32)))] == ref_key
@@ -165,21 +165,39 @@ def _scene_dict(mi, name):
         "to_uv": T().scale([4, 4, 1])}}}  # fmt: skip
     return {
         "type": "scene",
-        "sensor": {"type": "perspective", "fov": 50, "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0]),
-                   "film": sensor_film, "sampler": {"type": "independent"}},  # fmt: skip
+        "sensor": {
+            "type": "perspective",
+            "fov": 50,
+            "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0]),
+            "film": sensor_film,
+            "sampler": {"type": "independent"},
+        },  # fmt: skip
         "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": checker},
         "wall": {"type": "rectangle", "to_world": T().translate([0, 1.5, -1.5]).scale(3), "bsdf": white},
-        "ball": {"type": "sphere", "center": [-0.7, 0.5, 0.2], "radius": 0.5,
-                 "bsdf": {"type": "roughplastic", "alpha": 0.2, "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]}}},  # fmt: skip
+        "ball": {
+            "type": "sphere",
+            "center": [-0.7, 0.5, 0.2],
+            "radius": 0.5,
+            "bsdf": {
+                "type": "roughplastic",
+                "alpha": 0.2,
+                "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]},
+            },
+        },  # fmt: skip
         "glass": {"type": "sphere", "center": [0.8, 0.4, 0.6], "radius": 0.4, "bsdf": {"type": "dielectric"}},
-        "light": {"type": "rectangle", "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
-                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}}},  # fmt: skip
+        "light": {
+            "type": "rectangle",
+            "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}},
+        },  # fmt: skip
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}},
     }
 
 
 def _renders(mi, scene, integrator):
-    return np.stack([np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=seed))[..., :3] for seed in range(SEEDS)])
+    return np.stack(
+        [np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=seed))[..., :3] for seed in range(SEEDS)]
+    )
 
 
 def _blocks(images):
@@ -243,5 +261,9 @@ def test_bsdf_strategy_reproduces_mitsubas_path_at_the_same_seed(llvm, hide_emit
     scene = mi.load_file(str(sm.scene_path("cornell_box")), width=16, height=16)
     options = {"max_depth": 6, "hide_emitters": hide_emitters}
     ref = np.array(mi.render(scene, integrator=mi.load_dict({"type": "path", **options}), spp=24, seed=7))
-    ours = np.array(mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", **options}), spp=24, seed=7))
+    ours = np.array(
+        mi.render(
+            scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", **options}), spp=24, seed=7
+        )
+    )
     assert np.max(np.abs(ours - ref)) <= 1e-4 * np.max(ref)

@@ -20,7 +20,9 @@ def test_shipped_scenes_load_in_plain_mitsuba_and_render(llvm, name):
     path = sm.scene_path(name)
     scene = mi.load_file(str(path), width=16, height=12, spp=8)  # plain Mitsuba: integrator path
     assert "PathIntegrator" in str(scene.integrator())
-    image = np.array(mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "symmetric_cosine"}), spp=8))
+    image = np.array(
+        mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "symmetric_cosine"}), spp=8)
+    )
     assert image.shape[:2] == (12, 16) and np.all(np.isfinite(image)) and image.mean() > 0
 
 
@@ -39,7 +41,10 @@ def test_cli_renders_a_mitsuba_scene_file(llvm, tmp_path, capsys):
 @pytest.mark.parametrize(
     "content, words",
     [
-        ('<scene version="3.0.0"><shape type="sphere"><bsdf type="nosuch"/></shape></scene>', 'Plugin "nosuch" not found'),
+        (
+            '<scene version="3.0.0"><shape type="sphere"><bsdf type="nosuch"/></shape></scene>',
+            'Plugin "nosuch" not found',
+        ),
         ("<scene version=", "scene file"),
     ],
 )
@@ -64,4 +69,7 @@ def test_cli_spp_and_sampler_errors(llvm, tmp_path, capsys):
 
 def test_import_symsphere_never_imports_mitsuba():
     code = "import sys, symsphere, symsphere.render, symsphere.apps.cli; print('mitsuba' in sys.modules or 'drjit' in sys.modules)"
-    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "False"
+    assert (
+        subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+        == "False"
+    )

@@ -68,8 +68,12 @@ def test_triangle_triple_equals_numpy(jit_variant, method):
     assert np.max(np.abs(pdf[interior] - ref_pdf[interior]) / ref_pdf[interior]) < 1e-5
     back = _np(sm.triangle_to_square(_vec3(mi, ref), method))
     ref_back = triangle_to_square(ref, method)
-    inside = interior & (ref[:, 0] - ref[:, 1] > 1e-3) & (ref[:, 1] > 1e-3)  # u of a point on an edge or the vertex is ill-conditioned
-    assert np.max(np.abs(back[inside] - ref_back[inside])) < 1e-4  # float32 atan2/asin of the input: ~1e-7 / (condition >= 1e-3)
+    inside = (
+        interior & (ref[:, 0] - ref[:, 1] > 1e-3) & (ref[:, 1] > 1e-3)
+    )  # u of a point on an edge or the vertex is ill-conditioned
+    assert (
+        np.max(np.abs(back[inside] - ref_back[inside])) < 1e-4
+    )  # float32 atan2/asin of the input: ~1e-7 / (condition >= 1e-3)
 
 
 @pytest.mark.parametrize("domain", ["sphere", "hemisphere"])
@@ -152,7 +156,10 @@ def test_maps_run_in_the_scalar_variant():
                 d = sm.square_to_sphere(mi.Point2f(u, v), method)
                 ref = square_to_sphere([u, v], method)
                 assert np.allclose([d.x, d.y, d.z], ref, atol=1e-6)
-                assert np.isclose(sm.square_to_sphere_pdf(d, method), square_to_sphere_pdf(ref, method), rtol=1e-5) or method != "equal_area"
+                assert (
+                    np.isclose(sm.square_to_sphere_pdf(d, method), square_to_sphere_pdf(ref, method), rtol=1e-5)
+                    or method != "equal_area"
+                )
             w = sm.square_to_cosine_wedge(mi.Point2f(u, v))
             assert np.allclose([w.x, w.y, w.z], square_to_cosine_wedge([u, v]), atol=1e-6)
         k, base = sm.fold(mi.Vector3f(-0.9, 0.2, 0.1))
@@ -200,7 +207,11 @@ def _sampler_and_pdf(mi, kind, method):
 
     frame = _rotation(mi)
     if kind == "triangle":
-        return 2, (lambda s: frame.to_world(sm.square_to_triangle(s, method))), (lambda v: sm.square_to_triangle_pdf(frame.to_local(v), method))
+        return (
+            2,
+            (lambda s: frame.to_world(sm.square_to_triangle(s, method))),
+            (lambda v: sm.square_to_triangle_pdf(frame.to_local(v), method)),
+        )
     if kind in ("sphere", "hemisphere"):
         fwd = sm.square_to_sphere if kind == "sphere" else sm.square_to_hemisphere
         pdf = sm.square_to_sphere_pdf if kind == "sphere" else sm.square_to_hemisphere_pdf

@@ -6,7 +6,6 @@ import pytest
 from symsphere.render import load_pfm, save_npy, save_pfm, save_png, tonemap
 
 
-
 def test_pfm_round_trip(tmp_path):
     rng = np.random.default_rng(1)
     image = rng.random((5, 7, 3)) * 10
@@ -44,5 +43,3 @@ def test_npy_and_png(tmp_path):
     assert tonemap(image)[0, 0].tolist() == [255] * 3 and tonemap(image)[1, 0].tolist() == [0] * 3
     assert tonemap(image)[0, 1, 0] == round(255 * (1.055 * 0.5 ** (1 / 2.4) - 0.055))  # 188
     assert tonemap(image, exposure=0.25)[0, 0, 0] == round(255 * (1.055 * 0.25 ** (1 / 2.4) - 0.055))
-
-

@@ -66,7 +66,6 @@ from symsphere.render import (
     Quad,
     Scene,
     Sphere,
-    cornell,
     diffuse,
     furnace,
     render,
@@ -114,7 +113,7 @@ def test_the_kernels_frame_is_frames_frame():
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.vstack([normals, [[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0], [0.6, 0, -0.8]]])
     compiled = _compiled_frame(normals)
-    for n, f in zip(normals, compiled):
+    for n, f in zip(normals, compiled, strict=False):
         np.testing.assert_array_equal(f, frames.frame(n))
         np.testing.assert_allclose(f @ f.T, np.eye(3), atol=1e-15)
 
@@ -205,7 +204,12 @@ def test_sampled_directions_weights_and_pdfs(sampler, full):
 @pytest.mark.parametrize("full, n", [(False, 8), (True, 16)])
 @pytest.mark.parametrize(
     "sampler",
-    [K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL, K.SYMMETRIC_COSINE_SOBOL_INTERLACED2, K.SYMMETRIC_COSINE_SOBOL_INTERLACED3],
+    [
+        K.SYMMETRIC_COSINE,
+        K.SYMMETRIC_COSINE_SOBOL,
+        K.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
+        K.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
+    ],
 )
 def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, full, n):
     """Groups of 8 (16) samples: the 8 z-keeping signed permutations (x {z, -z}) of one cosine wedge point."""
@@ -449,7 +453,7 @@ def test_rectangle_solid_angle_everywhere():
     omega = _triangle_solid_angle(a, b, c) + _triangle_solid_angle(a, c, d)
     keep = omega > 1.1e-3
     assert keep.sum() > 2000 and omega.max() > 6.2  # up to almost 2 pi
-    for p, expected in zip(points[keep], omega[keep]):
+    for p, expected in zip(points[keep], omega[keep], strict=False):
         pdf = P.emitter_pdfs(p, 0, np.array([1.0]), np.array([1.0]), spheres, quads)[0]
         assert math.isclose(pdf, 1 / expected, rel_tol=1e-8), (p, pdf, 1 / expected)
 
@@ -552,7 +556,9 @@ def test_nee_beats_bsdf_sampling_on_the_small_light():
     reference = _direct_reference("sphere", 12, 8)
     errors = {}
     for integrator in INTEGRATORS:
-        image = render(_direct_scene("sphere"), width=12, height=8, spp=32, sampler="cosine", seed=5, integrator=integrator)
+        image = render(
+            _direct_scene("sphere"), width=12, height=8, spp=32, sampler="cosine", seed=5, integrator=integrator
+        )
         errors[integrator] = np.sqrt(np.mean((image.image[..., 0] - reference) ** 2))
     assert errors["path"] < 0.25 * errors["bsdf"], errors
 
@@ -622,7 +628,9 @@ def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.15):
     assert np.all(np.abs(z) < critical), (np.abs(z).max(), critical, np.unravel_index(np.abs(z).argmax(), z.shape))
     # the test has teeth: the blocks are well estimated where there is light (relative standard error)
     lit = ref_mean > 0.05
-    assert np.all(np.sqrt(block_variance[lit]) < teeth * ref_mean[lit]), np.max(np.sqrt(block_variance[lit]) / ref_mean[lit])
+    assert np.all(np.sqrt(block_variance[lit]) < teeth * ref_mean[lit]), np.max(
+        np.sqrt(block_variance[lit]) / ref_mean[lit]
+    )
 
 
 @pytest.mark.slow

@@ -8,7 +8,6 @@ from symsphere.render import _probes as P
 from symsphere.render._random import nested_uniform_scramble, reverse_bits32, sobol2
 
 
-
 def test_sobol2_first_points():
     points = [tuple(int(c) / 2**32 for c in sobol2(np.uint64(i))) for i in range(4)]
     assert points == [(0, 0), (0.5, 0.5), (0.25, 0.75), (0.75, 0.25)]
@@ -56,8 +55,6 @@ def test_owen_sobol_prefixes_are_nets(key):
 def test_owen_scrambles_differ_between_keys():
     a, b = P.sobol_points(64, np.uint64(1)), P.sobol_points(64, np.uint64(2))
     assert not np.any(np.all(a == b, axis=1))
-
-
 
 
 # --- interlaced (higher-order) Sobol' points --------------------------------------------------------

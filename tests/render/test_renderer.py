@@ -82,7 +82,10 @@ def test_render_result_fields():
     assert result.image.shape == (6, 8, 3) and result.image.dtype == np.float64
     assert result.paths == 8 * 6 * 24 and result.paths_per_second > 0
     assert (result.sampler, result.method, result.pixel_filter, result.seed) == ("symmetric_sobol", "paper2", "box", 1)
-    assert result.integrator == "path" and render("furnace", width=4, height=4, spp=1, seed=1, integrator="bsdf").integrator == "bsdf"
+    assert (
+        result.integrator == "path"
+        and render("furnace", width=4, height=4, spp=1, seed=1, integrator="bsdf").integrator == "bsdf"
+    )
     assert render("furnace", width=4, height=4, spp=1, sampler="cosine", seed=1).method is None
     tent = render("cornell", width=8, height=6, spp=4, pixel_filter="tent", seed=1)
     assert tent.pixel_filter == "tent" and np.all(np.isfinite(tent.image))

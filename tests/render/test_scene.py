@@ -45,7 +45,7 @@ def test_cornell_is_smallpt_as_published():
     assert [s.clip for s in scene.spheres[:8]] == [None] * 8
     # the light: smallpt's sphere, clipped to its part below the ceiling plane y = 81.6 (see below)
     assert scene.spheres[8].clip == HalfSpace((50.0, 81.6, 81.6), (0.0, -1.0, 0.0))
-    for sphere, (radius, center, emission, color, kind) in zip(scene.spheres, SMALLPT):
+    for sphere, (radius, center, emission, color, kind) in zip(scene.spheres, SMALLPT, strict=False):
         material = scene.materials[sphere.material]
         assert sphere.radius == radius
         assert sphere.center == tuple(float(c) for c in center)
@@ -144,7 +144,6 @@ def test_clip_validation():
         Scene("s", camera, {"m": diffuse(0.5)}, (Sphere((0, 0, 0), 1.0, "m", ((0, 0, 0), (0, 1, 0))),))
     whole = Scene("s", camera, {"m": diffuse(0.5)}, (Sphere((0, 0, 0), 1.0, "m", HalfSpace((0, -3, 0), (0, 1, 0))),))
     assert whole.arrays(4, 4)["spheres"][9, 0] == 2.0  # a plane below the sphere keeps all of it
-
 
 
 GOOD_TOML = """
@@ -307,8 +306,6 @@ def test_scenes_made_in_python_are_validated():
     assert translucent_scene().materials["ball"].kind == "translucent"
 
 
-
-
 def test_the_documented_scene_file_loads_and_renders(tmp_path):
     import pathlib
     import re
@@ -344,7 +341,8 @@ def test_every_name_is_still_importable_from_scene():
     assert set(moved) <= set(dir(scene))
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         scene.nope  # noqa: B018
-    from symsphere.render.scene import SceneError as error_class, get_scene as getter
+    from symsphere.render.scene import SceneError as error_class
+    from symsphere.render.scene import get_scene as getter
 
     assert getter is scenes.get_scene and error_class is render_package.SceneError
     assert f"{error_class.__module__}.{error_class.__qualname__}" == "symsphere.render.scene.SceneError"

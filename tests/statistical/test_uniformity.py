@@ -14,11 +14,10 @@ and have the scheme's marginal density, which is what ``sphere_pdf`` states.
 
 import numpy as np
 import pytest
+from references import assert_power
 
 from symsphere import METHODS, fold, sample_hemisphere, sample_sphere, sphere_pdf, square_to_triangle, triangle_pdf
 from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
-
-from references import assert_power
 
 SIGNIFICANCE = 0.01
 # equal_area on T0 (4 point sets) + sphere + hemisphere (2) + paper maps on T0 (2) + sphere pdfs (3) + quick
@@ -78,9 +77,7 @@ def test_paper_maps_match_their_own_pdf(method):
     uv = np.random.default_rng(18).random((N_T0, 2))
     p = square_to_triangle(uv, method)
     _check(
-        chi2_test(
-            p, lambda q: triangle_pdf(q, method), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS
-        )
+        chi2_test(p, lambda q: triangle_pdf(q, method), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS)
     )
 
 
@@ -90,7 +87,11 @@ def test_paper_maps_are_not_uniform(method):
     # The paper claims uniformity; the same test that passes equal_area rejects them.
     uv = np.random.default_rng(19).random((N_T0, 2))
     result = chi2_test(
-        square_to_triangle(uv, method), uniform_pdf("triangle"), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS
+        square_to_triangle(uv, method),
+        uniform_pdf("triangle"),
+        "triangle",
+        significance=SIGNIFICANCE,
+        test_count=CHI2_TESTS,
     )
     assert not result.passed
     assert result.p_value < 1e-100
@@ -100,14 +101,20 @@ def test_paper_maps_are_not_uniform(method):
 @pytest.mark.parametrize("method", METHODS)
 def test_sphere_scheme_matches_sphere_pdf(method):
     d = one_per_orbit(sample_sphere(48 * N_ORBITS, method=method, rng=20), 48, rng=21)
-    _check(
-        chi2_test(d, lambda q: sphere_pdf(q, method), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS)
-    )
+    _check(chi2_test(d, lambda q: sphere_pdf(q, method), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
 
 
 def test_quick_equal_area_on_t0():
     # A fast version of the T0 test for the default (not slow) run: 10^5 points (774 cells) detect w >= 0.05
     # with 99 % power (a density 5 % off on either half of T0); the slow tests detect MUST_DETECT_W.
     uv = np.random.default_rng(22).random((100_000, 2))
-    _check(chi2_test(square_to_triangle(uv), uniform_pdf("triangle"), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS),
-           w=0.05)
+    _check(
+        chi2_test(
+            square_to_triangle(uv),
+            uniform_pdf("triangle"),
+            "triangle",
+            significance=SIGNIFICANCE,
+            test_count=CHI2_TESTS,
+        ),
+        w=0.05,
+    )

@@ -97,7 +97,7 @@ class _Outputs:
         if self.done:
             return True
         after = [_identity(p) for p in self.paths]
-        return bool(self.paths) and all(a is not None and a != b for a, b in zip(after, self.before))
+        return bool(self.paths) and all(a is not None and a != b for a, b in zip(after, self.before, strict=False))
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -263,7 +263,9 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"one of: {', '.join(sorted(INTEGRANDS))} (symsphere.integrands.INTEGRANDS; docs/integrands.md)",
     )  # fmt: skip
     integrate.add_argument(
-        "--n", type=int, default=None,
+        "--n",
+        type=int,
+        default=None,
         help="evaluations: a multiple of 48 (hemisphere: 24); with --rtol/--atol the first stage's (optional)",
     )
     integrate.add_argument(
@@ -278,7 +280,9 @@ def build_parser() -> argparse.ArgumentParser:
     integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
     integrate.add_argument("--rtol", type=float, default=None, help="relative tolerance: double n until it is met")
     integrate.add_argument("--atol", type=float, default=None, help="absolute tolerance: double n until it is met")
-    integrate.add_argument("--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)")
+    integrate.add_argument(
+        "--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)"
+    )
     _add_allow_long(integrate)
     _add_cluster_options(integrate)
     integrate.set_defaults(handler=_run_integrate)
@@ -295,7 +299,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("--out", default="symsphere-demo", metavar="DIR", help="output directory (default: %(default)s)")
     demo.add_argument(
-        "--n", type=int, default=_DEMO_DEFAULT_N,
+        "--n",
+        type=int,
+        default=_DEMO_DEFAULT_N,
         help="directions per sample, a multiple of 48; 4800 runs in seconds (default: %(default)s)",
     )
     demo.add_argument("--seed", type=int, default=0, help="default: %(default)s")
@@ -556,6 +562,7 @@ def _run_sample(args) -> int:
         blocks = iterate if client is None else _cluster_blocks(client, args, options, chunk)
         with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
             args.outputs.watch([args.out])
+
             def progress(count):
                 _check_pending(args)  # an interrupt lost while a kernel compiled: roll back now
                 bar.update(count)
@@ -645,7 +652,9 @@ def _run_integrate(args) -> int:
     print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
     if to_tolerance:
         state = "reached" if result.converged else "NOT reached (n_max)"
-        print(f"  tolerance {result.tolerance:.3g} {state}: half-width {(high - low) / 2:.3g} after {result.n_stages} stages")
+        print(
+            f"  tolerance {result.tolerance:.3g} {state}: half-width {(high - low) / 2:.3g} after {result.n_stages} stages"
+        )
     return 0
 
 
@@ -721,7 +730,9 @@ def _run_render(args) -> int:
         if not scene_file.exists():
             raise _UsageError(f"--scene: file {args.scene!r} does not exist")
         if not scene_file.is_file():  # a FIFO would block the reader, /dev/zero never ends
-            raise _UsageError(f"--scene: {args.scene!r} is {file_kind(os.stat(scene_file).st_mode)}, not a regular file")
+            raise _UsageError(
+                f"--scene: {args.scene!r} is {file_kind(os.stat(scene_file).st_mode)}, not a regular file"
+            )
     for name in ("width", "height", "spp", "threads"):  # render() checks them too, naming 'spp' not '--spp'
         if getattr(args, name) is not None:
             check_count(getattr(args, name), f"--{name}")
@@ -730,8 +741,11 @@ def _run_render(args) -> int:
     check_size(args.spp, "--spp", MAX_PATHS // pixels, f"for {args.width} x {args.height} pixels (int64 path indices)")
     if args.scheduler is None:  # on a remote cluster the number of threads is not known here
         threads = (args.threads or os.cpu_count() or 1) * (args.workers or 1)
-        _check_duration(pixels * args.spp / (_FASTEST_PATHS_PER_THREAD * threads),
-                        f"{pixels * args.spp} paths (--width x --height x --spp on {threads} threads)", args)
+        _check_duration(
+            pixels * args.spp / (_FASTEST_PATHS_PER_THREAD * threads),
+            f"{pixels * args.spp} paths (--width x --height x --spp on {threads} threads)",
+            args,
+        )
     options = dict(
         width=args.width,
         height=args.height,

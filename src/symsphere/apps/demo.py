@@ -24,10 +24,10 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from collections.abc import Iterable
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -224,7 +224,7 @@ def _report(tests: list[_Test], results: list[Chi2Result], n: int, seed: int, sh
         "| domain | method | reference pdf | χ² | dof | p-value | result | observed/expected per bin (min–max) |",
         "|---|---|---|---:|---:|---:|---|---|",
     ]
-    for test, result in zip(tests, results):
+    for test, result in zip(tests, results, strict=False):
         low, high = result.ratio_range
         lines.append(
             f"| {test.domain} | {test.method} | {_reference_name(test)} | {result.statistic:.1f} | {result.dof} "
@@ -266,13 +266,12 @@ def _render(path: Path, seed: int) -> str:
 
 def _verdict(method: MapMethod, tests: list[_Test], results: list[Chi2Result]) -> str:
     """One sentence per map, from the measured results (never assumed)."""
-    mine = [(t, r) for t, r in zip(tests, results) if t.method == method and _testable(r)]
+    mine = [(t, r) for t, r in zip(tests, results, strict=False) if t.method == method and _testable(r)]
     uniform = [(t, r) for t, r in mine if t.reference == "uniform"]
     own = [(t, r) for t, r in mine if t.reference != "uniform"]
     if not uniform:
         return (
-            f"**{method} was not tested**: too few samples for two cells of 5 expected counts; "
-            "rerun with a larger --n."
+            f"**{method} was not tested**: too few samples for two cells of 5 expected counts; rerun with a larger --n."
         )
     failed = [t.domain for t, r in uniform if not r.passed]
     if get_map(method).uniform:
@@ -322,9 +321,7 @@ def _result_word(result: Chi2Result) -> str:
     return "pass" if result.passed else "**FAIL**"
 
 
-def _write_figure(
-    path: Path, tests: list[_Test], results: list[Chi2Result], scatter: dict[str, FloatArray]
-) -> None:
+def _write_figure(path: Path, tests: list[_Test], results: list[Chi2Result], scatter: dict[str, FloatArray]) -> None:
     # The object-oriented API with an Agg canvas: no pyplot state, no GUI backend.  Function-level:
     # matplotlib and scipy.stats load only when a figure is drawn.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -334,7 +331,7 @@ def _write_figure(
     from ..stats import equal_area_bins
 
     triangle = {
-        t.method: r for t, r in zip(tests, results) if t.domain == "triangle" and t.reference == "uniform"
+        t.method: r for t, r in zip(tests, results, strict=False) if t.domain == "triangle" and t.reference == "uniform"
     }
     ratios: dict[str, Float64Array] = {}
     for method, result in triangle.items():

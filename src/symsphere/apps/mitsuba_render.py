@@ -55,14 +55,17 @@ def render_scene_file(path: str | Path, *, width: int | None, height: int | None
     """
     path = Path(path)
     if sampler not in SAMPLER_STRATEGIES:
-        raise ValueError(f"--sampler {sampler!r} is not available for Mitsuba scenes; use one of {set(SAMPLER_STRATEGIES)}")
+        raise ValueError(
+            f"--sampler {sampler!r} is not available for Mitsuba scenes; use one of {set(SAMPLER_STRATEGIES)}"
+        )
     if not path.is_file():
         raise ValueError(f"--scene: file {str(path)!r} does not exist")
     try:
-        import drjit as dr
         import mitsuba as mi
     except ImportError as error:
-        raise ValueError(f"--scene {str(path)!r}: Mitsuba scene files need Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})") from None
+        raise ValueError(
+            f"--scene {str(path)!r}: Mitsuba scene files need Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})"
+        ) from None
     if mi.variant() != VARIANT:
         mi.set_variant(VARIANT)
     import symsphere.mitsuba  # noqa: F401  (registers symsphere_path)
@@ -71,7 +74,7 @@ def render_scene_file(path: str | Path, *, width: int | None, height: int | None
     params = {k: v for k, v in (("width", width), ("height", height), ("spp", spp)) if k in declared and v is not None}
     try:
         scene = mi.load_file(str(path), **params)  # type: ignore[arg-type]  # the stub knows only update_scene: bool
-    except Exception as error:  # noqa: BLE001 - Mitsuba reports every problem as a RuntimeError
+    except Exception as error:
         raise ValueError(f"scene file {str(path)!r}: {_last_line(error)}") from None
     own = str(scene.integrator()) if scene.integrator() is not None else ""
     depth = {}
@@ -88,7 +91,7 @@ def render_scene_file(path: str | Path, *, width: int | None, height: int | None
         options["method"] = method
     try:
         integrator = mi.load_dict(options)
-    except Exception as error:  # noqa: BLE001
+    except Exception as error:
         raise ValueError(_last_line(error).removeprefix("ValueError: ")) from None
     film = scene.sensors()[0].film()
     w, h = (int(c) for c in film.crop_size())

@@ -17,13 +17,15 @@ from __future__ import annotations
 
 try:
     import drjit as _drjit  # noqa: F401
-    import mitsuba as _mitsuba  # noqa: F401
+    import mitsuba as _mitsuba
 except ImportError as _error:  # pragma: no cover - exercised without the extra
     raise ImportError(
         "symsphere.mitsuba needs Mitsuba 3 and Dr.Jit: pip install 'symsphere[mitsuba]' "
         "(Mitsuba's LLVM variants also need libLLVM >= 16, Debian: apt-get install libllvm19)"
     ) from _error
 
+from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, integrator_class, on_variant_change, register
+from ._scenes import SCENES, scene_path
 from ._warps import (
     cosine_wedge_to_square,
     fold,
@@ -40,9 +42,6 @@ from ._warps import (
     square_to_triangle_pdf,
     triangle_to_square,
 )
-
-from ._scenes import SCENES, scene_path
-from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, integrator_class, on_variant_change, register
 
 __all__ = [
     "integrator_class",

@@ -46,7 +46,15 @@ from ..maps import METHODS
 from . import _random
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
-__all__ = ["STRATEGIES", "POINTS", "GROUP_SIZES", "integrator_class", "register", "on_variant_change", "lambertian_codes"]
+__all__ = [
+    "STRATEGIES",
+    "POINTS",
+    "GROUP_SIZES",
+    "integrator_class",
+    "register",
+    "on_variant_change",
+    "lambertian_codes",
+]
 
 STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
 POINTS = ("random", "sobol")
@@ -91,9 +99,7 @@ class _PathMethods:
     def __init__(self, props: Any) -> None:
         mi.SamplingIntegrator.__init__(self, props)  # the current variant's base (this class is a template)
         if not dr.is_jit_v(mi.Float):
-            raise ValueError(
-                f"symsphere_path runs in Mitsuba's JIT variants (llvm_*, cuda_*), not in {mi.variant()!r}"
-            )
+            raise ValueError(f"symsphere_path runs in Mitsuba's JIT variants (llvm_*, cuda_*), not in {mi.variant()!r}")
         if mi.is_polarized:
             raise ValueError(f"symsphere_path does not support polarized variants ({mi.variant()!r})")
         self.strategy = check_choice(props.get("strategy", "symmetric"), "strategy", STRATEGIES)
@@ -166,7 +172,9 @@ class _PathMethods:
             if sensor.shutter_open_time() > 0:
                 time += sampler.next_1d() * sensor.shutter_open_time()
             wavelength_sample = sampler.next_1d() if mi.is_spectral else 0.5
-            ray, ray_weight = sensor.sample_ray_differential(time, wavelength_sample, dr.fma(pos_f, scale, offset), aperture)
+            ray, ray_weight = sensor.sample_ray_differential(
+                time, wavelength_sample, dr.fma(pos_f, scale, offset), aperture
+            )
             key = _random.pixel_key(mi.UInt64(seed), pixel)
             table = self._lambertian_table(scene) if self.strategy != "bsdf" else None
             spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table)
@@ -283,17 +291,23 @@ class _PathMethods:
 
             sample_1 = sampler.next_1d()
             sample_2 = sampler.next_2d()
-            bsdf_val, bsdf_pdf, bsdf_sample, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, sample_1, sample_2, active_next)
+            bsdf_val, bsdf_pdf, bsdf_sample, bsdf_weight = bsdf.eval_pdf_sample(
+                ctx, si, wo, sample_1, sample_2, active_next
+            )
 
             if dr.hint(symmetric, mode="scalar"):
-                lambertian = active_next & (dr.gather(mi.UInt32, table, dr.reinterpret_array(mi.UInt32, bsdf), active_next) != 0)
+                lambertian = active_next & (
+                    dr.gather(mi.UInt32, table, dr.reinterpret_array(mi.UInt32, bsdf), active_next) != 0
+                )
                 local, pdf_local = self._local_direction(sample_2, key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
                 value_local = bsdf.eval(ctx, si, local, lambertian)
                 bsdf_pdf = dr.select(lambertian, self._density(wo, si.wi.z), bsdf_pdf)
                 bsdf_sample.wo = dr.select(lambertian, local, bsdf_sample.wo)
                 bsdf_sample.pdf = dr.select(lambertian, pdf_local, bsdf_sample.pdf)
-                bsdf_weight = dr.select(lambertian, dr.select(pdf_local > 0.0, value_local / pdf_local, 0.0), bsdf_weight)
+                bsdf_weight = dr.select(
+                    lambertian, dr.select(pdf_local > 0.0, value_local / pdf_local, 0.0), bsdf_weight
+                )
 
             mis_em = dr.select(ds.delta, 1.0, _mis_weight(ds.pdf, bsdf_pdf))
             result[active_em] = dr.fma(throughput, bsdf_val * em_weight * mis_em, result)

@@ -21,11 +21,11 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._validation import check_choice
 from ..maps import METHODS
 from ..square_warps import strip_order
 from ..symmetry import SIGNS, SOURCES
 from ..symmetry import fold as numpy_fold
-from .._validation import check_choice
 
 __all__ = [
     "square_to_triangle",

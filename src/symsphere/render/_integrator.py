@@ -586,7 +586,9 @@ def radiance(
             dx, dy, dz = rows_to_world(x, y, z, t_row, b_row, nx, ny, nz)
             specular = False
         else:  # MIRROR or DIELECTRIC
-            dx, dy, dz, state = _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, materials[m, 7], state)
+            dx, dy, dz, state = _specular_direction(
+                kind, dx, dy, dz, nx, ny, nz, cos_in, entering, materials[m, 7], state
+            )
             br *= materials[m, 1]
             bg *= materials[m, 2]
             bb *= materials[m, 3]
@@ -617,7 +619,7 @@ def radiance(
     return lr, lg, lb
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
     """The serial kernel of one (integrator, sampler family, map, pixel filter): it renders the rows it is given.
 
@@ -672,7 +674,9 @@ def render_pass(
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
-    kernel = _pass_kernel(int(integrator), int(fixed_sampler(sampler)), bool(is_cosine(sampler)), int(code), int(pixel_filter))
+    kernel = _pass_kernel(
+        int(integrator), int(fixed_sampler(sampler)), bool(is_cosine(sampler)), int(code), int(pixel_filter)
+    )
     parts = max(1, min(get_num_threads(), len(rows)))
 
     def part(index):
@@ -697,6 +701,8 @@ def prepare_kernels() -> None:
     """
     global _ready
     if not _ready:
-        invalidate_if_changed(_pass_kernel(PATH, COSINE, True, 0, BOX))  # the module's cache directory: every case's entries
+        invalidate_if_changed(
+            _pass_kernel(PATH, COSINE, True, 0, BOX)
+        )  # the module's cache directory: every case's entries
         start_threads()
         _ready = True

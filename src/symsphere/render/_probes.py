@@ -47,7 +47,9 @@ def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
     key = pixel_key(seed, pixel)
     for s in range(samples):
         state = path_state(key, s)
-        x, y, z, weight, pdf, state = sample_local(sampler, fixed_sampler(sampler), is_cosine(sampler), code, full, key, s, depth, state)
+        x, y, z, weight, pdf, state = sample_local(
+            sampler, fixed_sampler(sampler), is_cosine(sampler), code, full, key, s, depth, state
+        )
         out[s, 0] = x
         out[s, 1] = y
         out[s, 2] = z
@@ -61,7 +63,9 @@ def bsdf_pdfs(sampler, code, full, directions):
     """:func:`~symsphere.render._integrator.bsdf_pdf` of each local unit direction (rows of *directions*)."""
     out = np.empty(directions.shape[0])
     for i in range(directions.shape[0]):
-        out[i] = bsdf_pdf(fixed_sampler(sampler), is_cosine(sampler), code, full, directions[i, 0], directions[i, 1], directions[i, 2])
+        out[i] = bsdf_pdf(
+            fixed_sampler(sampler), is_cosine(sampler), code, full, directions[i, 0], directions[i, 1], directions[i, 2]
+        )
     return out
 
 

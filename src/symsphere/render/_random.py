@@ -229,7 +229,9 @@ def owen_sobol2(index, key):
     h1 = mix64(key ^ _GOLDEN)
     h2 = mix64(key ^ _MIX1)
     i = _reverse_fast(_laine_karras(_reverse_fast(np.uint64(index) & _M32), h1 & _M32))
-    y_reversed = _YREV[0, i & _B255] ^ _YREV[1, (i >> _S8) & _B255] ^ _YREV[2, (i >> _S16) & _B255] ^ _YREV[3, i >> _S24]
+    y_reversed = (
+        _YREV[0, i & _B255] ^ _YREV[1, (i >> _S8) & _B255] ^ _YREV[2, (i >> _S16) & _B255] ^ _YREV[3, i >> _S24]
+    )
     x = _reverse_fast(_laine_karras(i, h1 >> _S32))  # vdC(i) = reverse(i), so its scramble is reverse(LK(i))
     y = _reverse_fast(_laine_karras(y_reversed, h2 & _M32))
     return np.float64(x) * _TWO_M32, np.float64(y) * _TWO_M32

@@ -86,7 +86,9 @@ def _check_float32_range(image: np.ndarray) -> None:
     largest = float(np.max(np.abs(finite))) if finite.size else 0.0
     limit = float(np.finfo(np.float32).max)
     if largest > limit:
-        raise ValueError(f"'image' has values up to {largest:.3g}, beyond float32's {limit:.3g}, which a PFM cannot hold")
+        raise ValueError(
+            f"'image' has values up to {largest:.3g}, beyond float32's {limit:.3g}, which a PFM cannot hold"
+        )
 
 
 def _check_exposure(exposure: object) -> float:
@@ -234,7 +236,7 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     # Encoded first (tone mapping, PNG compression): the temporaries exist only while the bytes are written.
     encoded = [_encode(suffix, image, exposure) for suffix in suffixes]
     with atomic_paths(paths) as temporaries:
-        for data, temporary, path in zip(encoded, temporaries, paths):
+        for data, temporary, path in zip(encoded, temporaries, paths, strict=False):
             try:
                 temporary.write_bytes(data)
             except OSError as exc:  # name the user's file, not the temporary next to it

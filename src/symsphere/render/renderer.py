@@ -243,7 +243,9 @@ def render(
         startup = time.perf_counter() - start
         from tqdm.auto import tqdm
 
-        with tqdm(total=plan.spp, unit="spp", desc=f"rendering {plan.scene.name}", disable=None if progress else True) as bar:
+        with tqdm(
+            total=plan.spp, unit="spp", desc=f"rendering {plan.scene.name}", disable=None if progress else True
+        ) as bar:
             start = time.perf_counter()
             for index in range(plan.passes):
                 # Each pass is summed on its own and then added, so that a cluster that renders

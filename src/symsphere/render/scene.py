@@ -21,8 +21,9 @@ from __future__ import annotations
 
 import importlib
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -309,9 +310,7 @@ class Scene:
                 *(e1 / l1), *(e2 / l2), l1, l2, float(rectangle),
             ]  # fmt: skip
             areas.append(math.sqrt(squared))
-        lights, light_pmf = _light_tables(
-            [materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas
-        )
+        lights, light_pmf = _light_tables([materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas)
         return dict(
             spheres=np.ascontiguousarray(spheres.T),  # structure of arrays: the kernels vectorise over objects
             sphere_material=np.array([index[s.material] for s in ordered], dtype=np.int64),
@@ -366,7 +365,7 @@ def _light_tables(emissions, areas):
     Power of an emitter = mean emitted radiance over RGB x area (x pi, x 2
     sides: common factors).  Objects are numbered spheres first, then quads.
     """
-    power = np.array([float(np.mean(e)) * a for e, a in zip(emissions, areas)], dtype=np.float64)
+    power = np.array([float(np.mean(e)) * a for e, a in zip(emissions, areas, strict=False)], dtype=np.float64)
     emitters = np.flatnonzero(power > 0)
     pmf = np.zeros(len(power))
     if emitters.size:
@@ -481,7 +480,7 @@ def _check_material(material, where) -> Material:
     color_name = {"diffuse": "albedo", "dielectric": "tint"}.get(material.kind, "reflectance")
     rgb = color(material.color, f"{where}.{color_name}", upper=1.0)
     transmittance = color(material.transmittance, f"{where}.transmittance", upper=1.0)
-    if material.kind == "translucent" and any(r + t > 1.0 for r, t in zip(rgb, transmittance)):
+    if material.kind == "translucent" and any(r + t > 1.0 for r, t in zip(rgb, transmittance, strict=False)):
         raise SceneError(f"{where}: reflectance + transmittance must be <= 1 in every channel (energy conservation)")
     if material.kind != "translucent":
         transmittance = BLACK

@@ -52,7 +52,6 @@ from __future__ import annotations
 import json
 import os
 import tomllib
-from pathlib import Path
 from collections.abc import Collection, Iterable, Mapping
 from typing import Any
 
@@ -176,7 +175,7 @@ def _from_dict(data: Any, source: str | None, default_name: str) -> Scene:
         direction = vector(camera_table["direction"], "camera.direction")
     else:
         target = vector(camera_table["look_at"], "camera.look_at")
-        direction = tuple(t - p for t, p in zip(target, position))
+        direction = tuple(t - p for t, p in zip(target, position, strict=False))
         if not any(direction):
             raise SceneError("camera.look_at must differ from camera.position")
     camera = Camera(

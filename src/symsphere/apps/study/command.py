@@ -54,11 +54,17 @@ def add_study_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentPar
     study.add_argument("--config", choices=tuple(CONFIGS), default="full", help="default: %(default)s")
     study.add_argument("--seed", type=int, default=0, help="non-negative integer (default: %(default)s)")
     study.add_argument(
-        "--repetitions", type=int, default=None,
+        "--repetitions",
+        type=int,
+        default=None,
         help="independent repetitions per cell, >= 2 (default: 32 for full and qmc, 4 for small)",
     )
     study.add_argument(
-        "--k-max", type=int, default=None, dest="k_max", metavar="K",
+        "--k-max",
+        type=int,
+        default=None,
+        dest="k_max",
+        metavar="K",
         help="largest size n = 48*2^K (default: 14 for full and qmc, 6 for small)",
     )
     study.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
@@ -117,13 +123,16 @@ def run_study_command(args: argparse.Namespace) -> int:
             raise ValueError(f"--k-max must be in [{config.k_min + 2}, 20], got {args.k_max}")
         changes["k_max"] = args.k_max
     if changes:
-        config = config.replace(name=f"{config.name} (" + ", ".join(f"{k}={v}" for k, v in changes.items()) + ")",
-                                **changes)
+        config = config.replace(
+            name=f"{config.name} (" + ", ".join(f"{k}={v}" for k, v in changes.items()) + ")", **changes
+        )
     parent = Path(args.out).absolute().parent
     if not parent.is_dir():  # name the user's path, not the temporary folder next to it
         raise OSError(errno.ENOENT, "no such directory", str(parent))
     start = time.perf_counter()
     report = run_study(args.out, config=config, seed=args.seed, progress=not args.no_progress)
-    print(f"report: {report}  (and report.html, CSV tables and figures in {report.parent}; "
-          f"{time.perf_counter() - start:.1f} s)")
+    print(
+        f"report: {report}  (and report.html, CSV tables and figures in {report.parent}; "
+        f"{time.perf_counter() - start:.1f} s)"
+    )
     return 0

@@ -146,8 +146,16 @@ class StudyConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"'name' must be a non-empty string, got {self.name!r}")
-        for name in ("k_min", "k_max", "repetitions", "discrepancy_k_max", "discrepancy_repetitions",
-                     "chi2_samples", "density_samples", "warp_samples"):
+        for name in (
+            "k_min",
+            "k_max",
+            "repetitions",
+            "discrepancy_k_max",
+            "discrepancy_repetitions",
+            "chi2_samples",
+            "density_samples",
+            "warp_samples",
+        ):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise ValueError(f"'{name}' must be an integer, got {value!r}")
@@ -180,9 +188,7 @@ class StudyConfig:
                 raise ValueError(f"'{field_name}' must be a non-empty tuple of names, got {value!r}")
             for item in value:
                 if item not in allowed:
-                    raise ValueError(
-                        f"'{field_name}' has {item!r}, which is not one of {', '.join(sorted(allowed))}"
-                    )
+                    raise ValueError(f"'{field_name}' has {item!r}, which is not one of {', '.join(sorted(allowed))}")
             if len(set(value)) != len(value):
                 raise ValueError(f"'{field_name}' has duplicates: {value!r}")
             object.__setattr__(self, field_name, tuple(value))

@@ -23,13 +23,25 @@ __all__ = ["density_samplers", "warp_maps", "write_figures"]
 
 _METHOD_COLOURS = {"equal_area": "#1f77b4", "paper1": "#ff7f0e", "paper2": "#d62728"}
 _PEER_COLOURS = {
-    "classic": "#2ca02c", "classic_hemisphere": "#2ca02c", "gaussian": "#9467bd", "octahedral": "#8c564b",
-    "octahedral_hemisphere": "#8c564b", "fibonacci_rotated": "#e377c2", "fibonacci": "#e377c2",
-    "arvo": "#bcbd22", "cosine": "#17becf", "lebedev": "#000000", "lebedev_rotated": "#7f7f7f",
+    "classic": "#2ca02c",
+    "classic_hemisphere": "#2ca02c",
+    "gaussian": "#9467bd",
+    "octahedral": "#8c564b",
+    "octahedral_hemisphere": "#8c564b",
+    "fibonacci_rotated": "#e377c2",
+    "fibonacci": "#e377c2",
+    "arvo": "#bcbd22",
+    "cosine": "#17becf",
+    "lebedev": "#000000",
+    "lebedev_rotated": "#7f7f7f",
 }
 _POINT_STYLES = {
-    "random": ("-", "o"), "stratified": ("--", "s"), "sobol": ("-.", "^"), "halton": (":", "v"),
-    "sobol_interlaced2": ((0, (5, 1, 1, 1)), "D"), "sobol_interlaced3": ((0, (3, 1, 1, 1, 1, 1)), "P"),
+    "random": ("-", "o"),
+    "stratified": ("--", "s"),
+    "sobol": ("-.", "^"),
+    "halton": (":", "v"),
+    "sobol_interlaced2": ((0, (5, 1, 1, 1)), "D"),
+    "sobol_interlaced3": ((0, (3, 1, 1, 1, 1, 1)), "P"),
 }
 
 
@@ -117,8 +129,16 @@ def _convergence_figure(path, results, integrand, by_label):
         axes = left if method else right
         axes.loglog(n, y, label=label, **_style(name, points, method))
         if method == "equal_area" and points in ("random", "sobol"):
-            right.loglog(n, y, color="0.6", linestyle=_POINT_STYLES[points][0], linewidth=2.5, alpha=0.6,
-                         label=f"equal_area/{points} ({slope})", zorder=0)
+            right.loglog(
+                n,
+                y,
+                color="0.6",
+                linestyle=_POINT_STYLES[points][0],
+                linewidth=2.5,
+                alpha=0.6,
+                label=f"equal_area/{points} ({slope})",
+                zorder=0,
+            )
     n_all = np.array(sorted({r["n"] for r in rows}), dtype=float)
     top = max(values)
     for axes in (left, right):
@@ -126,8 +146,16 @@ def _convergence_figure(path, results, integrand, by_label):
             guide = top * (n_all / n_all[0]) ** (-power)
             axes.loglog(n_all, guide, color="0.3", linewidth=0.6, linestyle=(0, (1, 3)))
             # Inside the axes, left of the guide's last point: to its right it was clipped at the figure's edge.
-            axes.annotate(text, (n_all[-1], guide[-1]), fontsize=7, color="0.3", xytext=(-2, 2),
-                          textcoords="offset points", ha="right", va="bottom")
+            axes.annotate(
+                text,
+                (n_all[-1], guide[-1]),
+                fontsize=7,
+                color="0.3",
+                xytext=(-2, 2),
+                textcoords="offset points",
+                ha="right",
+                va="bottom",
+            )
         axes.set_xlabel("n (evaluations of f)")
         axes.grid(True, which="major", linewidth=0.3)
         axes.legend(fontsize=6.5, ncol=2 if axes is left else 1, loc="lower left")
@@ -156,25 +184,41 @@ def _discrepancy_figure(path, results, by_label):
         if method:
             weighted = fits[(name, points)]["weighted_fit"]
             wslope = f" ({weighted.slope:.2f})" if weighted is not None else ""
-            weighted_axes.loglog(n, [r["weighted_discrepancy_rms"] for r in rows], label=f"{method}/{points}{wslope}",
-                                 **_style(name, points, method))
+            weighted_axes.loglog(
+                n,
+                [r["weighted_discrepancy_rms"] for r in rows],
+                label=f"{method}/{points}{wslope}",
+                **_style(name, points, method),
+            )
     n_all = np.array(sorted({r["n"] for r in results.discrepancy}), dtype=float)
     for axes in (scheme, weighted_axes, peers):
-        axes.loglog(n_all, np.sqrt(1.0 / (3.0 * n_all)), color="k", linewidth=1.0, linestyle=(0, (4, 2)),
-                    label="√(1/(3N)): i.i.d. uniform")
+        axes.loglog(
+            n_all,
+            np.sqrt(1.0 / (3.0 * n_all)),
+            color="k",
+            linewidth=1.0,
+            linestyle=(0, (4, 2)),
+            label="√(1/(3N)): i.i.d. uniform",
+        )
         first = math.sqrt(1.0 / (3.0 * n_all[0])) / 3
-        axes.loglog(n_all, first * (n_all / n_all[0]) ** -0.75, color="0.4", linewidth=0.7,
-                    linestyle=(0, (1, 2)), label="N^-3/4 (the optimal order)")
+        axes.loglog(
+            n_all,
+            first * (n_all / n_all[0]) ** -0.75,
+            color="0.4",
+            linewidth=0.7,
+            linestyle=(0, (1, 2)),
+            label="N^-3/4 (the optimal order)",
+        )
         axes.set_xlabel("N (points)")
         axes.grid(True, linewidth=0.3)
-        axes.legend(fontsize=6.5, ncol=2 if axes is not peers else 1, loc="upper center",
-                    bbox_to_anchor=(0.5, -0.13))
+        axes.legend(fontsize=6.5, ncol=2 if axes is not peers else 1, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     scheme.set_ylabel(f"cap L2 discrepancy D (rms over {results.config.discrepancy_repetitions} sets)")
     scheme.set_title("the scheme: all N directions, equal weights 1/N", fontsize=9)
     weighted_axes.set_title("the scheme with the estimator's weights 1/(N 4π pdf)", fontsize=9)
     peers.set_title("peers (equal weights)", fontsize=9)
-    figure.suptitle("Spherical-cap L2 discrepancy, exact by Stolarsky's invariance principle (fitted slope)",
-                    fontsize=10)
+    figure.suptitle(
+        "Spherical-cap L2 discrepancy, exact by Stolarsky's invariance principle (fitted slope)", fontsize=10
+    )
     figure.savefig(path, dpi=80)
 
 
@@ -194,13 +238,19 @@ def _density_figure(path, results, sampler):
     ratio = np.clip(ratio, 1 / 8, 8)
     figure = _figure((6.4, 3.6))
     axes = figure.add_subplot(projection="mollweide")
-    mesh = axes.pcolormesh(phi_edges, np.arcsin(cos_edges), ratio.T, cmap="RdBu_r",
-                           norm=LogNorm(vmin=0.25, vmax=4.0), shading="flat", rasterized=True)
+    mesh = axes.pcolormesh(
+        phi_edges,
+        np.arcsin(cos_edges),
+        ratio.T,
+        cmap="RdBu_r",
+        norm=LogNorm(vmin=0.25, vmax=4.0),
+        shading="flat",
+        rasterized=True,
+    )
     axes.grid(True, linewidth=0.3)
     axes.set_xticklabels([])
     axes.tick_params(labelsize=6)
-    figure.colorbar(mesh, ax=axes, shrink=0.7, label="density / uniform", ticks=[0.25, 0.5, 1, 2, 4],
-                    format="%g")
+    figure.colorbar(mesh, ax=axes, shrink=0.7, label="density / uniform", ticks=[0.25, 0.5, 1, 2, 4], format="%g")
     low, high = float(ratio.min()), float(ratio.max())
     axes.set_title(
         f"{sampler.name} (random points): {len(d)} directions\nin {n_phi}×{n_cos} equal-area bins, "
@@ -222,15 +272,23 @@ _WARP_CAPTIONS = {
 def _warp_setup(name):
     """(domain, forward uv -> d, pdf, title) of a map that gets a warp picture."""
     if name in METHODS:
-        return ("triangle", lambda uv: square_to_triangle(uv, name), lambda p: triangle_pdf(p, name),
-                f"{name}: unit square -> T0")
+        return (
+            "triangle",
+            lambda uv: square_to_triangle(uv, name),
+            lambda p: triangle_pdf(p, name),
+            f"{name}: unit square -> T0",
+        )
     peer = PEERS[name]
     caption = f" ({_WARP_CAPTIONS[name]})" if name in _WARP_CAPTIONS else ""
     if peer.forward is not None:
         return (peer.domain, peer.forward, peer.pdf, f"{name}: unit square -> {peer.domain}{caption}")
     if peer.is_map and peer.orbit_size == 48:  # a map onto T0, then the 48 images (Peer.forward is None)
-        return ("triangle", lambda uv: square_to_spherical_triangle(uv, *T0_VERTICES),
-                lambda p: spherical_triangle_pdf(p, *T0_VERTICES), f"{name}: unit square -> T0{caption}")
+        return (
+            "triangle",
+            lambda uv: square_to_spherical_triangle(uv, *T0_VERTICES),
+            lambda p: spherical_triangle_pdf(p, *T0_VERTICES),
+            f"{name}: unit square -> T0{caption}",
+        )
     raise ValueError(f"no warp picture for {name!r}")  # pragma: no cover
 
 
@@ -299,7 +357,8 @@ def _warp_figure(path, results, name):
         axes.set_xlabel("φ (degrees)")
         axes.tick_params(labelsize=7)
     grid.set_ylabel("cos θ (equal-area coordinates)")
-    figure.colorbar(mesh, ax=[observed_axes, expected_axes], shrink=0.85, label="/ uniform",
-                    ticks=[0.25, 0.5, 1, 2, 4], format="%g")
+    figure.colorbar(
+        mesh, ax=[observed_axes, expected_axes], shrink=0.85, label="/ uniform", ticks=[0.25, 0.5, 1, 2, 4], format="%g"
+    )
     figure.suptitle(f"warp of {title}", fontsize=10)
     figure.savefig(path, dpi=80)

@@ -88,16 +88,31 @@ _COMPARISONS = (
     (("symsphere_equal_area", "sobol"), ("classic", "sobol"), "QMC with orbits vs Sobol' on the classic map"),
     (("symsphere_equal_area", "sobol"), ("octahedral", "sobol"), "QMC with orbits vs Sobol' on the octahedral map"),
     (("symsphere_equal_area", "sobol"), ("fibonacci_rotated", "random"), "QMC with orbits vs rotated Fibonacci"),
-    (("symsphere_equal_area", "sobol_interlaced2"), ("symsphere_equal_area", "sobol"),
-     "order-2 interlaced vs plain Sobol' base points"),
-    (("symsphere_equal_area", "sobol_interlaced3"), ("symsphere_equal_area", "sobol"),
-     "order-3 interlaced vs plain Sobol' base points"),
-    (("symsphere_equal_area", "sobol_interlaced2"), ("octahedral", "sobol_interlaced2"),
-     "order-2 points: orbits vs Clarberg's octahedral map"),
-    (("symsphere_equal_area", "sobol_interlaced2"), ("fibonacci_rotated", "random"),
-     "order-2 QMC with orbits vs rotated Fibonacci"),
-    (("symsphere_equal_area", "sobol_interlaced2"), ("lebedev_rotated", "random"),
-     "order-2 QMC with orbits vs rotated Lebedev (131)"),
+    (
+        ("symsphere_equal_area", "sobol_interlaced2"),
+        ("symsphere_equal_area", "sobol"),
+        "order-2 interlaced vs plain Sobol' base points",
+    ),
+    (
+        ("symsphere_equal_area", "sobol_interlaced3"),
+        ("symsphere_equal_area", "sobol"),
+        "order-3 interlaced vs plain Sobol' base points",
+    ),
+    (
+        ("symsphere_equal_area", "sobol_interlaced2"),
+        ("octahedral", "sobol_interlaced2"),
+        "order-2 points: orbits vs Clarberg's octahedral map",
+    ),
+    (
+        ("symsphere_equal_area", "sobol_interlaced2"),
+        ("fibonacci_rotated", "random"),
+        "order-2 QMC with orbits vs rotated Fibonacci",
+    ),
+    (
+        ("symsphere_equal_area", "sobol_interlaced2"),
+        ("lebedev_rotated", "random"),
+        "order-2 QMC with orbits vs rotated Lebedev (131)",
+    ),
     (("symsphere_equal_area", "random"), ("classic_hemisphere", "random"), "hemisphere: orbits of 24 vs i.i.d."),
     (("symsphere_equal_area", "random"), ("cosine", "random"), "hemisphere: uniform orbits vs cosine-weighted i.i.d."),
     (("symsphere_equal_area", "sobol"), ("classic_hemisphere", "sobol"), "hemisphere QMC: orbits vs classic map"),
@@ -152,8 +167,11 @@ def _findings(results):
         sentence = (
             f"**Orbits of {count}, random points ({domain}).** At the largest n, the MSE of "
             f"{'/'.join(baseline)} (i.i.d.) over that of equal_area with orbits is "
-            + (f"{_range_text(finite.values())} ({', '.join(f'{g}: {_g(v)}' for g, v in finite.items())})"
-               if finite else "infinite")
+            + (
+                f"{_range_text(finite.values())} ({', '.join(f'{g}: {_g(v)}' for g, v in finite.items())})"
+                if finite
+                else "infinite"
+            )
         )
         if exact:
             sentence += f"; the scheme is exact (rounding level) on {', '.join(exact)}"
@@ -189,22 +207,43 @@ def _findings(results):
                     f"({', '.join(f'{g}: {_g(v)}' for g, v in r.items())})."
                 )
     slopes = []
-    for name, points in (ea, ea_sobol, ("classic", "random"), ("classic", "sobol"), ("octahedral", "sobol"),
-                         ("fibonacci_rotated", "random")):
-        rows = [row for row in results.summary if row["sampler"] == name and row["points"] == points
-                and row["integrand"] in sphere and row["status"] != "exact"]
+    for name, points in (
+        ea,
+        ea_sobol,
+        ("classic", "random"),
+        ("classic", "sobol"),
+        ("octahedral", "sobol"),
+        ("fibonacci_rotated", "random"),
+    ):
+        rows = [
+            row
+            for row in results.summary
+            if row["sampler"] == name
+            and row["points"] == points
+            and row["integrand"] in sphere
+            and row["status"] != "exact"
+        ]
         if rows:
             slopes.append(f"{name}/{points}: " + ", ".join(f"{row['integrand']} {row['slope']:.2f}" for row in rows))
     if slopes:
         out.append(
             "**Convergence slopes** (log RMSE vs log n on the sphere; cells at rounding level left out): "
-            + "; ".join(slopes) + "."
+            + "; ".join(slopes)
+            + "."
         )
     fits = {(f["sampler"], f["points"]): f for f in results.discrepancy_fits}
     parts = []
-    for key in (ea, ea_sobol, ("symsphere_paper1", "random"), ("symsphere_paper1", "sobol"),
-                ("symsphere_paper2", "sobol"), ("classic", "sobol"), ("octahedral", "sobol"),
-                ("fibonacci_rotated", "random"), ("classic", "random")):
+    for key in (
+        ea,
+        ea_sobol,
+        ("symsphere_paper1", "random"),
+        ("symsphere_paper1", "sobol"),
+        ("symsphere_paper2", "sobol"),
+        ("classic", "sobol"),
+        ("octahedral", "sobol"),
+        ("fibonacci_rotated", "random"),
+        ("classic", "random"),
+    ):
         f = fits.get(key)
         if f is None or f["fit"] is None:
             continue
@@ -217,12 +256,15 @@ def _findings(results):
             "**Cap discrepancy** (slope of D against N; i.i.d. points give -0.5, the best possible order is "
             "-0.75): " + "; ".join(parts) + "."
         )
-    failed_uniform = sorted({f"{r['sampler']} ({r['domain']})" for r in results.chi2
-                             if r["reference"] == "uniform" and not r["passed"]})
-    passed_own = sorted({f"{r['sampler']} ({r['domain']})" for r in results.chi2
-                         if r["reference"] == "own pdf" and r["passed"]})
-    failed_own = sorted({f"{r['sampler']} ({r['domain']})" for r in results.chi2
-                         if r["reference"] == "own pdf" and not r["passed"]})
+    failed_uniform = sorted(
+        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "uniform" and not r["passed"]}
+    )
+    passed_own = sorted(
+        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "own pdf" and r["passed"]}
+    )
+    failed_own = sorted(
+        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "own pdf" and not r["passed"]}
+    )
     if results.chi2:
         sentence = "**χ².** Fail against the uniform density: " + (", ".join(failed_uniform) or "none")
         sentence += "; pass against their own pdf: " + (", ".join(passed_own) or "none")
@@ -248,10 +290,11 @@ def _best_randomized(results):
         label = lambda r: f"{r['sampler']}/{r['points']}"  # noqa: E731
         exact = [r for r in rows if r["status"] == "exact" or not math.isfinite(r["efficiency"])]
         rest = [r for r in rows if r not in exact]
-        text = f"`{g}`: " + (f"at rounding level with {', '.join(label(r) for r in exact)}; among the others, "
-                             if exact else "")
+        text = f"`{g}`: " + (
+            f"at rounding level with {', '.join(label(r) for r in exact)}; among the others, " if exact else ""
+        )
         if len(rest) < 2:
-            out.append(text.rstrip("; among the others, "))
+            out.append(text.removesuffix("; among the others, "))
             continue
         by_mse = sorted(rest, key=lambda r: r["rmse_at_n_max"])
         by_time = sorted(rest, key=lambda r: -r["efficiency"])
@@ -278,8 +321,11 @@ def _lebedev_text(results):
         lebedev = _lookup(results.convergence, integrand=g, sampler="lebedev", points=rule.points, k=k)
         if lebedev is None:
             continue
-        rows = [r for r in results.convergence if r["integrand"] == g and r["k"] == k
-                and labels[(r["sampler"], r["points"])].is_random]
+        rows = [
+            r
+            for r in results.convergence
+            if r["integrand"] == g and r["k"] == k and labels[(r["sampler"], r["points"])].is_random
+        ]
         if not rows:
             continue
         best = min(rows, key=lambda r: r["rmse"])
@@ -287,8 +333,11 @@ def _lebedev_text(results):
         if lebedev["rounding_level"]:
             out.append(f"`{g}`: Lebedev at rounding level (n = {lebedev['n']})")
             continue
-        series = [r for r in results.convergence if r["integrand"] == g and r["sampler"] == best["sampler"]
-                  and r["points"] == best["points"]]
+        series = [
+            r
+            for r in results.convergence
+            if r["integrand"] == g and r["sampler"] == best["sampler"] and r["points"] == best["points"]
+        ]
         match = next((r["n"] for r in series if r["rmse"] <= error), None)
         needs = f"reaches it at n = {match}" if match is not None else f"does not reach it by n = {series[-1]['n']}"
         out.append(
@@ -330,7 +379,7 @@ def report_markdown(results: Results) -> str:
         "",
         f"- **RMSE** of the estimate over {config.repetitions} independent repetitions (fresh random points, "
         f"jitter, scrambling or rotation each time) for n = 48·2^k evaluations of f, k = {ks[0]}…{ks[-1]} "
-        f"(n = {48 * 2**ks[0]} … {48 * 2**ks[-1]}). The scheme with stratified points needs a square number of "
+        f"(n = {48 * 2 ** ks[0]} … {48 * 2 ** ks[-1]}). The scheme with stratified points needs a square number of "
         "base points; for odd k it uses the nearest such n (the tables give the n used).",
         "- **Slope**: least squares of log RMSE against log n over all sizes (± its standard error). "
         f"RMSEs at rounding level (≤ {ROUNDING_LEVEL:g}·max(1, |exact|)) are flagged and left out; a cell "
@@ -383,8 +432,10 @@ def report_markdown(results: Results) -> str:
             "|---|" + "---:|" * len(names),
         ]
         for sampler in samplers(config, domain):
-            cells = [_efficiency_text(_lookup(results.summary, integrand=g, sampler=sampler.name,
-                                              points=sampler.points)) for g in names]
+            cells = [
+                _efficiency_text(_lookup(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
+                for g in names
+            ]
             lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
         lines += [
             "",
@@ -394,8 +445,10 @@ def report_markdown(results: Results) -> str:
             "|---|" + "---:|" * len(names),
         ]
         for sampler in samplers(config, domain):
-            cells = [_slope_text(_lookup(results.summary, integrand=g, sampler=sampler.name,
-                                         points=sampler.points)) for g in names]
+            cells = [
+                _slope_text(_lookup(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
+                for g in names
+            ]
             lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
         lines.append("")
 
@@ -420,12 +473,17 @@ def report_markdown(results: Results) -> str:
     lines += [f"- {sentence}" for sentence in _findings(results)]
     best = _best_randomized(results)
     if best:
-        lines.append("- **The most accurate randomized method** (largest n; equal time: efficiency 1/(MSE·seconds)): "
-                     + "; ".join(best) + ".")
+        lines.append(
+            "- **The most accurate randomized method** (largest n; equal time: efficiency 1/(MSE·seconds)): "
+            + "; ".join(best)
+            + "."
+        )
     lebedev = _lebedev_text(results)
     if lebedev:
-        lines.append("- **Lebedev (deterministic, exact to degree 131 at 5810 points) against the best randomized "
-                     "method at the same budget** (absolute errors): " + "; ".join(lebedev) + ".")
+        lines.append(
+            "- **Lebedev (deterministic, exact to degree 131 at 5810 points) against the best randomized "
+            "method at the same budget** (absolute errors): " + "; ".join(lebedev) + "."
+        )
     lines += ["", "## Convergence", ""]
     for g in config.integrands:
         it = INTEGRANDS[g]
@@ -441,8 +499,9 @@ def report_markdown(results: Results) -> str:
         for row in results.summary:
             if row["integrand"] != g:
                 continue
-            last = _lookup(results.convergence, integrand=g, sampler=row["sampler"], points=row["points"],
-                           n=row["n_max"])
+            last = _lookup(
+                results.convergence, integrand=g, sampler=row["sampler"], points=row["points"], n=row["n_max"]
+            )
             lines.append(
                 f"| {row['sampler']} | {row['points']} | {row['n_max']} | {_g(row['relative_rmse_at_n_max'])} | "
                 f"{_g(last['mean_error'])} ± {_g(last['mean_error_se'], 2)} | {_slope_text(row)} | "
@@ -453,8 +512,9 @@ def report_markdown(results: Results) -> str:
 
     if results.discrepancy:
         baseline = BASELINE["sphere"][0]  # exactly 48 * 2**k points, unlike the stratified scheme
-        ns = sorted({r["n"] for r in results.discrepancy if r["sampler"] == baseline} or
-                    {r["n"] for r in results.discrepancy})
+        ns = sorted(
+            {r["n"] for r in results.discrepancy if r["sampler"] == baseline} or {r["n"] for r in results.discrepancy}
+        )
         fits = {(f["sampler"], f["points"]): f for f in results.discrepancy_fits}
         lines += [
             "## Spherical-cap L2 discrepancy",
@@ -604,7 +664,7 @@ def report_html(text: str, title: str = "report") -> str:
         "img{max-width:100%}code{background:#f4f4f4;padding:0 0.2em}"
     )
     return (
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+        '<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         f"<title>{html.escape(title)}</title>\n<style>{style}</style>\n</head>\n<body>\n"
         + body
         + "\n</body>\n</html>\n"

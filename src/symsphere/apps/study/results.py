@@ -25,26 +25,67 @@ __all__ = [
 ]
 
 CONVERGENCE_COLUMNS = (
-    "integrand", "domain", "sampler", "points", "k", "n", "repetitions", "rmse", "relative_rmse",
-    "mean_error", "mean_error_se", "mean_seconds", "median_seconds", "rounding_level",
+    "integrand",
+    "domain",
+    "sampler",
+    "points",
+    "k",
+    "n",
+    "repetitions",
+    "rmse",
+    "relative_rmse",
+    "mean_error",
+    "mean_error_se",
+    "mean_seconds",
+    "median_seconds",
+    "rounding_level",
 )
 """Columns of ``convergence.csv``: one row per (integrand, sampler, points, n)."""
 
 SUMMARY_COLUMNS = (
-    "integrand", "domain", "sampler", "points", "status", "slope", "slope_se", "fit_points", "n_max",
-    "rmse_at_n_max", "relative_rmse_at_n_max", "median_seconds_at_n_max", "efficiency",
-    "relative_efficiency", "baseline",
+    "integrand",
+    "domain",
+    "sampler",
+    "points",
+    "status",
+    "slope",
+    "slope_se",
+    "fit_points",
+    "n_max",
+    "rmse_at_n_max",
+    "relative_rmse_at_n_max",
+    "median_seconds_at_n_max",
+    "efficiency",
+    "relative_efficiency",
+    "baseline",
 )
 """Columns of ``summary.csv``: one row per (integrand, sampler, points)."""
 
 DISCREPANCY_COLUMNS = (
-    "sampler", "points", "k", "n", "repetitions", "discrepancy_rms", "discrepancy_min", "discrepancy_max",
-    "weighted_discrepancy_rms", "random_expectation",
+    "sampler",
+    "points",
+    "k",
+    "n",
+    "repetitions",
+    "discrepancy_rms",
+    "discrepancy_min",
+    "discrepancy_max",
+    "weighted_discrepancy_rms",
+    "random_expectation",
 )
 """Columns of ``discrepancy.csv``: one row per (sampler, points, N)."""
 
 CHI2_COLUMNS = (
-    "sampler", "points", "domain", "reference", "n_samples", "statistic", "dof", "p_value", "threshold", "passed",
+    "sampler",
+    "points",
+    "domain",
+    "reference",
+    "n_samples",
+    "statistic",
+    "dof",
+    "p_value",
+    "threshold",
+    "passed",
 )
 """Columns of ``chi2.csv``: one row per test."""
 

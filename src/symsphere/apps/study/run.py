@@ -59,8 +59,15 @@ def study_files(config: str | StudyConfig = "full") -> list[str]:
 
 def _replaceable():
     """Every name a study of any configuration can write: an earlier study's folder may be replaced."""
-    names = {"report.md", "report.html", "convergence.csv", "summary.csv", "discrepancy.csv", "chi2.csv",
-             "discrepancy.png"}
+    names = {
+        "report.md",
+        "report.html",
+        "convergence.csv",
+        "summary.csv",
+        "discrepancy.csv",
+        "chi2.csv",
+        "discrepancy.png",
+    }
     names |= {f"convergence_{g}.png" for g in INTEGRANDS}
     names |= {f"density_symsphere_{m}.png" for m in METHODS} | {f"density_{p}.png" for p in PEERS}
     names |= {f"warp_{m}.png" for m in WARP_MAPS}
@@ -120,8 +127,9 @@ def run_study(
         # The peers' Sobol' sizes 3 * 2**m are deliberate (see the module docstring).
         warnings.filterwarnings("ignore", message="The balance properties of Sobol")
         bar_format = "{l_bar}{bar}| {n:.0f}/{total_fmt} cells [{elapsed}<{remaining}{postfix}]"
-        with tqdm(total=total, desc="study", disable=True if not progress else None, dynamic_ncols=True,
-                  bar_format=bar_format) as bar:
+        with tqdm(
+            total=total, desc="study", disable=True if not progress else None, dynamic_ncols=True, bar_format=bar_format
+        ) as bar:
             clock = time.perf_counter()
             _run_convergence(results, cells, bar)
             results.stage_seconds["convergence"] = time.perf_counter() - clock
@@ -150,8 +158,8 @@ def run_study(
     return Path(out_dir) / "report.md"
 
 
-
 # --- convergence -----------------------------------------------------------------
+
 
 def _convergence_cells(config):
     cells = []
@@ -199,13 +207,19 @@ def _convergence_row(integrand, sampler, k, estimates, seconds):
     error = float(rmse(estimates, integrand.exact))
     repetitions = len(estimates)
     return {
-        "integrand": integrand.name, "domain": integrand.domain, "sampler": sampler.name,
-        "points": sampler.points, "k": k, "n": sampler.n_for(k), "repetitions": repetitions,
+        "integrand": integrand.name,
+        "domain": integrand.domain,
+        "sampler": sampler.name,
+        "points": sampler.points,
+        "k": k,
+        "n": sampler.n_for(k),
+        "repetitions": repetitions,
         "rmse": error,
         "relative_rmse": error / abs(integrand.exact) if integrand.exact != 0 else math.nan,
         "mean_error": float(np.mean(estimates - integrand.exact)),
         "mean_error_se": float(np.std(estimates, ddof=1) / math.sqrt(repetitions)),
-        "mean_seconds": float(np.mean(seconds)), "median_seconds": float(np.median(seconds)),
+        "mean_seconds": float(np.mean(seconds)),
+        "median_seconds": float(np.median(seconds)),
         "rounding_level": bool(error <= ROUNDING_LEVEL * max(1.0, abs(integrand.exact))),
     }
 
@@ -233,12 +247,23 @@ def _summarise(results):
             efficiency = math.inf
         else:
             efficiency = 1.0 / (max(mse, LOG_FLOOR) * last["median_seconds"])
-        summary.append({
-            "integrand": g, "domain": last["domain"], "sampler": name, "points": points, "status": status,
-            "slope": fit.slope, "slope_se": fit.standard_error, "fit_points": fit.points, "n_max": last["n"],
-            "rmse_at_n_max": last["rmse"], "relative_rmse_at_n_max": last["relative_rmse"],
-            "median_seconds_at_n_max": last["median_seconds"], "efficiency": efficiency,
-        })
+        summary.append(
+            {
+                "integrand": g,
+                "domain": last["domain"],
+                "sampler": name,
+                "points": points,
+                "status": status,
+                "slope": fit.slope,
+                "slope_se": fit.standard_error,
+                "fit_points": fit.points,
+                "n_max": last["n"],
+                "rmse_at_n_max": last["rmse"],
+                "relative_rmse_at_n_max": last["relative_rmse"],
+                "median_seconds_at_n_max": last["median_seconds"],
+                "efficiency": efficiency,
+            }
+        )
     for row in summary:
         baseline = BASELINE[row["domain"]]
         reference = next(
@@ -254,6 +279,7 @@ def _summarise(results):
 
 
 # --- discrepancy -------------------------------------------------------------------
+
 
 def _discrepancy_cells(config):
     if "sphere" not in domains(config):
@@ -278,14 +304,20 @@ def _run_discrepancy(results, cells, bar):
                 w = weighted(np.ones(n), n * 4 * math.pi * sampler.pdf(x))
                 with_weights.append(max(cap_discrepancy_squared(x, w), 0.0))
         plain, with_weights = np.array(plain), np.array(with_weights)
-        results.discrepancy.append({
-            "sampler": sampler.name, "points": sampler.points, "k": k, "n": n,
-            "repetitions": config.discrepancy_repetitions,
-            "discrepancy_rms": float(np.sqrt(plain.mean())),
-            "discrepancy_min": float(np.sqrt(plain.min())), "discrepancy_max": float(np.sqrt(plain.max())),
-            "weighted_discrepancy_rms": float(np.sqrt(with_weights.mean())),
-            "random_expectation": math.sqrt(1.0 / (3.0 * n)),
-        })
+        results.discrepancy.append(
+            {
+                "sampler": sampler.name,
+                "points": sampler.points,
+                "k": k,
+                "n": n,
+                "repetitions": config.discrepancy_repetitions,
+                "discrepancy_rms": float(np.sqrt(plain.mean())),
+                "discrepancy_min": float(np.sqrt(plain.min())),
+                "discrepancy_max": float(np.sqrt(plain.max())),
+                "weighted_discrepancy_rms": float(np.sqrt(with_weights.mean())),
+                "random_expectation": math.sqrt(1.0 / (3.0 * n)),
+            }
+        )
         bar.update(1)
     fits = []
     groups = {}
@@ -293,15 +325,21 @@ def _run_discrepancy(results, cells, bar):
         groups.setdefault((row["sampler"], row["points"]), []).append(row)
     for (name, points), rows in groups.items():
         ns = [r["n"] for r in rows]
-        fits.append({
-            "sampler": name, "points": points,
-            "fit": fit_slope(ns, [r["discrepancy_rms"] for r in rows]) if len(rows) >= 2 else None,
-            "weighted_fit": fit_slope(ns, [r["weighted_discrepancy_rms"] for r in rows]) if len(rows) >= 2 else None,
-        })
+        fits.append(
+            {
+                "sampler": name,
+                "points": points,
+                "fit": fit_slope(ns, [r["discrepancy_rms"] for r in rows]) if len(rows) >= 2 else None,
+                "weighted_fit": fit_slope(ns, [r["weighted_discrepancy_rms"] for r in rows])
+                if len(rows) >= 2
+                else None,
+            }
+        )
     results.discrepancy_fits = fits
 
 
 # --- chi-square ----------------------------------------------------------------------
+
 
 def chi2_tests(config: StudyConfig) -> list[tuple[Sampler, str]]:
     """The chi-square tests of *config*: (sampler, ``'uniform'`` or ``'own'``) for each random sampler.
@@ -329,20 +367,30 @@ def _run_chi2(results, tests, bar):
         bar.set_postfix_str(f"chi2: {sampler.label} ({sampler.domain}) vs {reference}", refresh=False)
         if sampler not in samples:
             size = sampler.orbit_size
-            d = sampler.sample(config.chi2_samples * size,
-                               results.seed_sequence(2, key(sampler.label), key(sampler.domain)))
+            d = sampler.sample(
+                config.chi2_samples * size, results.seed_sequence(2, key(sampler.label), key(sampler.domain))
+            )
             if size > 1:
                 d = one_per_orbit(d, size, results.seed_sequence(3, key(sampler.label), key(sampler.domain)))
             samples[sampler] = d
         pdf = uniform_pdf(sampler.domain) if reference == "uniform" else sampler.pdf
-        result = chi2_test(samples[sampler], pdf, sampler.domain, significance=FAMILY_SIGNIFICANCE,
-                           test_count=len(tests))
-        results.chi2.append({
-            "sampler": sampler.name, "points": sampler.points, "domain": sampler.domain,
-            "reference": reference if reference == "uniform" else "own pdf",
-            "n_samples": len(samples[sampler]), "statistic": result.statistic, "dof": result.dof,
-            "p_value": result.p_value, "threshold": result.threshold, "passed": result.passed,
-        })
+        result = chi2_test(
+            samples[sampler], pdf, sampler.domain, significance=FAMILY_SIGNIFICANCE, test_count=len(tests)
+        )
+        results.chi2.append(
+            {
+                "sampler": sampler.name,
+                "points": sampler.points,
+                "domain": sampler.domain,
+                "reference": reference if reference == "uniform" else "own pdf",
+                "n_samples": len(samples[sampler]),
+                "statistic": result.statistic,
+                "dof": result.dof,
+                "p_value": result.p_value,
+                "threshold": result.threshold,
+                "passed": result.passed,
+            }
+        )
         bar.update(1)
 
 

@@ -8,8 +8,8 @@ from :class:`symsphere.peers.Peer` fields for a peer and from the map and the do
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -122,8 +122,9 @@ class Sampler:
         """
         if self.is_scheme:
             replicates = None if self.points == "random" else 1
-            result = integrate(f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng,
-                               replicates=replicates)
+            result = integrate(
+                f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng, replicates=replicates
+            )
             return float(result.integral)
         if self.peer.name not in COMPILED_PEERS:
             return self.peer.estimate(f, n, rng=rng, points=self.points)
@@ -178,9 +179,7 @@ def weighted(values: npt.ArrayLike, pdf: npt.ArrayLike) -> np.ndarray:
 def samplers(config: StudyConfig, domain: str) -> list[Sampler]:
     """The samplers of *config* on *domain*: the scheme (every map x point set), then the peers."""
     scheme = [
-        Sampler.scheme(method, points, domain)
-        for method in config.scheme_methods
-        for points in config.scheme_points
+        Sampler.scheme(method, points, domain) for method in config.scheme_methods for points in config.scheme_points
     ]
     peers = config.sphere_peers if domain == "sphere" else config.hemisphere_peers
     return scheme + [Sampler.of_peer(PEERS[peer], points) for peer, points in peers]
