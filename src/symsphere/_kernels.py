@@ -365,10 +365,10 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
 
     @njit(**_OPTIONS)
     def fill(points, lo, hi, weights, rows, tail, offset):  # pragma: no cover - compiled by numba
-        # Every branch on source, code or kind is at this function's top level, where numba prunes
-        # it; the helpers are functions of their own (register_jitable: compiled once per process
-        # and shared by the cases; LLVM inlines them), not inlined in numba's IR, which costs
-        # compile time in every case.
+        # The branches on source and kind are at this function's top level and the map's in
+        # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are functions of
+        # their own (register_jitable: compiled once per process and shared by the cases; LLVM
+        # inlines them), not numba-IR inlines, which cost compile time in every case.
         whole = rows.shape[0]
         u = np.full(_BATCH, 0.5)
         v = np.full(_BATCH, 0.5)
@@ -384,16 +384,7 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
                 for j in range(stop - first):
                     u[j] = points[first + j, 0]
                     v[j] = points[first + j, 1]
-            # One loop per map, so the default one is branch-free (vectorisable).
-            if code == 0:
-                for j in range(_BATCH):
-                    base[0, j], base[1, j], base[2, j] = _equal_area_point(u[j], v[j])
-            elif code == 1:
-                for j in range(_BATCH):
-                    base[0, j], base[1, j], base[2, j] = _paper1_point(u[j], v[j])
-            else:
-                for j in range(_BATCH):
-                    base[0, j], base[1, j], base[2, j] = _paper2_point(u[j], v[j])
+            _map_batch(u, v, code, base)  # inlined in numba's IR: the other maps pruned
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
