@@ -34,7 +34,12 @@ def _listing(directory):
 
 
 def _one_line_error(stderr: str) -> str:
-    lines = [line for line in stderr.splitlines() if line.strip() and "%" not in line]  # tqdm bars aside
+    # tqdm bars aside, and the line saying numba compiles (a first run with an empty cache)
+    lines = [
+        line
+        for line in stderr.splitlines()
+        if line.strip() and "%" not in line and "compiling numba kernels" not in line
+    ]
     assert "Traceback" not in stderr, stderr
     assert len(lines) == 1, stderr
     return lines[0]
