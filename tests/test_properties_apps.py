@@ -503,6 +503,8 @@ EXCLUDED = {
 # bad options); their internals run only with arguments the applications build.
 EXCLUDED_MODULES = {
     "symsphere.apps": "the applications: tested through the command line (tests/test_reliability.py, tests/apps/)",
+    "symsphere.mitsuba": "Dr.Jit functions of Mitsuba's array types, not numpy inputs: tested in tests/mitsuba (values "
+    "against numpy, chi-square, parameter errors)",
 }
 
 

@@ -173,6 +173,14 @@ def test_work_beyond_a_day_needs_allow_long(capsys, monkeypatch):
 N_LATE = 48 * 2**10
 
 
+@pytest.fixture(autouse=True)
+def _python_sigint_handler():
+    """Python's own SIGINT handler (KeyboardInterrupt) in every test: a pytest-xdist worker runs with another."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def _inject_sigint(monkeypatch, module, name, at_call):
     """Send SIGINT to this process from inside the at_call-th call of module.name (after the call)."""
     real = getattr(module, name)

@@ -41,7 +41,16 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, integrate, iter_hemisphere, iter_sphere
-from .._validation import MAX_PATHS, MAX_PIXELS, check_count, check_output_path, check_seed, check_size, file_kind
+from .._validation import (
+    MAX_PATHS,
+    MAX_PIXELS,
+    check_count,
+    check_nonnegative,
+    check_output_path,
+    check_seed,
+    check_size,
+    file_kind,
+)
 from ..integrands import INTEGRANDS
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..maps import METHODS
@@ -617,6 +626,9 @@ def _run_integrate(args) -> int:
     )
     to_tolerance = args.rtol is not None or args.atol is not None
     if to_tolerance:
+        for name in ("rtol", "atol"):  # before the time estimate, which runs a pilot without them
+            if getattr(args, name) is not None:
+                check_nonnegative(getattr(args, name), name)
         kwargs.update(rtol=args.rtol, atol=args.atol, n_max=args.n_max)
     elif args.n is None:
         raise _UsageError("--n is required unless --rtol or --atol is given")
