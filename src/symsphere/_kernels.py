@@ -447,7 +447,7 @@ def fill_orbits(
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
     (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
     C-contiguous float32 or float64.  *parts*: how many stretches to split the points
-    into (0: numba's thread count; the output does not depend on it).  If *out* has
+    into (0: numba's thread count, but at most one part per 256 points; the output does not depend on it).  If *out* has
     ``(m - 1) * count + rest`` rows, ``0 < rest < count``, the last point's orbit is cut:
     the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
     same kernel call.
