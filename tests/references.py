@@ -179,3 +179,16 @@ def assert_power(result, w, power=0.99):
         f"power {got:.3f} < {power} against w = {w} (n = {n}, dof = {result.dof}); "
         f"this n detects w >= {chi2_detectable_w(n, result.dof, result.threshold, power):.4f}"
     )
+
+
+def one_line_error(stderr: str) -> str:
+    """The one line a command wrote on stderr (no traceback), for the one-line-error tests."""
+    # tqdm bars aside, and the line saying numba compiles (a first run with an empty cache)
+    lines = [
+        line
+        for line in stderr.splitlines()
+        if line.strip() and "%" not in line and "compiling numba kernels" not in line
+    ]
+    assert "Traceback" not in stderr, stderr
+    assert len(lines) == 1, stderr
+    return lines[0]

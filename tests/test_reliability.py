@@ -20,7 +20,7 @@ import warnings
 
 import numpy as np
 import pytest
-from references import scaled_for_load
+from references import one_line_error, scaled_for_load
 
 import symsphere
 from symsphere import harmonics, io, symmetry
@@ -31,18 +31,6 @@ CLI = [sys.executable, "-m", "symsphere"]
 
 def _listing(directory):
     return sorted(p.name for p in directory.iterdir())
-
-
-def _one_line_error(stderr: str) -> str:
-    # tqdm bars aside, and the line saying numba compiles (a first run with an empty cache)
-    lines = [
-        line
-        for line in stderr.splitlines()
-        if line.strip() and "%" not in line and "compiling numba kernels" not in line
-    ]
-    assert "Traceback" not in stderr, stderr
-    assert len(lines) == 1, stderr
-    return lines[0]
 
 
 # --- 1. full disk: no SIGBUS, no temporary left, one clear line ---------------------------------
@@ -71,7 +59,7 @@ def test_full_tmpfs_fails_with_one_line_and_no_leftover(tmp_path):
     run = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True, timeout=300)
     assert "status=1\n" in run.stdout, (run.stdout, run.stderr)  # not 135 (SIGBUS)
     assert run.stdout.strip().endswith("status=1"), run.stdout  # and ls printed nothing: no file, no temporary
-    line = _one_line_error(run.stderr)
+    line = one_line_error(run.stderr)
     assert "big.npy" in line and "No space left on device" in line
 
 
@@ -117,7 +105,7 @@ def test_file_size_limit_gives_one_line_and_no_leftover(tmp_path):
     )
     run = subprocess.run([sys.executable, "-c", code, str(tmp_path / "d.npy")], capture_output=True, text=True)
     assert run.returncode == 1, run.stderr
-    assert "d.npy" in _one_line_error(run.stderr)
+    assert "d.npy" in one_line_error(run.stderr)
     assert _listing(tmp_path) == []
 
 
@@ -145,7 +133,7 @@ def test_sigterm_during_sample_removes_the_temporary(tmp_path):
         temporary_exists,
     )
     assert status == 143
-    assert "terminated (SIGTERM); nothing was written" in _one_line_error(stderr)
+    assert "terminated (SIGTERM); nothing was written" in one_line_error(stderr)
     assert _listing(tmp_path) == []
 
 
@@ -158,7 +146,7 @@ def test_sigterm_during_render_writes_nothing(tmp_path):
         lambda: time.monotonic() - started > 4.0,
     )  # fmt: skip
     assert status == 143
-    assert "terminated (SIGTERM)" in _one_line_error(stderr)
+    assert "terminated (SIGTERM)" in one_line_error(stderr)
     assert _listing(tmp_path) == []
 
 
@@ -368,7 +356,7 @@ def test_hostile_scene_files_give_one_line(tmp_path, capsys, name, text, words):
     status = main(["render", "--scene", str(scene), "--width", "4", "--height", "4", "--spp", "1",
                    "--no-progress", "--out", str(tmp_path / "x.png")])  # fmt: skip
     assert status == 2
-    line = _one_line_error(capsys.readouterr().err)
+    line = one_line_error(capsys.readouterr().err)
     assert words in line
     assert _listing(tmp_path) == [name]
 
@@ -378,14 +366,14 @@ def test_timeout_nan_with_scheduler_is_a_usage_error(capsys):
         ["integrate", "--integrand", "exp", "--n", "48", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "nan"]
     )
     assert status == 2
-    assert "--timeout must be a positive number" in _one_line_error(capsys.readouterr().err)
+    assert "--timeout must be a positive number" in one_line_error(capsys.readouterr().err)
 
 
 def test_exposure_inf_is_rejected_before_rendering(tmp_path, capsys):
     start = time.monotonic()
     status = main(["render", "--spp", "9600000", "--exposure", "inf", "--out", str(tmp_path / "x.png")])
     assert status == 2 and time.monotonic() - start < scaled_for_load(5)
-    assert "--exposure must be a positive finite number" in _one_line_error(capsys.readouterr().err)
+    assert "--exposure must be a positive finite number" in one_line_error(capsys.readouterr().err)
 
 
 def test_unexpected_errors_are_one_line(tmp_path, capsys, monkeypatch):
@@ -397,7 +385,7 @@ def test_unexpected_errors_are_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(cli, "stream_directions", broken)
     monkeypatch.delenv("SYMSPHERE_TRACEBACK", raising=False)
     assert main(["sample", "--n", "48", "--out", str(tmp_path / "d.npy")]) == 1
-    assert "internal error: RuntimeError: something broke" in _one_line_error(capsys.readouterr().err)
+    assert "internal error: RuntimeError: something broke" in one_line_error(capsys.readouterr().err)
 
 
 # --- 9. the documented exception types ------------------------------------------------------------

@@ -18,6 +18,7 @@ import warnings
 
 import numpy as np
 import pytest
+from references import one_line_error
 
 import symsphere
 from symsphere import frames, harmonics, io, points, quality, wedge
@@ -30,18 +31,6 @@ IS_ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
 
 def _listing(directory):
     return sorted(p.name for p in directory.iterdir())
-
-
-def _one_line(stderr: str) -> str:
-    # tqdm bars aside, and the line saying numba compiles (a first run with an empty cache)
-    lines = [
-        line
-        for line in stderr.splitlines()
-        if line.strip() and "%" not in line and "compiling numba kernels" not in line
-    ]
-    assert "Traceback" not in stderr, stderr
-    assert len(lines) == 1, stderr
-    return lines[0]
 
 
 def _special_files(tmp_path):
@@ -71,7 +60,7 @@ def test_sample_out_refuses_devices_and_fifos(tmp_path, capsys, through_link):
             out = special.rename(tmp_path / f"{special.name}.npy")
             special = out
         status = main(["sample", "--n", "96", "--seed", "1", "--out", str(out)])
-        line = _one_line(capsys.readouterr().err)
+        line = one_line_error(capsys.readouterr().err)
         assert status == 1 and str(out) in line and "not a regular file" in line, line
         assert is_kind(os.lstat(special).st_mode), f"{special} was replaced"
 
@@ -94,7 +83,7 @@ def test_library_writers_refuse_a_fifo_and_leave_nothing(tmp_path):
 def test_demo_out_that_is_a_fifo_is_refused(tmp_path, capsys):
     os.mkfifo(tmp_path / "demo")
     assert main(["demo", "--n", "4800", "--out", str(tmp_path / "demo"), "--no-progress"]) != 0
-    assert "demo" in _one_line(capsys.readouterr().err)
+    assert "demo" in one_line_error(capsys.readouterr().err)
     assert stat.S_ISFIFO(os.lstat(tmp_path / "demo").st_mode) and _listing(tmp_path) == ["demo"]
 
 
@@ -129,7 +118,7 @@ def test_render_scene_fifo_says_what_it_is(tmp_path):
     for name, kind in (("f.json", "a FIFO"), ("z.json", "a character device")):
         run = subprocess.run(CLI + ["render", "--scene", str(tmp_path / name), "--out", str(tmp_path / "x.png")],
                              capture_output=True, text=True, timeout=120)  # fmt: skip
-        line = _one_line(run.stderr)
+        line = one_line_error(run.stderr)
         assert run.returncode == 2 and kind in line and "does not exist" not in line, line
 
 
@@ -145,7 +134,7 @@ def test_absurd_render_sizes_name_the_argument(capsys):
     for options, named in cases:
         start = time.monotonic()
         assert main(["render", *options, "--out", "never.png"]) == 2
-        line = _one_line(capsys.readouterr().err)
+        line = one_line_error(capsys.readouterr().err)
         assert named in line and "at most" in line and "array is too big" not in line, line
         assert time.monotonic() - start < 10
     with pytest.raises(ValueError, match=r"'width \* height'=4611686018427387904 is too large"):
@@ -156,12 +145,12 @@ def test_work_beyond_a_day_needs_allow_long(capsys, monkeypatch):
     monkeypatch.setattr(symsphere.render, "render", lambda *a, **k: pytest.fail("rendered"))
     start = time.monotonic()
     assert main(["render", "--spp", str(10**13), "--out", "never.png"]) == 2
-    assert "--allow-long" in _one_line(capsys.readouterr().err)
+    assert "--allow-long" in one_line_error(capsys.readouterr().err)
     assert main(["integrate", "--integrand", "exp", "--n", str(48 * 10**13)]) == 2
-    line = _one_line(capsys.readouterr().err)
+    line = one_line_error(capsys.readouterr().err)
     assert "days" in line and "--allow-long" in line, line
     assert main(["sample", "--n", str(48 * 10**13), "--out", "never.npy"]) == 2
-    assert "--allow-long" in _one_line(capsys.readouterr().err)
+    assert "--allow-long" in one_line_error(capsys.readouterr().err)
     assert time.monotonic() - start < 60
     for verb in ("sample", "integrate", "render"):
         assert "--allow-long" in cli.build_parser()._subparsers._group_actions[0].choices[verb].format_help()
@@ -270,7 +259,7 @@ def test_late_sigint_at_many_times(tmp_path):
         assert _listing(tmp_path) == ["d.npy"]
         data = np.load(out)
         if process.returncode == 130:
-            assert data.shape == (1, 3) and "nothing was written" in _one_line(stderr)
+            assert data.shape == (1, 3) and "nothing was written" in one_line_error(stderr)
         else:
             assert data.shape == (n, 3) and "wrote" in stdout
         outcomes.append(process.returncode)
@@ -361,7 +350,7 @@ def test_render_out_errors_name_the_path_before_rendering(tmp_path, capsys, monk
     ]
     for out, said in cases:
         assert main(["render", "--width", "4", "--height", "3", "--spp", "2", "--out", out]) == 1
-        line = _one_line(capsys.readouterr().err)
+        line = one_line_error(capsys.readouterr().err)
         assert said in line and ".tmp" not in line and "'paths'" not in line, line
     assert _listing(tmp_path) == ["afile", "x.pfm"]
 

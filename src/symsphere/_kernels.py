@@ -421,16 +421,22 @@ def _prepare_kernels():
         _ready = True
 
 
-def _run(source, code, kind, m, parts, part_input, weights, rows, tail, offset):
-    """Run the case's kernel over the parts of m points, on the threads of symsphere._threads."""
-    kernel = _fill_kernel(source, code, kind)
-    count = part_count(m, parts)
+def _run(source, method, count, basis, out, m, parts, part_input, offset):
+    """Run the case's kernel over the parts of m points, on the threads of symsphere._threads.
+
+    *part_input(lo)* is the kernel's *points* argument for the part starting at point lo.
+    """
+    _prepare_kernels()
+    kind, weights = _store_kind(count, basis)
+    rows, tail = _split(out, count)
+    kernel = _fill_kernel(source, METHOD_CODES[method], kind)
+    parts = part_count(m, parts or _default_parts(m))
 
     def part(index):
-        lo, hi = part_range(m, count, index)
+        lo, hi = part_range(m, parts, index)
         kernel(part_input(lo), lo, hi, weights, rows, tail, offset)
 
-    run_parts(part, count)
+    run_parts(part, parts)
 
 
 def fill_orbits(
@@ -452,22 +458,8 @@ def fill_orbits(
     the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
     same kernel call.
     """
-    _prepare_kernels()
-    kind, weights = _store_kind(count, basis)
-    rows, tail = _split(out, count)
     uv = np.ascontiguousarray(uv, dtype=np.float64)
-    _run(
-        _GIVEN,
-        METHOD_CODES[method],
-        kind,
-        len(uv),
-        parts or _default_parts(len(uv)),
-        lambda lo: uv,
-        weights,
-        rows,
-        tail,
-        offset,
-    )
+    _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset)
     return out
 
 
@@ -486,14 +478,11 @@ def fill_random_orbits(
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
     *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
     (:attr:`symsphere.points.BasePoints.seed_words`); the last orbit cut as there."""
-    _prepare_kernels()
-    kind, weights = _store_kind(count, basis)
-    rows, tail = _split(out, count)
 
     def stream(lo):
         return pcg64_state(seed_words, 2 * (first_point + lo))
 
-    _run(_RANDOM, METHOD_CODES[method], kind, m, parts or _default_parts(m), stream, weights, rows, tail, offset)
+    _run(_RANDOM, method, count, basis, out, m, parts, stream, offset)
     return out
 
 
