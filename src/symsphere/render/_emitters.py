@@ -1,12 +1,15 @@
 """Emitters for next-event estimation and MIS: sampling, densities, selection, the power heuristic.
 
-Scalar numba functions (``register_jitable``), called by the path-tracing
-kernel of :mod:`symsphere.render._integrator`: :func:`choose_light`,
-:func:`sample_emitter`, :func:`emitter_pdf` and :func:`power_heuristic`.  They are
-compiled as functions of their own, not inlined into the kernel by numba
-(``inline="always"``, as until 2026-12): numba then types each of them once instead of
-inside the kernel's one large function, which cut a render's first compilation
-from 35 to 17 CPU-seconds (docs/benchmarks.md, "Cold start"); LLVM may still inline them.
+Scalar numba functions, called by the path-tracing kernel of
+:mod:`symsphere.render._integrator`: :func:`choose_light`, :func:`sample_emitter`,
+:func:`emitter_pdf` and :func:`power_heuristic`.  They are compiled as functions of their
+own, not inlined into the kernel by numba (``inline="always"``): numba then types each of
+them once instead of inside every specialised kernel, which cut a render's first
+compilation from 35 to 17 CPU-seconds (docs/benchmarks.md, "Cold start").  Those that take
+the scene's tables are compiled without numba's reference counting (``TABLE_FUNCTION``:
+``_nrt=False``; they allocate nothing): a call that passes arrays otherwise increments and
+decrements each array's counter, atomic operations that cost a render half its speed
+(measured: docs/benchmarks.md).  The kernel that calls them owns the tables for the call.
 The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
 spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
 ``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
@@ -31,6 +34,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 from numba.extending import register_jitable
 
 from ..frames import frame_rows
@@ -38,6 +42,7 @@ from ._random import next_u64, u01
 
 __all__ = [
     "INV_2PI",
+    "TABLE_FUNCTION",
     "choose_light",
     "disk_point",
     "emitter_pdf",
@@ -49,6 +54,10 @@ __all__ = [
 ]
 
 INV_2PI = 0.5 / math.pi
+# The numba options of the scalar functions that take the scene's tables (here and in the integrator):
+# compiled once each, cached, no reference counting of their array arguments (they allocate nothing),
+# and the kernels' error model (a division by zero gives inf or NaN, as in numpy, not an exception).
+TABLE_FUNCTION = dict(_nrt=False, cache=True, error_model="numpy", nogil=True)
 _PI = math.pi
 _MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
 _ONE_MINUS_EPSILON = 1.0 - 2.0**-53
@@ -80,7 +89,7 @@ def rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
 # --- emitters ------------------------------------------------------------------------
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def _sphere_cone(px, py, pz, i, spheres):
     """(e = c - p, |e|^2, p outside the sphere): whether a full sphere is sampled by its cone from p.
 
@@ -95,7 +104,7 @@ def _sphere_cone(px, py, pz, i, spheres):
     return ex, ey, ez, d2, d2 > spheres[4, i] and spheres[8, i] == -np.inf
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def spherical_rectangle(px, py, pz, j, quads):
     """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
     Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
@@ -181,7 +190,7 @@ def disk_point(state):
             return x, y, r2, state
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def sample_emitter(px, py, pz, obj, state, spheres, quads):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
@@ -305,7 +314,7 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
@@ -332,7 +341,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     return t * t / (cos_l * area)
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def choose_light(lights, u):
     """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
     last = lights.shape[1] - 1

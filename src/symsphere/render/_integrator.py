@@ -90,7 +90,15 @@ from .._threads import run_parts, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
-from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
+from ._emitters import (
+    INV_2PI,
+    TABLE_FUNCTION,
+    choose_light,
+    emitter_pdf,
+    power_heuristic,
+    rows_to_world,
+    sample_emitter,
+)
 from ._random import below, mix64, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
@@ -322,7 +330,7 @@ def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     return det, b - root, b + root
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -400,7 +408,7 @@ def plain_spheres(spheres):
     return n
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def _light_sample(
     px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material, quad_material,
     spheres, quads, state,
@@ -438,7 +446,7 @@ def _light_sample(
     return ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state
 
 
-@register_jitable
+@njit(**TABLE_FUNCTION)
 def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, state):
     """The direction after a mirror or a smooth dielectric (exact unpolarised Fresnel), and the state.
 
@@ -632,14 +640,13 @@ def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
     per estimator (measured: a first case ~14 CPU-s on an empty cache, each further one ~7 s).
     """
 
-    @njit(**KERNEL_OPTIONS)
+    @njit(_nrt=False, **KERNEL_OPTIONS)  # no reference counting (TABLE_FUNCTION); scratch comes from the caller
     def render_rows(
         spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-        rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum,
+        rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum, scratch,
     ):  # fmt: skip  # pragma: no cover - compiled by numba
         height = accum.shape[0]
         width = accum.shape[1]
-        scratch = np.empty(max(spheres.shape[1], quads.shape[1], 1))
         plain = plain_spheres(spheres)
         for i in range(rows.shape[0]):
             row = rows[i]
@@ -684,6 +691,7 @@ def render_pass(
         kernel(
             spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
             rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows[lo:hi], accum,
+            np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
         )  # fmt: skip
 
     run_parts(part, parts)
