@@ -37,7 +37,7 @@ from ._numba_cache import invalidate_if_changed
 from ._threads import run_parts, start_threads
 from ._typing import Float64Array, FloatArray
 from .symmetry import SIGNS, SOURCES
-from .warps import METHODS, triangle_warp
+from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
 __all__ = [
     "BATCH",

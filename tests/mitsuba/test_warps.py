@@ -14,19 +14,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from symsphere.maps import METHODS
-from symsphere.square_warps import (
+
+from symsphere.symmetry import SPHERE_MAPS, fold
+from symsphere.warps import (
+    METHODS,
+    cosine_wedge_to_square,
     hemisphere_to_square,
     sphere_to_square,
+    square_to_cosine_wedge,
+    square_to_cosine_wedge_pdf,
     square_to_hemisphere,
     square_to_hemisphere_pdf,
     square_to_sphere,
     square_to_sphere_pdf,
+    square_to_triangle,
+    square_to_triangle_pdf,
+    triangle_to_square,
 )
-
-from symsphere import square_to_triangle, square_to_triangle_pdf, triangle_to_square
-from symsphere.symmetry import SPHERE_MAPS, fold
-from symsphere.warps import cosine_wedge_to_square, square_to_cosine_wedge, square_to_cosine_wedge_pdf
 
 TOL = 2e-6
 N = 4096

@@ -7,24 +7,24 @@ into the kernels are ``X_point(u, v)`` (and, for the wedge, ``cosine_wedge_densi
 ``cosine_wedge_uv``).  Every warp is described by a :class:`Warp` record in :data:`WARPS`
 (domain, uniform or not, orbit size).
 
-=============================== ============ ==========================================================
-maps                            domain       what
-=============================== ============ ==========================================================
-``square_to_triangle``          T0           the scheme's maps onto T0 = {z >= x >= y >= 0}:
-                                             ``method='equal_area'`` (exact, uniform), ``'paper1'``,
-                                             ``'paper2'`` (the paper's Algorithms 1 and 2, not uniform)
-``square_to_sphere``,           sphere,      the scheme as one bijection of the square through its 48
-``square_to_hemisphere``        hemisphere   (24) triangles, strip by strip
-``square_to_cosine_wedge``      wedge        cosine-weighted onto W = {x >= y >= 0, z >= 0} (8 images)
-``square_to_uniform_sphere``,   sphere,      z = 1 - 2u (z = u), phi = 2 pi v: Archimedes' hat-box map
-``square_to_uniform_hemisphere``hemisphere
-``square_to_octahedral_*``      sphere,      Clarberg's equal-area octahedral maps (JGT 2008)
-                                hemisphere
-``square_to_concentric_disk``   disk         Shirley & Chiu (1997)
-``square_to_cosine_hemisphere`` hemisphere   the concentric disk lifted by Malley's method: cos(theta)/pi
-``square_to_spherical_triangle``triangle     Arvo (1995) onto any spherical triangle;
-                                             ``square_to_arvo_triangle``: onto T0
-=============================== ============ ==========================================================
+=================================== ============ ============================================================
+maps                                domain       what
+=================================== ============ ============================================================
+``square_to_triangle``              T0           the scheme's maps onto T0 = {z >= x >= y >= 0}:
+                                                 ``method='equal_area'`` (exact, uniform), ``'paper1'``,
+                                                 ``'paper2'`` (the paper's Algorithms 1 and 2, not uniform)
+``square_to_sphere``,               sphere,      the scheme as one bijection of the square through its 48
+``square_to_hemisphere``            hemisphere   (24) triangles, strip by strip
+``square_to_cosine_wedge``          wedge        cosine-weighted onto W = {x >= y >= 0, z >= 0} (8 images)
+``square_to_uniform_sphere``,       sphere,      z = 1 - 2u (z = u), phi = 2 pi v: Archimedes' hat-box map
+``square_to_uniform_hemisphere``    hemisphere
+``square_to_octahedral_sphere``,    sphere,      Clarberg's equal-area octahedral maps (JGT 2008)
+``square_to_octahedral_hemisphere`` hemisphere
+``square_to_concentric_disk``       disk         Shirley & Chiu (1997)
+``square_to_cosine_hemisphere``     hemisphere   the concentric disk lifted by Malley's method: cos(theta)/pi
+``square_to_spherical_triangle``    triangle     Arvo (1995) onto any spherical triangle;
+                                                 ``square_to_arvo_triangle``: onto T0
+=================================== ============ ============================================================
 
 Every map is exact and has no NaN or inf for u, v in {0, 1}, in float64 and float32; results take
 the floating dtype of the input.  The samplers built on them are in :mod:`symsphere.sampling` (the
@@ -61,7 +61,7 @@ from ._octahedral import (
     square_to_octahedral_sphere,
     square_to_octahedral_sphere_pdf,
 )
-from ._record import Warp, WarpDomain
+from ._record import Warp
 from ._registry import WARPS, get_warp
 from ._scheme import (
     hemisphere_to_square,
@@ -112,7 +112,6 @@ from ._wedge import (
 __all__ = [
     # the record and the registry
     "Warp",
-    "WarpDomain",
     "WARPS",
     "get_warp",
     # T0: the scheme's maps

@@ -27,7 +27,8 @@ class Warp:
     name : str
         The key in :data:`symsphere.warps.WARPS`.
     domain : {'sphere', 'hemisphere', 'triangle', 'wedge', 'disk'}
-        Where the points lie (:data:`WarpDomain`).
+        Where the points lie: the sphere, the hemisphere z >= 0, T0 = {z >= x >= y >= 0}, the wedge
+        W = {x >= y >= 0, z >= 0}, or the unit disk (points of the plane, shape (..., 2)).
     uniform : bool
         Whether the density is constant on the domain.
     orbit_size : int
