@@ -137,8 +137,8 @@ def _private_attribute_doc(name):
     public namespace re-exports it (scipy's ``_qmc`` behind ``scipy.stats.qmc``), and autodoc reads doc
     strings of constants from the source of the module it documents, which has none.
     """
-    from sphinx.pycode import ModuleAnalyzer
     from sphinx.errors import PycodeError
+    from sphinx.pycode import ModuleAnalyzer
 
     modname, _, attr = name.rpartition(".")
     package = sys.modules.get(modname)

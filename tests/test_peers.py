@@ -290,6 +290,21 @@ def test_bad_input(call, error, word):
         call()
 
 
+def test_map_peers_are_their_warps():
+    # The warp record a map peer is built on says what the peer says: domain (T0 for arvo), uniformity, orbit size.
+    for name, peer in P.PEERS.items():
+        assert (peer.warp is not None) == peer.is_map
+        if peer.warp is None:
+            continue
+        assert peer.warp is warps.WARPS[peer.warp.name] and peer.warp.uniform == peer.uniform
+        if name == "arvo":
+            assert peer.warp.domain == "triangle" and peer.orbit_size == peer.warp.orbit_size == 48
+            assert peer.forward is None and peer.inverse is None
+        else:
+            assert peer.warp.domain == peer.domain and peer.warp.orbit_size == peer.orbit_size == 1
+            assert peer.forward is peer.warp.forward and peer.inverse is peer.warp.inverse
+
+
 @pytest.mark.parametrize("name", list(P.PEERS))
 def test_peer_facts_agree_with_the_peer(name):
     """The fields a study reads instead of testing names: orbit size, uniformity, point sets."""
