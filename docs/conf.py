@@ -9,6 +9,7 @@ from the list of modules in ``api/index.rst`` (one line per public module) with 
 import importlib
 import inspect
 import pathlib
+import pkgutil
 import re
 import shutil
 import sys
@@ -129,9 +130,37 @@ def _clean_generated(app):
     shutil.rmtree(HERE / "api" / "generated", ignore_errors=True)
 
 
+def _private_attribute_doc(name):
+    """The doc string of constant *name* where a private module of its package assigns it, or None.
+
+    ``symsphere.warps.WEDGE_MAPS`` is assigned, with its doc string, in ``symsphere.warps._wedge``: the
+    public namespace re-exports it (scipy's ``_qmc`` behind ``scipy.stats.qmc``), and autodoc reads doc
+    strings of constants from the source of the module it documents, which has none.
+    """
+    from sphinx.errors import PycodeError
+    from sphinx.pycode import ModuleAnalyzer
+
+    modname, _, attr = name.rpartition(".")
+    package = sys.modules.get(modname)
+    for info in pkgutil.iter_modules(getattr(package, "__path__", []), modname + "."):
+        if not info.name.rpartition(".")[2].startswith("_"):
+            continue
+        try:
+            docs = ModuleAnalyzer.for_module(info.name).find_attr_docs()
+        except PycodeError:
+            continue
+        if ("", attr) in docs:
+            return list(docs[("", attr)])
+    return None
+
+
 def _drop_type_docstring(app, what, name, obj, options, lines):
     # A constant without a doc comment would otherwise be described by its type's docstring
-    # ("Built-in immutable sequence. ..." for a tuple).
+    # ("Built-in immutable sequence. ..." for a tuple); one assigned in a private module of its
+    # package takes the doc string written there.
+    if what in ("data", "attribute") and (doc := _private_attribute_doc(name)) is not None:
+        lines[:] = doc
+        return
     type_doc = getattr(type(obj), "__doc__", None)
     if what in ("data", "attribute") and type_doc and "\n".join(lines).strip() == inspect.cleandoc(type_doc):
         lines.clear()

@@ -37,7 +37,7 @@ def main(argv=None):
         cell = np.minimum((symsphere.triangle_to_square(p, "equal_area") * CELLS).astype(int), CELLS - 1)
         ratio = np.bincount(cell[:, 0] * CELLS + cell[:, 1], minlength=CELLS**2) / (args.n / CELLS**2)
         result = chi2_test(p, uniform_pdf("triangle"), "triangle")
-        density = symsphere.triangle_pdf(p, method) / (12 / np.pi)
+        density = symsphere.square_to_triangle_pdf(p, method) / (12 / np.pi)
         print(
             f"| {method} | {ratio.min():.2f} | {ratio.max():.2f} | {result.p_value:.3g} "
             f"| {density.min():.2f} – {density.max():.3g} (unbounded at (0,0,1)) |"

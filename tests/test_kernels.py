@@ -146,7 +146,7 @@ def test_scalar_helpers_match_numpy():
             out[i, 6] = _kernels.triangle_density(x, y, z, code)
         return out
 
-    from symsphere import square_to_triangle, triangle_pdf
+    from symsphere import square_to_triangle, square_to_triangle_pdf
 
     uv = np.random.default_rng(2).random((200, 2))
     for method, code in _kernels.METHOD_CODES.items():
@@ -161,7 +161,7 @@ def test_scalar_helpers_match_numpy():
             # numbers summing to <= 5 in the components (MAP_EPS apart), and each path's evaluation
             # (hypot E, six roundings) adds E + 3: 5 MAP_EPS + 2E + 6.
             k_pdf = 0 if method == "equal_area" else 5 * MAP_EPS[method] + 2 * _E + 6
-            assert_within_eps(got[:, 6], triangle_pdf(p, method), k_pdf)
+            assert_within_eps(got[:, 6], square_to_triangle_pdf(p, method), k_pdf)
 
 
 @pytest.mark.parametrize("points", ["random", "stratified", "sobol", "halton"])

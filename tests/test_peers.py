@@ -1,7 +1,11 @@
-"""The peer samplers: maps, inverses, densities, and their distributions.
+"""The peer samplers: registry, conventions, densities, and their distributions.
+
+The peers' maps of the unit square are tested in tests/warps/ (one file per module, and the contract
+every warp keeps in tests/warps/test_contract.py).
 
 Statistical tests use significance 0.01 with a Sidak correction over the
-CHI2_TESTS chi-square (and two-sample) tests of this file, so the chance that
+CHI2_TESTS chi-square (and two-sample) tests of this file and of
+tests/warps/test_spherical_triangle.py (3 of them), so the chance that
 any of them fails for correct samplers is 1%.  Each uses independent rows: one
 point per random rotation for the rotated Fibonacci set and one member per
 orbit for ``arvo`` (``symsphere.stats.one_per_orbit``).  The reference
@@ -19,11 +23,13 @@ from scipy.stats import qmc
 
 import symsphere as ss
 from symsphere import peers as P
+from symsphere import warps
 from symsphere.points import unit_square_points
 from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
 
 SIGNIFICANCE = 0.01
-# 6 direct peers + rotated Fibonacci + arvo (sphere) + arvo on T0 + equal_area on T0 + two-sample
+# 6 direct peers + rotated Fibonacci + arvo (sphere) here; arvo on T0 + equal_area on T0 + two-sample in
+# tests/warps/test_spherical_triangle.py
 CHI2_TESTS = 6 + 1 + 1 + 1 + 1 + 1
 N_CHI2 = 50_000
 # Power (tests/references.py): the peers are reference samplers from the literature, checked for a wrong
@@ -31,35 +37,6 @@ N_CHI2 = 50_000
 # p < 1e-100).  N_CHI2 = 50 000 (392 cells) rejects Cohen's w >= 0.06 with probability 99 %, e.g. a density
 # 6 % off on either half of the domain; _check asserts it.  (The library's own maps: w = 0.04, tests/statistical/.)
 MUST_DETECT_W = 0.06
-
-MAPS = {  # name -> (forward, inverse, pdf, domain)
-    "classic": (P.square_to_uniform_sphere, P.uniform_sphere_to_square, P.uniform_sphere_pdf, "sphere"),
-    "classic_hemisphere": (
-        P.square_to_uniform_hemisphere,
-        P.uniform_hemisphere_to_square,
-        P.uniform_hemisphere_pdf,
-        "hemisphere",
-    ),
-    "octahedral": (P.square_to_octahedral_sphere, P.octahedral_sphere_to_square, P.uniform_sphere_pdf, "sphere"),
-    "octahedral_hemisphere": (
-        P.square_to_octahedral_hemisphere,
-        P.octahedral_hemisphere_to_square,
-        P.uniform_hemisphere_pdf,
-        "hemisphere",
-    ),
-    "cosine": (P.square_to_cosine_hemisphere, P.cosine_hemisphere_to_square, P.cosine_hemisphere_pdf, "hemisphere"),
-    "arvo_t0": (
-        lambda uv: P.square_to_spherical_triangle(uv, *P.T0_VERTICES),
-        lambda d: P.spherical_triangle_to_square(d, *P.T0_VERTICES),
-        lambda d: P.spherical_triangle_pdf(d, *P.T0_VERTICES),
-        "triangle",
-    ),
-}
-EDGE_VALUES = (0.0, 1e-300, 1e-17, 0.5, 1 - 1e-16, 1.0)
-EDGE_UV = np.array([[a, b] for a in EDGE_VALUES for b in EDGE_VALUES])
-# A generic (obtuse, large) triangle for Arvo's general algorithm.
-TRIANGLE = np.array([[0.1, -0.3, 0.95], [0.9, 0.4, -0.2], [-0.6, 0.7, 0.3]])
-TRIANGLE = TRIANGLE / np.linalg.norm(TRIANGLE, axis=1, keepdims=True)
 
 
 def _in_domain(d, domain, tol=1e-6):
@@ -69,10 +46,6 @@ def _in_domain(d, domain, tol=1e-6):
     if domain == "hemisphere":
         return z >= -tol
     return (z - x >= -tol) & (x - y >= -tol) & (y >= -tol)
-
-
-def _interior_uv(n, seed=0, margin=1e-3):
-    return margin + (1 - 2 * margin) * np.random.default_rng(seed).random((n, 2))
 
 
 def _check(result, w=MUST_DETECT_W):
@@ -159,114 +132,6 @@ def test_qmc_beats_random_on_a_smooth_integrand():
         assert err["sobol"] < 1e-4 < err["random"], (name, err)
 
 
-# --- maps: edges, round trips, Jacobians, normalisation ------------------------
-
-
-@pytest.mark.parametrize("name", list(MAPS))
-@pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_map_edges_finite(name, dtype):
-    forward, inverse, pdf, domain = MAPS[name]
-    d = forward(EDGE_UV.astype(dtype))
-    assert d.dtype == dtype and np.all(np.isfinite(d))
-    np.testing.assert_allclose(np.linalg.norm(d.astype(np.float64), axis=1), 1, atol=1e-6)
-    assert np.all(_in_domain(d.astype(np.float64), domain, tol=1e-6))
-    uv = inverse(d)
-    assert uv.dtype == dtype and np.all(np.isfinite(uv)) and np.all((uv >= 0) & (uv <= 1))
-    assert np.all(np.isfinite(pdf(d)))
-
-
-def test_map_corners():
-    # The corners map through numpy's sin, cos of multiples of pi/2 (e.g. sin((pi/2)_64) = 1 - 2e-33): exact
-    # values, but an implementation within E = ELEMENTARY_ULPS ulps (tests/references.py) may return 1 - E ulp,
-    # and the products round once more: (E + 1) eps on unit vectors.
-    corner = (ELEMENTARY_ULPS + 1) * EPS64
-    np.testing.assert_allclose(P.square_to_uniform_sphere([[0, 0], [1, 0.3]]), [[0, 0, 1], [0, 0, -1]], atol=corner)
-    np.testing.assert_allclose(
-        P.square_to_octahedral_sphere([[0.5, 0.5], [0, 0], [1, 1], [0, 1], [1, 0]]),
-        [[0, 0, 1]] + [[0, 0, -1]] * 4,
-        atol=corner,
-    )
-    np.testing.assert_allclose(
-        P.square_to_octahedral_sphere([[1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0]]),
-        [[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
-        atol=corner,
-    )
-    np.testing.assert_allclose(
-        P.square_to_octahedral_hemisphere([[0.5, 0.5], [1, 1], [0, 1], [0, 0], [1, 0]]),
-        [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]],
-        atol=corner,
-    )
-    np.testing.assert_allclose(
-        P.square_to_cosine_hemisphere([[0.5, 0.5], [1, 0.5], [0.5, 1], [0, 0.5]]),
-        [[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0]],
-        atol=corner,
-    )
-    A, B, C = P.T0_VERTICES
-    np.testing.assert_allclose(
-        P.square_to_spherical_triangle([[0.3, 0], [0, 1], [1, 1]], A, B, C), [B, A, C], atol=1e-15
-    )
-
-
-@pytest.mark.parametrize("name", list(MAPS))
-def test_round_trip(name):
-    forward, inverse, _, _ = MAPS[name]
-    uv = _interior_uv(100_000, seed=1)
-    np.testing.assert_allclose(inverse(forward(uv)), uv, rtol=0, atol=1e-12)
-    if name != "arvo_t0":
-        # and direction -> square -> direction, from directions that are not images of uv
-        d = np.random.default_rng(2).standard_normal((20_000, 3))
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
-        if MAPS[name][3] == "hemisphere":
-            d[:, 2] = np.abs(d[:, 2])
-        # Malley's lift z = sqrt(1 - rho^2) is ill-conditioned at the horizon (dz/drho -> inf):
-        # there a 1-ulp change of uv moves z by ~1e-16 / z, so keep z away from 0.
-        d = d[np.abs(d[:, 2]) > 1e-3]
-        np.testing.assert_allclose(forward(inverse(d)), d, rtol=0, atol=1e-12)
-
-
-def test_round_trip_general_triangle():
-    uv = _interior_uv(50_000, seed=3)
-    p = P.square_to_spherical_triangle(uv, *TRIANGLE)
-    assert np.all(P.spherical_triangle_pdf(p, *TRIANGLE) > 0)
-    np.testing.assert_allclose(P.spherical_triangle_to_square(p, *TRIANGLE), uv, rtol=0, atol=1e-12)
-
-
-def _jacobian(forward, uv, h=1e-6):
-    du, dv = np.array([h, 0.0]), np.array([0.0, h])
-    fu = (forward(uv + du) - forward(uv - du)) / (2 * h)
-    fv = (forward(uv + dv) - forward(uv - dv)) / (2 * h)
-    return np.linalg.norm(np.cross(fu, fv), axis=-1)
-
-
-def _smooth_uv(n, seed):
-    # away from the kinks: u, v = 1/2 (octahedral axes), |a| + |b| = 1 (its equator),
-    # |a| = |b| (the concentric sectors and the hemisphere octahedral axes)
-    uv = _interior_uv(4 * n, seed, margin=1e-3)
-    a, b = 2 * uv[:, 0] - 1, 2 * uv[:, 1] - 1
-    ok = (np.abs(a) > 1e-3) & (np.abs(b) > 1e-3) & (np.abs(np.abs(a) + np.abs(b) - 1) > 1e-3)
-    ok &= np.abs(np.abs(a) - np.abs(b)) > 1e-3
-    return uv[ok][:n]
-
-
-@pytest.mark.parametrize("name", list(MAPS) + ["arvo_general"])
-def test_pdf_is_inverse_jacobian(name):
-    # pdf = 1 / |dF/du x dF/dv| by central differences: an independent check of each map's algebra.
-    if name == "arvo_general":
-        forward = lambda uv: P.square_to_spherical_triangle(uv, *TRIANGLE)  # noqa: E731
-        pdf = lambda d: P.spherical_triangle_pdf(d, *TRIANGLE)  # noqa: E731
-    else:
-        forward, _, pdf, _ = MAPS[name]
-    uv = _smooth_uv(2000, seed=4)
-    np.testing.assert_allclose(pdf(forward(uv)) * _jacobian(forward, uv), 1.0, rtol=2e-7)
-
-
-def test_octahedral_density_is_uniform():
-    # The brief's check: Clarberg's map is equal-area, |J| = 4 pi everywhere (the sphere has area 4 pi).
-    uv = _smooth_uv(5000, seed=5)
-    np.testing.assert_allclose(_jacobian(P.square_to_octahedral_sphere, uv), 4 * np.pi, rtol=2e-7)
-    np.testing.assert_allclose(_jacobian(P.square_to_octahedral_hemisphere, uv), 2 * np.pi, rtol=2e-7)
-
-
 def _sphere_quadrature(n_cos=64, n_phi=128):
     # Gauss-Legendre in cos(theta) on [-1, 0] and [0, 1] (pdfs jump or kink at the equator) x trapezoid in phi.
     x, w = np.polynomial.legendre.leggauss(n_cos)
@@ -291,66 +156,6 @@ def test_pdf_integrates_to_one(name):
         assert np.all(density[d[:, 2] < 0] == 0)
 
 
-def test_triangle_pdf_matches_girard():
-    # 1/pdf = area = angle excess (Girard), from the angles between the edge planes.
-    for tri in (P.T0_VERTICES, TRIANGLE):
-        A, B, C = tri
-        angles = []
-        for p, q, r in ((A, B, C), (B, C, A), (C, A, B)):
-            n1, n2 = np.cross(p, q), np.cross(p, r)
-            angles.append(np.arccos(n1 @ n2 / np.linalg.norm(n1) / np.linalg.norm(n2)))
-        centroid = (A + B + C) / np.linalg.norm(A + B + C)
-        assert 1 / P.spherical_triangle_pdf(centroid, *tri) == pytest.approx(sum(angles) - np.pi, rel=1e-13)
-        assert P.spherical_triangle_pdf(-centroid, *tri) == 0
-    assert P.spherical_triangle_pdf([0.3, 0.2, 0.9], *P.T0_VERTICES) == pytest.approx(12 / np.pi, rel=1e-14)
-
-
-# --- Arvo versus equal_area -----------------------------------------------------
-
-
-def test_arvo_relabelled_is_equal_area_pointwise():
-    # With B = (0, 0, 1) as the vertex the arcs start from (Arvo's vertices (B, A, C) of
-    # T0), Arvo's sub-triangle of area u pi/12 is T0's part with azimuth below phi and
-    # the arc from the pole is sampled uniformly in cos(theta): exactly equal_area.
-    A, B, C = P.T0_VERTICES
-    uv = np.concatenate([np.random.default_rng(6).random((100_000, 2)), EDGE_UV])
-    np.testing.assert_allclose(
-        P.square_to_spherical_triangle(uv, B, A, C), ss.square_to_triangle(uv), rtol=0, atol=1e-12
-    )
-
-
-def test_arvo_as_labelled_is_a_different_map():
-    # With A = (0, 0, 1) (the labelling of the sampler `arvo`) the arcs start from
-    # (1, 0, 1)/sqrt 2: the same distribution (tested below), a different map.
-    uv = _interior_uv(10_000, seed=7)
-    diff = np.linalg.norm(P.square_to_spherical_triangle(uv, *P.T0_VERTICES) - ss.square_to_triangle(uv), axis=1)
-    assert diff.max() > 0.5 and np.median(diff) > 0.05
-
-
-def test_chi2_arvo_on_t0():
-    p = P.square_to_spherical_triangle(np.random.default_rng(8).random((N_CHI2, 2)), *P.T0_VERTICES)
-    _check(chi2_test(p, uniform_pdf("triangle"), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
-
-
-def test_chi2_equal_area_on_t0():
-    p = ss.square_to_triangle(np.random.default_rng(9).random((N_CHI2, 2)))
-    _check(chi2_test(p, uniform_pdf("triangle"), "triangle", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
-
-
-def test_arvo_and_equal_area_same_histogram():
-    # Two-sample chi-square (homogeneity) on the (phi, cos theta) histogram of T0's bounding rectangle.
-    rng = np.random.default_rng(10)
-    arvo = P.square_to_spherical_triangle(rng.random((N_CHI2, 2)), *P.T0_VERTICES)
-    equal = ss.square_to_triangle(rng.random((N_CHI2, 2)))
-    edges = (np.linspace(0, np.pi / 4, 11), np.linspace(1 / np.sqrt(3), 1, 11))
-    counts = [np.histogram2d(np.arctan2(p[:, 1], p[:, 0]), p[:, 2], bins=edges)[0].ravel() for p in (arvo, equal)]
-    table = np.array(counts)
-    table = table[:, table.sum(axis=0) > 0]
-    result = scipy_stats.chi2_contingency(table)
-    threshold = 1 - (1 - SIGNIFICANCE) ** (1 / CHI2_TESTS)
-    assert result.pvalue >= threshold, result
-
-
 def test_chi2_arvo_sphere():
     d = one_per_orbit(P.sample_arvo(48 * N_CHI2, rng=11), 48, rng=12)
     _check(chi2_test(d, uniform_pdf("sphere"), "sphere", significance=SIGNIFICANCE, test_count=CHI2_TESTS))
@@ -359,7 +164,7 @@ def test_chi2_arvo_sphere():
 def test_arvo_orbit_layout():
     d = P.sample_arvo(96, rng=13)
     uv = unit_square_points(2, "random", 13, per_point=48)  # the base points sample_arvo draws
-    base = P.square_to_spherical_triangle(uv, *P.T0_VERTICES)
+    base = warps.square_to_spherical_triangle(uv, *warps.T0_VERTICES)
     np.testing.assert_allclose(d.reshape(2, 48, 3), ss.orbit(base), rtol=0, atol=1e-15)
 
 
@@ -419,9 +224,12 @@ def test_fibonacci_formula():
 
 def test_fibonacci_large_index_phase():
     # frac(i (Phi - 1)) from 64-bit fixed point, against exact integer arithmetic with 200 bits.
+    # The phase is read back from point i of a set of n = 2 i + 1 points (on the equator, z = 0) by atan2:
+    # numpy's cos, sin and atan2 add a few eps to frac, far below the bound's k 2^-64.
     i = np.array([10**9, 10**9 + 7, 2**40 + 3, 10**15], dtype=np.int64)
-    bits = (i.astype(np.uint64) * np.uint64(P._GOLDEN_FRACTION_BITS)) >> np.uint64(11)
-    frac = bits.astype(np.float64) * 2.0**-53
+    points = np.array([P.fibonacci_point(int(k), 2 * int(k) + 1) for k in i])
+    assert np.all(points[:, 2] == 0.0)
+    frac = np.mod(np.arctan2(points[:, 1], points[:, 0]) / (2 * np.pi), 1.0)
     scale = 200
     golden_minus_1 = math.isqrt(5 << (2 * scale)) - (1 << scale)  # 2^(scale+1) (Phi - 1), floored
     for k, f in zip(i.tolist(), frac, strict=False):
@@ -465,18 +273,8 @@ def test_fibonacci_integrates_exp():
         (lambda: P.PEERS["gaussian"].sample(4, points="sobol"), ValueError, "'points'"),
         (lambda: P.PEERS["fibonacci"].sample(4, points="halton"), ValueError, "'points'"),
         (lambda: P.sample_fibonacci(4, randomize=1), TypeError, "'randomize'"),
-        (lambda: P.square_to_uniform_sphere([1.5, 0.2]), ValueError, "'uv'"),
-        (lambda: P.square_to_octahedral_sphere([[0.5, np.nan]]), ValueError, "'uv'"),
-        (lambda: P.square_to_cosine_hemisphere([0.5, 0.5, 0.5]), ValueError, "'uv'"),
-        (lambda: P.square_to_concentric_disk("ab"), TypeError, "'uv'"),
-        (lambda: P.uniform_sphere_to_square([1.0, 0.0]), ValueError, "'d'"),
-        (lambda: P.octahedral_hemisphere_to_square([0.0, 0.6, -0.8]), ValueError, "'d'"),
-        (lambda: P.cosine_hemisphere_to_square([[np.inf, 0, 1]]), ValueError, "'d'"),
-        (lambda: P.concentric_disk_to_square([2.0, 0.0]), ValueError, "'p'"),
-        (lambda: P.uniform_sphere_pdf([[1, 2]]), ValueError, "'d'"),
-        (lambda: P.square_to_spherical_triangle([0.1, 0.2], [0, 0, 1], [0, 0, 2], [1, 0, 0]), ValueError, "'a'"),
-        (lambda: P.square_to_spherical_triangle([0.1, 0.2], [0, 0, 1], [0, 0, 0], [1, 0, 0]), ValueError, "'b'"),
-        (lambda: P.spherical_triangle_pdf([0, 0, 1], [0, 0, 1], [1, 0, 0], [1, 2]), ValueError, "'c'"),
+        (lambda: P.fibonacci_point(4, 4), ValueError, "'i'"),
+        (lambda: P.fibonacci_point(0, 0), ValueError, "'n'"),
         (lambda: P.fibonacci_points(-3), ValueError, "'n'"),
         (lambda: P.get_peer("uniform"), ValueError, "'name'"),
         (lambda: P.sample_lebedev(100), ValueError, "'n'=100 is not the size of a Lebedev rule"),
@@ -490,6 +288,21 @@ def test_fibonacci_integrates_exp():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+def test_map_peers_are_their_warps():
+    # The warp record a map peer is built on says what the peer says: domain (T0 for arvo), uniformity, orbit size.
+    for name, peer in P.PEERS.items():
+        assert (peer.warp is not None) == peer.is_map
+        if peer.warp is None:
+            continue
+        assert peer.warp is warps.WARPS[peer.warp.name] and peer.warp.uniform == peer.uniform
+        if name == "arvo":
+            assert peer.warp.domain == "triangle" and peer.orbit_size == peer.warp.orbit_size == 48
+            assert peer.forward is None and peer.inverse is None
+        else:
+            assert peer.warp.domain == peer.domain and peer.warp.orbit_size == peer.orbit_size == 1
+            assert peer.forward is peer.warp.forward and peer.inverse is peer.warp.inverse
 
 
 @pytest.mark.parametrize("name", list(P.PEERS))

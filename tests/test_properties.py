@@ -39,16 +39,12 @@ from symsphere import (  # noqa: E402  # noqa: E402
     harmonics,
     integrands,
     integration,
-    maps,
     peers,
     quality,
     sampling,
-    spherical_triangles,
-    square_warps,
     stats,
     symmetry,
     warps,
-    wedge,
 )
 from symsphere import points as points_module  # noqa: E402
 
@@ -74,7 +70,7 @@ VALID = {
     "method": "equal_area", "points": "random", "rng": 1, "dtype": np.float64, "domain": "sphere",
     "coeffs": {(2, 0, 0): 1.0}, "degree": 4, "f": lambda d: np.tanh(d[:, 0]), "pdf": stats.uniform_pdf(),
     "samples": _SAMPLES, "bins": (4, 4), "directions": _SAMPLES[:48], "orbit_size": 48,
-    "vertices": peers.T0_VERTICES, "center": [0.0, 0.0, 3.0], "distance": 3.0, "radius": 1.0, "radiance": 1.0,
+    "vertices": warps.T0_VERTICES, "center": [0.0, 0.0, 3.0], "distance": 3.0, "radius": 1.0, "radiance": 1.0,
     "local": np.array([[0.0, 0.6, 0.8]]), "world": np.array([[0.0, 0.6, 0.8]]), "basis": np.eye(3),
     "nx": 0.0, "ny": 0.0, "nz": 1.0, "x": 0.3, "y": 0.2, "z": 0.93273791, "u": 0.3, "v": 0.5,
     "weights": None, "values": [1.0, 0.5, 0.25], "estimates": [[1.0, 1.1], [0.9, 1.0]], "exact": 1.0,
@@ -82,14 +78,17 @@ VALID = {
     "confidence_level": 0.95, "floor": 1e-300, "test": "chi2", "per_point": 1,
 }  # fmt: skip
 OVERRIDES = {
-    "square_to_spherical_triangle": dict(a=peers.T0_VERTICES[0], b=peers.T0_VERTICES[1], c=peers.T0_VERTICES[2]),
-    "spherical_triangle_to_square": dict(a=peers.T0_VERTICES[0], b=peers.T0_VERTICES[1], c=peers.T0_VERTICES[2]),
-    "spherical_triangle_pdf": dict(a=peers.T0_VERTICES[0], b=peers.T0_VERTICES[1], c=peers.T0_VERTICES[2]),
+    "square_to_spherical_triangle": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
+    "spherical_triangle_to_square": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
+    "square_to_spherical_triangle_pdf": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
     "fit_slope": dict(n=[48, 96, 192]),
     "cap_discrepancy": dict(points=_SAMPLES[:48]),
     "cap_discrepancy_squared": dict(points=_SAMPLES[:48]),
     "unit_square_points": dict(m=4),
     "fibonacci_points": dict(n=5),
+    "fibonacci_point": dict(i=2, n=5),
+    "get_warp": dict(name="uniform_sphere"),
+    "square_to_concentric_disk_pdf": dict(p=np.array([[0.3, 0.2]])),
     "sample_fibonacci": dict(n=5),
     "sample_gaussian": dict(n=5),
     "sample_classic": dict(n=5),
@@ -107,14 +106,14 @@ OVERRIDES = {
     "interlace_digits": dict(x=np.array([[0.3, 0.6, 0.2, 0.9]]), factor=2),
 }
 # Documented to return inf (a density that diverges at a vertex of the paper's maps): finite elsewhere.
-MAY_BE_INF = {"triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
+MAY_BE_INF = {"square_to_triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas.
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
 # since issue 22 (inside kernels they are the bare formulas) and are tested like the others, and below;
 # so do the elementwise warps of symsphere.warps.
-TRUSTED = {"get_map", "check_points", "suite", "uniform_pdf"}
-MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module,
-           bins, integration, spherical_triangles, square_warps, warps)  # fmt: skip
+TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf"}
+MODULES = (symsphere, sampling, symmetry, frames, harmonics, stats, integrands, peers, quality, points_module,
+           bins, integration, warps)  # fmt: skip
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -250,15 +249,15 @@ def test_one_bad_argument_gives_a_clear_error_or_finite_output(name, function, d
 DIRECTION_FUNCTIONS = [
     ("sphere_pdf", sampling.sphere_pdf, "d", ()),
     ("hemisphere_pdf", sampling.hemisphere_pdf, "d", ()),
-    ("triangle_pdf", maps.triangle_pdf, "p", ()),
+    ("square_to_triangle_pdf", warps.square_to_triangle_pdf, "p", ()),
     ("fold", symmetry.fold, "d", None),
     ("orbit", symmetry.orbit, "p", (48, 3)),
     ("real_sh", lambda d: harmonics.real_sh(3, -2, d), "d", ()),
     ("evaluate_polynomial", lambda d: harmonics.evaluate_polynomial({(2, 1, 0): 1.0}, d), "d", ()),
-    ("cosine_hemisphere_pdf", peers.cosine_hemisphere_pdf, "d", ()),
-    ("uniform_sphere_to_square", peers.uniform_sphere_to_square, "d", (2,)),
-    ("octahedral_sphere_to_square", peers.octahedral_sphere_to_square, "d", (2,)),
-    ("cosine_wedge_pdf", wedge.cosine_wedge_pdf, "d", ()),
+    ("square_to_cosine_hemisphere_pdf", warps.square_to_cosine_hemisphere_pdf, "d", ()),
+    ("uniform_sphere_to_square", warps.uniform_sphere_to_square, "d", (2,)),
+    ("octahedral_sphere_to_square", warps.octahedral_sphere_to_square, "d", (2,)),
+    ("square_to_cosine_wedge_pdf", warps.square_to_cosine_wedge_pdf, "d", ()),
 ]
 
 
@@ -286,13 +285,14 @@ def test_direction_functions_keep_the_batch_shape(name, function, argument, tail
 
 SCALAR_FUNCTIONS = [
     ("frame_rows", frames.frame_rows, ("nx", "ny", "nz")),
-    ("cosine_wedge_point", wedge.cosine_wedge_point, ("u", "v")),
-    ("cosine_wedge_density", wedge.cosine_wedge_density, ("x", "y", "z")),
-    ("cosine_wedge_uv", wedge.cosine_wedge_uv, ("x", "y", "z")),
+    ("cosine_wedge_point", warps.cosine_wedge_point, ("u", "v")),
+    ("cosine_wedge_density", warps.cosine_wedge_density, ("x", "y", "z")),
+    ("cosine_wedge_uv", warps.cosine_wedge_uv, ("x", "y", "z")),
     ("uniform_sphere_point", warps.uniform_sphere_point, ("u", "v")),
     ("uniform_hemisphere_point", warps.uniform_hemisphere_point, ("u", "v")),
     ("concentric_disk_point", warps.concentric_disk_point, ("u", "v")),
     ("cosine_hemisphere_point", warps.cosine_hemisphere_point, ("u", "v")),
+    ("octahedral_sphere_point", warps.octahedral_sphere_point, ("u", "v")),
 ]
 SCALARS = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),

@@ -490,7 +490,7 @@ EXCLUDED = {
     "symsphere.stats.Chi2Result": "a result record (chi2_test returns it)",
     "symsphere.quality.SlopeFit": "a result record (fit_slope returns it)",
     "symsphere.peers.Peer": "a registry record (PEERS, get_peer)",
-    "symsphere.maps.TriangleMap": "a registry record (get_map)",
+    "symsphere.warps.Warp": "a registry record (WARPS, get_warp, triangle_warp)",
     "symsphere.integrands.Integrand": "a registry record (INTEGRANDS, suite)",
     "symsphere.points.BasePoints": "a point source the samplers build from 'points' (tested through them)",
     "symsphere.render.RenderResult": "a result record (render returns it; write_outputs is tested with one)",

@@ -441,11 +441,11 @@ def test_extreme_normals_are_accepted_without_warning(scale):
 
 
 def test_zero_and_non_unit_vectors_are_rejected():
-    from symsphere import peers
+    from symsphere import warps
 
     for call in (
-        lambda: peers.cosine_hemisphere_pdf([0.0, 0.0, 0.0]),
-        lambda: peers.spherical_triangle_to_square([0.0, 0.0, 0.0], *peers.T0_VERTICES),
+        lambda: warps.square_to_cosine_hemisphere_pdf([0.0, 0.0, 0.0]),
+        lambda: warps.spherical_triangle_to_square([0.0, 0.0, 0.0], *warps.T0_VERTICES),
         lambda: symsphere.triangle_to_square([0.0, 0.0, 0.0], "paper1"),
         lambda: symsphere.sphere_pdf([0.0, 0.0, 2.0], "paper1"),
         lambda: symsphere.hemisphere_pdf([0.0, 0.0, 0.5]),
@@ -468,7 +468,7 @@ def test_triangle_pdf_float32_near_the_vertex_is_quiet():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         for method in ("paper1", "paper2"):
-            density = symsphere.triangle_pdf(p, method)
+            density = symsphere.square_to_triangle_pdf(p, method)
             assert density.dtype == np.float32 and density > 0
 
 

@@ -21,7 +21,7 @@ import pytest
 from references import one_line_error
 
 import symsphere
-from symsphere import frames, harmonics, io, points, quality, wedge
+from symsphere import frames, harmonics, io, points, quality, warps
 from symsphere.apps import cli
 from symsphere.apps.cli import main
 
@@ -282,11 +282,11 @@ def test_late_sigint_at_many_times(tmp_path):
         (lambda: harmonics.polynomial_integral({(2, 0, 0): math.inf}), ValueError, "'coeffs'"),
         (lambda: harmonics.polynomial_integral({(2, 0, 0): math.nan}), ValueError, "'coeffs'"),
         (lambda: harmonics.polynomial_integral({(2, 0, 0): "1"}), TypeError, "'coeffs'"),
-        (lambda: wedge.cosine_wedge_point(-1.0, 0.4), ValueError, "'u'"),
-        (lambda: wedge.cosine_wedge_point(0.5, math.nan), ValueError, "'v'"),
-        (lambda: wedge.cosine_wedge_density(None, 0.0, 1.0), TypeError, "'x'"),
-        (lambda: wedge.cosine_wedge_density(0.0, 0.0, 2.0), ValueError, "'x, y, z'"),
-        (lambda: wedge.cosine_wedge_uv(0.0, 0.6, 0.8), ValueError, "'x', 'y', 'z'"),
+        (lambda: warps.cosine_wedge_point(-1.0, 0.4), ValueError, "'u'"),
+        (lambda: warps.cosine_wedge_point(0.5, math.nan), ValueError, "'v'"),
+        (lambda: warps.cosine_wedge_density(None, 0.0, 1.0), TypeError, "'x'"),
+        (lambda: warps.cosine_wedge_density(0.0, 0.0, 2.0), ValueError, "'x, y, z'"),
+        (lambda: warps.cosine_wedge_uv(0.0, 0.6, 0.8), ValueError, "'x', 'y', 'z'"),
         (lambda: symsphere.render.render("furnace", width=2, height=2, spp=1, seed=np.random.PCG64(1)), TypeError,
          "'seed'"),
     ],
@@ -303,13 +303,13 @@ def test_scalar_functions_still_compile_in_kernels():
 
     @njit
     def kernel(u, v):
-        x, y, z = wedge.cosine_wedge_point(u, v)
+        x, y, z = warps.cosine_wedge_point(u, v)
         t, b = frames.frame_rows(x, y, z)
-        return z, t[0], wedge.cosine_wedge_density(x, y, z), wedge.cosine_wedge_uv(x, y, z)[0]
+        return z, t[0], warps.cosine_wedge_density(x, y, z), warps.cosine_wedge_uv(x, y, z)[0]
 
     z, t0, density, u = kernel(0.75, 0.3)
     assert z == 0.5 and abs(density - 4 / math.pi) < 1e-15 and abs(u - 0.75) < 1e-15
-    assert t0 == frames.frame_rows(*wedge.cosine_wedge_point(0.75, 0.3))[0][0]
+    assert t0 == frames.frame_rows(*warps.cosine_wedge_point(0.75, 0.3))[0][0]
 
 
 # --- 6. integrate with an f of shape (m, 0) -----------------------------------------------------------

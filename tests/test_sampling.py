@@ -16,7 +16,7 @@ from symsphere import (
     sample_hemisphere,
     sample_sphere,
     sphere_pdf,
-    triangle_pdf,
+    square_to_triangle_pdf,
     triangle_to_square,
 )
 from symsphere.frames import frame
@@ -154,9 +154,11 @@ def test_hemisphere_about_normal(method):
 def test_scheme_pdf_is_triangle_pdf_over_count(method):
     d = sample_sphere(48 * 100, method=method, rng=8)
     _, base = fold(d)
-    np.testing.assert_array_equal(sphere_pdf(d, method), triangle_pdf(base, method) / 48)
+    np.testing.assert_array_equal(sphere_pdf(d, method), square_to_triangle_pdf(base, method) / 48)
     h = sample_hemisphere(24 * 100, method=method, rng=8)
-    np.testing.assert_array_equal(hemisphere_pdf(h, method), triangle_pdf(fold(h, "hemisphere")[1], method) / 24)
+    np.testing.assert_array_equal(
+        hemisphere_pdf(h, method), square_to_triangle_pdf(fold(h, "hemisphere")[1], method) / 24
+    )
     if method == "equal_area":
         np.testing.assert_allclose(sphere_pdf(d, method), 1 / (4 * np.pi), rtol=1e-15)
         np.testing.assert_allclose(hemisphere_pdf(h, method), 1 / (2 * np.pi), rtol=1e-15)

@@ -10,8 +10,7 @@ densities; the default map, ``'equal_area'``, is exactly uniform.
 
 The names below are the package's everyday interface; each is documented in
 its module (:mod:`symsphere.sampling`, :mod:`symsphere.integration`,
-:mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`,
-:mod:`symsphere.square_warps`).
+:mod:`symsphere.warps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`).
 :mod:`symsphere.stats`, :mod:`symsphere.peers`, :mod:`symsphere.integrands`,
 :mod:`symsphere.render`, :mod:`symsphere.study` and the other submodules of
 ``dir(symsphere)`` are imported on first use (``ss.render.render(...)`` works
@@ -39,24 +38,27 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from .integration import IntegrationResult, integrate
-from .maps import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
 from .points import POINT_SETS
 from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
-from .square_warps import (
+from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
+from .warps import (
+    METHODS,
     hemisphere_to_square,
     sphere_to_square,
     square_to_hemisphere,
     square_to_hemisphere_pdf,
     square_to_sphere,
     square_to_sphere_pdf,
+    square_to_triangle,
+    square_to_triangle_pdf,
+    triangle_to_square,
 )
-from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 
 __version__ = "0.2.0.dev0"
 
 _SUBMODULES = (
     "bins", "distributed", "frames", "harmonics", "integrands", "io", "peers", "quality", "render",
-    "spherical_triangles", "stats", "study", "warps", "wedge",
+    "stats", "study",
 )  # fmt: skip
 
 
@@ -89,7 +91,7 @@ __all__ = [
     "integrands",
     "peers",
     "stats",
-    "wedge",
+    "warps",
     "fold",
     "IntegrationResult",
     "hemisphere_pdf",
@@ -107,6 +109,6 @@ __all__ = [
     "square_to_sphere",
     "square_to_sphere_pdf",
     "square_to_triangle",
-    "triangle_pdf",
+    "square_to_triangle_pdf",
     "triangle_to_square",
 ]

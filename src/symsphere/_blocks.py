@@ -22,9 +22,9 @@ from . import frames
 from ._kernels import fill_orbits, fill_random_orbits
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_dtype
-from .maps import get_map
 from .points import BasePoints
 from .symmetry import orbit
+from .warps import triangle_warp
 
 __all__ = [
     "CUT_ORBIT_KEY", "prepare", "fill_range", "fill_rows", "cut_offset",
@@ -58,7 +58,7 @@ def prepare(
     """
     n = check_count(n, name, multiple=1 if any_size else count)
     dtype = check_dtype(dtype)
-    get_map(method)
+    triangle_warp(method)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         source = BasePoints(points, rng, -(-n // count), per_point=count, n=n)
@@ -183,7 +183,7 @@ def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
 
 def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:
     """The numpy path (map, orbit, frame): what the kernels must reproduce."""
-    directions = orbit(get_map(method).forward(uv), "sphere" if count == 48 else "hemisphere")
+    directions = orbit(triangle_warp(method).points(uv), "sphere" if count == 48 else "hemisphere")
     if basis is not None:
         directions = frames.to_world(directions, basis)
     return directions.reshape(-1, 3)

@@ -31,9 +31,9 @@ from ._validation import (
     check_rng,
     short_repr,
 )
-from .maps import get_map
 from .points import BLOCK, BasePoints, check_points
 from .symmetry import DOMAINS
+from .warps import triangle_warp
 
 Integrand = Callable[[Float64Array], npt.ArrayLike]
 """What ``f`` is: directions (m, 3) to values (m,) or (m, k)."""
@@ -211,7 +211,7 @@ def plan(
     compiled = compiled_integrand(f)
     domain = check_choice(domain, "domain", DOMAINS)
     count = 48 if domain == "sphere" else 24
-    get_map(method)
+    triangle_warp(method)
     engine = check_points(points)
     normal = check_normal(normal)
     if normal is not None and domain != "hemisphere":
@@ -267,7 +267,7 @@ def block_partials(plan: Plan, replicate: int, first: int, stop: int) -> list[Pa
             plan.method,
             plan.count,
             plan.basis,
-            get_map(plan.method).uniform,
+            triangle_warp(plan.method).uniform,
         )
     return [block_partial(plan, replicate, block) for block in range(first, stop)]
 
@@ -279,7 +279,7 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     start = block * BLOCK
     stop = min(start + BLOCK, plan.orbits_per_replicate)
     source = plan.sources[replicate]
-    triangle_map = get_map(plan.method)
+    triangle_map = triangle_warp(plan.method)
     directions = np.empty(((stop - start) * plan.count, 3))
     if triangle_map.uniform:
         fill_range(source, start, stop, plan.method, plan.count, plan.basis, directions)  # random: drawn in the kernel
@@ -289,7 +289,7 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
         fill_orbits(uv, plan.method, plan.count, plan.basis, directions)
         # 1 / pdf of the scheme = count / pdf_T0(base), shared by the whole orbit
         with np.errstate(divide="ignore"):
-            weight = plan.count / triangle_map.pdf(triangle_map.forward(uv))
+            weight = plan.count / triangle_map.densities(triangle_map.points(uv))
     values = evaluate(plan.f, directions)
     estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
     mean = estimates.mean(axis=0)

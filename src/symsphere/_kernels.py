@@ -1,10 +1,10 @@
 """numba kernels: (draws +) map + orbit (+ frame) fused in one pass, one part of the points per thread.
 
-The map formulas are the elementwise functions of :mod:`symsphere.maps`
+The map formulas are the elementwise functions of :func:`symsphere.warps.square_to_triangle`
 (``register_jitable``), the orbit stores gather from the tables of
 :mod:`symsphere.symmetry`, and about a normal a weights table is built from the
 same tables, so nothing here restates a formula.  The numpy path
-(``maps.TriangleMap.forward`` + ``symmetry.orbit`` + ``frames.to_world``) is the
+(``warps.Warp.points`` + ``symmetry.orbit`` + ``frames.to_world``) is the
 reference the tests compare against.  Random base points are drawn inside the
 kernel from numpy's PCG64 stream: each part starts from the state numpy's own
 ``PCG64.advance`` gives (:func:`pcg64_state`) and steps it as numpy does (tested
@@ -36,8 +36,8 @@ from numba.extending import intrinsic, register_jitable
 from ._numba_cache import invalidate_if_changed
 from ._threads import run_parts, start_threads
 from ._typing import Float64Array, FloatArray
-from .maps import METHODS, get_map
 from .symmetry import SIGNS, SOURCES
+from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
 __all__ = [
     "BATCH",
@@ -61,8 +61,8 @@ __all__ = [
 
 METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
-# The maps' own elementwise formulas (register_jitable in symsphere.maps), taken from the registry.
-_EQUAL_AREA, _PAPER1, _PAPER2 = (get_map(name) for name in METHODS)
+# The maps' own elementwise formulas (register_jitable in symsphere.warps), taken from their records.
+_EQUAL_AREA, _PAPER1, _PAPER2 = (triangle_warp(name) for name in METHODS)
 _equal_area_point, _paper1_point, _paper2_point = _EQUAL_AREA.point, _PAPER1.point, _PAPER2.point
 _equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PAPER1.density, _PAPER2.density
 

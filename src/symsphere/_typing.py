@@ -46,7 +46,7 @@ ChiDomain: TypeAlias = Literal["sphere", "hemisphere", "triangle"]
 """The domains of :mod:`symsphere.stats` and :mod:`symsphere.bins` (the triangle is T0)."""
 
 MapMethod: TypeAlias = Literal["equal_area", "paper1", "paper2"]
-"""The maps of the unit square onto T0 (:data:`symsphere.maps.METHODS`)."""
+"""The maps of the unit square onto T0 (:data:`symsphere.warps.METHODS`)."""
 
 PointSet: TypeAlias = Literal["random", "stratified", "sobol", "halton", "sobol_interlaced2", "sobol_interlaced3"]
 """The named point sets of the unit square (:data:`symsphere.points.POINT_SETS`)."""

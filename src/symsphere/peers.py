@@ -5,9 +5,8 @@ Each peer is implemented here from its paper, with the conventions of
 ``SeedSequence`` or a ``Generator``; ``dtype=`` is float64 or float32 (the
 computation is in float64, cast at the end); outputs have shape (n, 3).
 Densities are with respect to solid angle.  Where a peer is a map from the
-unit square, the map and its inverse are public too, in :mod:`symsphere.warps`
-and :mod:`symsphere.spherical_triangles` (``square_to_*`` and ``*_to_square``, side
-by side with the pdf, as in pbrt-v4's ``util/sampling.h``; re-exported here), and its sampler takes quasi-Monte Carlo points
+unit square, the map is a :class:`symsphere.warps.Warp` (:attr:`Peer.warp`: ``square_to_X``,
+``square_to_X_pdf`` and ``X_to_square`` of :mod:`symsphere.warps`), and its sampler takes quasi-Monte Carlo points
 (``points=`` 'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2',
 'sobol_interlaced3' or a ``scipy.stats.qmc.QMCEngine`` with ``d == 2``).
 
@@ -31,7 +30,7 @@ Every map is exact and has no NaN or inf for u, v in {0, 1}, in float64 and
 float32.
 
 Arvo versus ``equal_area``: the same uniform distribution on T0, by a different map
-(:mod:`symsphere.spherical_triangles` says how they relate).
+(:func:`symsphere.warps.square_to_spherical_triangle` says how they relate).
 
 The Lebedev rules are quadratures, not samplers: nodes with unequal weights
 (:func:`lebedev_weights`, :attr:`Peer.rule_weights`; :meth:`Peer.estimate` uses them), in the
@@ -52,40 +51,19 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from numba.extending import overload, register_jitable
 from scipy.spatial.transform import Rotation
 
 from ._lebedev import LEBEDEV_ORDERS, LEBEDEV_SIZES, lebedev_size, lebedev_weights, sample_lebedev
 from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
 from ._validation import check_count, check_dtype, check_rng, short_repr
 from .points import POINT_SETS, check_points, unit_square_points
-from .spherical_triangles import (
-    T0_VERTICES,
-    spherical_triangle_pdf,
-    spherical_triangle_to_square,
-    square_to_spherical_triangle,
-    square_to_t0_arvo,
-)
 from .symmetry import orbit
-from .warps import (
-    concentric_disk_to_square,
-    cosine_hemisphere_pdf,
-    cosine_hemisphere_to_square,
-    octahedral_hemisphere_to_square,
-    octahedral_sphere_to_square,
-    square_to_concentric_disk,
-    square_to_cosine_hemisphere,
-    square_to_octahedral_hemisphere,
-    square_to_octahedral_sphere,
-    square_to_uniform_hemisphere,
-    square_to_uniform_sphere,
-    uniform_hemisphere_pdf,
-    uniform_hemisphere_to_square,
-    uniform_sphere_pdf,
-    uniform_sphere_to_square,
-)
+from .warps import WARPS, Warp, square_to_arvo_triangle, square_to_uniform_sphere_pdf
 
 __all__ = [
     "PEERS",
@@ -105,27 +83,8 @@ __all__ = [
     "LEBEDEV_SIZES",
     "sample_octahedral",
     "sample_octahedral_hemisphere",
-    # maps, inverses and densities (symsphere.warps, re-exported)
-    "square_to_uniform_sphere",
-    "uniform_sphere_to_square",
-    "uniform_sphere_pdf",
-    "square_to_uniform_hemisphere",
-    "uniform_hemisphere_to_square",
-    "uniform_hemisphere_pdf",
-    "square_to_octahedral_sphere",
-    "octahedral_sphere_to_square",
-    "square_to_octahedral_hemisphere",
-    "octahedral_hemisphere_to_square",
-    "square_to_concentric_disk",
-    "concentric_disk_to_square",
-    "square_to_cosine_hemisphere",
-    "cosine_hemisphere_to_square",
-    "cosine_hemisphere_pdf",
-    "square_to_spherical_triangle",
-    "spherical_triangle_to_square",
-    "spherical_triangle_pdf",
+    "fibonacci_point",
     "fibonacci_points",
-    "T0_VERTICES",
 ]
 
 
@@ -164,11 +123,9 @@ class Peer:
         A chi-square test takes one row per orbit.
     uniform : bool
         Whether the density is uniform on the domain (False for ``cosine``).
-    forward, inverse : callable or None
-        The map ``(m, 2) -> (m, 3)`` onto the domain and its inverse (the
-        public, validating ``square_to_*`` / ``*_to_square`` functions).  None
-        for ``arvo``, whose map is onto T0 (:func:`square_to_spherical_triangle`
-        with ``T0_VERTICES``) followed by the 48 images.
+    warp : symsphere.warps.Warp or None
+        The map of the unit square the peer is built on (None if it is not a map); for ``arvo``
+        the map onto T0 (``WARPS['arvo_triangle']``, orbit size 48), followed by the 48 images.
     reference : str
         Where the method comes from.
     rule_weights : callable or None
@@ -212,11 +169,29 @@ class Peer:
     multiple: int = 1
     orbit_size: int | None = 1
     uniform: bool = True
-    forward: Callable[[npt.ArrayLike], FloatArray] | None = None
-    inverse: Callable[[npt.ArrayLike], FloatArray] | None = None
+    warp: Warp | None = None
     reference: str = ""
     rule_weights: Callable[[int], Float64Array] | None = None
     sizes: Callable[[int], int] | None = None
+
+    @property
+    def forward(self) -> Callable[[npt.ArrayLike], FloatArray] | None:
+        """The map ``(m, 2) -> (m, 3)`` onto the peer's domain (the warp's validating ``square_to_X``).
+
+        None if the peer is no map, or (``arvo``) its map is onto T0 and then the 48 images.
+
+        Examples
+        --------
+        >>> from symsphere.peers import PEERS
+        >>> PEERS["octahedral"].forward.__name__, PEERS["arvo"].forward
+        ('square_to_octahedral_sphere', None)
+        """
+        return self.warp.forward if self.warp is not None and self.warp.domain == self.domain else None
+
+    @property
+    def inverse(self) -> Callable[[npt.ArrayLike], FloatArray] | None:
+        """The inverse of :attr:`forward` (the warp's ``X_to_square``), or None with it."""
+        return self.warp.inverse if self.warp is not None and self.warp.domain == self.domain else None
 
     def sample(
         self, n: int, rng: RNGLike = None, dtype: DTypeLike = np.float64, points: PointsLike = "random"
@@ -316,7 +291,7 @@ def sample_classic(
 ) -> FloatArray:
     """Uniform directions on the sphere by z = 1 - 2u, phi = 2 pi v.
 
-    The map of :func:`square_to_uniform_sphere` (pbrt-v4 ``SampleUniformSphere``,
+    The map of :func:`symsphere.warps.square_to_uniform_sphere` (pbrt-v4 ``SampleUniformSphere``,
     Mitsuba 3 ``square_to_uniform_sphere``) applied to points of the square.
 
     Parameters
@@ -341,7 +316,7 @@ def sample_classic(
     >>> d.shape, bool(np.allclose(np.linalg.norm(d, axis=1), 1))
     ((1000, 3), True)
     """
-    return _sample_map(square_to_uniform_sphere, n, points, rng, dtype)
+    return _sample_map(WARPS["uniform_sphere"].forward, n, points, rng, dtype)
 
 
 def sample_classic_hemisphere(
@@ -358,7 +333,7 @@ def sample_classic_hemisphere(
     >>> bool(np.all(sample_classic_hemisphere(100, rng=2)[:, 2] >= 0))
     True
     """
-    return _sample_map(square_to_uniform_hemisphere, n, points, rng, dtype)
+    return _sample_map(WARPS["uniform_hemisphere"].forward, n, points, rng, dtype)
 
 
 def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
@@ -394,7 +369,8 @@ def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float6
         zero = norm == 0
         g[zero] = rng.standard_normal((int(zero.sum()), 3))
         norm = np.linalg.norm(g, axis=1)
-    return (g / norm[:, None]).astype(dtype)
+    directions: FloatArray = (g / norm[:, None]).astype(dtype)
+    return directions
 
 
 def sample_octahedral(
@@ -402,7 +378,7 @@ def sample_octahedral(
 ) -> FloatArray:
     """Uniform directions on the sphere by Clarberg's octahedral map.
 
-    The map of :func:`square_to_octahedral_sphere`; parameters and returns as
+    The map of :func:`symsphere.warps.square_to_octahedral_sphere`; parameters and returns as
     in :func:`sample_classic`.
 
     Examples
@@ -411,7 +387,7 @@ def sample_octahedral(
     >>> sample_octahedral(256, points="sobol", rng=3).shape
     (256, 3)
     """
-    return _sample_map(square_to_octahedral_sphere, n, points, rng, dtype)
+    return _sample_map(WARPS["octahedral_sphere"].forward, n, points, rng, dtype)
 
 
 def sample_octahedral_hemisphere(
@@ -419,7 +395,7 @@ def sample_octahedral_hemisphere(
 ) -> FloatArray:
     """Uniform directions on the hemisphere z >= 0 by Clarberg's hemisphere map.
 
-    The map of :func:`square_to_octahedral_hemisphere`; parameters and returns
+    The map of :func:`symsphere.warps.square_to_octahedral_hemisphere`; parameters and returns
     as in :func:`sample_classic`.
 
     Examples
@@ -429,7 +405,7 @@ def sample_octahedral_hemisphere(
     >>> bool(np.all(sample_octahedral_hemisphere(64, rng=4)[:, 2] >= 0))
     True
     """
-    return _sample_map(square_to_octahedral_hemisphere, n, points, rng, dtype)
+    return _sample_map(WARPS["octahedral_hemisphere"].forward, n, points, rng, dtype)
 
 
 def sample_cosine(
@@ -438,7 +414,7 @@ def sample_cosine(
     """Cosine-weighted directions on the hemisphere z >= 0 (pdf cos(theta)/pi).
 
     Shirley & Chiu's concentric map onto the disk, lifted to the hemisphere
-    by Malley's method: :func:`square_to_cosine_hemisphere`.  Parameters and
+    by Malley's method: :func:`symsphere.warps.square_to_cosine_hemisphere`.  Parameters and
     returns as in :func:`sample_classic`.
 
     Examples
@@ -449,7 +425,7 @@ def sample_cosine(
     >>> round(float(d[:, 2].mean()), 2)      # E[cos theta] = 2/3
     0.67
     """
-    return _sample_map(square_to_cosine_hemisphere, n, points, rng, dtype)
+    return _sample_map(WARPS["cosine_hemisphere"].forward, n, points, rng, dtype)
 
 
 def sample_fibonacci(
@@ -505,8 +481,8 @@ def sample_arvo(
     """Uniform directions on the sphere: Arvo's triangle sampling on T0, then symmetry.
 
     ``n / 48`` points of the unit square are mapped onto T0 by Arvo's
-    algorithm for a general spherical triangle (:func:`square_to_spherical_triangle`
-    with ``T0_VERTICES`` in the order A = (0, 0, 1), B = (1, 0, 1)/sqrt 2,
+    algorithm for a general spherical triangle (:func:`symsphere.warps.square_to_arvo_triangle`:
+    ``T0_VERTICES`` in the order A = (0, 0, 1), B = (1, 0, 1)/sqrt 2,
     C = (1, 1, 1)/sqrt 3), and each is replaced by its 48 images
     (:func:`symsphere.orbit`), as :func:`symsphere.sample_sphere` does.
 
@@ -534,7 +510,7 @@ def sample_arvo(
     dtype = check_dtype(dtype)
     check_points(points)
     uv = unit_square_points(n // 48, points, rng, per_point=48)
-    base = square_to_t0_arvo(uv)
+    base = square_to_arvo_triangle(uv)
     return orbit(base).reshape(n, 3).astype(dtype)
 
 
@@ -605,28 +581,61 @@ def _fibonacci_sampler(randomize: bool) -> Sampler:
 # =============================================================================
 
 
-def _sample_map(forward, n, points, rng, dtype):
+def _sample_map(
+    forward: Callable[[npt.ArrayLike], FloatArray], n: int, points: PointsLike, rng: RNGLike, dtype: DTypeLike
+) -> FloatArray:
     n = check_count(n, "n")
     dtype = check_dtype(dtype)
     check_points(points)
     return forward(unit_square_points(n, points, rng)).astype(dtype)
 
 
-def _fibonacci(n):
-    # Keinert et al. (2015): z_i = 1 - (2i + 1)/n, phi_i = 2 pi frac(i / Phi).
-    i = np.arange(n, dtype=np.int64)
-    odd = (2 * i + 1).astype(np.float64)
+def _fibonacci(n: int) -> Float64Array:
+    return np.stack(_fibonacci_point(np.arange(n, dtype=np.int64), n), axis=-1)
+
+
+@register_jitable
+def _fibonacci_point(i: Any, n: Any) -> Any:
+    # Keinert et al. (2015): z_i = 1 - (2i + 1)/n, phi_i = 2 pi frac(i / Phi).  numpy applies it to an
+    # int64 array i, numba compiles it for one int (the study's kernels, through fibonacci_point).
+    odd = 2.0 * i + 1.0  # exact: i < 2^52
     z = 1.0 - odd / n
-    sin_theta = np.sqrt(odd * (2 * n - odd)) / n
+    sin_theta = np.sqrt(odd * (2.0 * n - odd)) / n
     # frac(i (Phi - 1)) in 64-bit fixed point: the product wraps mod 2^64 exactly.
-    frac_bits = i.astype(np.uint64) * np.uint64(_GOLDEN_FRACTION_BITS)
-    frac = (frac_bits >> np.uint64(11)).astype(np.float64) * 2.0**-53
+    frac_bits = np.uint64(i) * _GOLDEN_FRACTION_BITS
+    frac = np.float64(frac_bits >> np.uint64(11)) * 2.0**-53
     phi = 2.0 * np.pi * frac
-    return np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), z], axis=-1)
+    return sin_theta * np.cos(phi), sin_theta * np.sin(phi), z
+
+
+def fibonacci_point(i: int, n: int) -> tuple[float, float, float]:
+    """Point *i* of the *n* spherical Fibonacci points, elementwise: what :func:`fibonacci_points` gives in row i.
+
+    Numba compiles it (the study's compiled peers call it in their kernels); from Python, *i* and *n* are
+    checked (``0 <= i < n``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.peers import fibonacci_point, fibonacci_points
+    >>> bool(np.array_equal(fibonacci_point(2, 4), fibonacci_points(4)[2]))
+    True
+    """
+    n = check_count(n, "n")
+    if isinstance(i, bool) or not isinstance(i, int | np.integer) or not 0 <= i < n:
+        raise ValueError(f"'i' must be an integer with 0 <= i < n = {n}; got {short_repr(i)}")
+    with np.errstate(over="ignore"):  # the fixed-point product wraps mod 2^64 by design
+        x, y, z = _fibonacci_point(np.int64(i), n)
+    return float(x), float(y), float(z)
+
+
+@overload(fibonacci_point, jit_options={}, inline="never", strict=False)
+def _fibonacci_point_in_kernels(i: Any, n: Any) -> Any:
+    return _fibonacci_point
 
 
 # floor(2^64 (Phi - 1)) = floor(2^64 (sqrt 5 - 1)/2), from the exact integer square root.
-_GOLDEN_FRACTION_BITS = (math.isqrt(5 << 128) - (1 << 64)) >> 1
+_GOLDEN_FRACTION_BITS = np.uint64((math.isqrt(5 << 128) - (1 << 64)) >> 1)
 
 
 def _build_peers() -> dict[str, Peer]:
@@ -635,31 +644,29 @@ def _build_peers() -> dict[str, Peer]:
             "classic",
             "sphere",
             sample_classic,
-            uniform_sphere_pdf,
+            WARPS["uniform_sphere"].pdf,
             True,
             True,
             True,
-            forward=square_to_uniform_sphere,
-            inverse=uniform_sphere_to_square,
+            warp=WARPS["uniform_sphere"],
             reference="Archimedes' hat-box map; pbrt-v4 SampleUniformSphere, Mitsuba 3 square_to_uniform_sphere",
         ),
         Peer(
             "classic_hemisphere",
             "hemisphere",
             sample_classic_hemisphere,
-            uniform_hemisphere_pdf,
+            WARPS["uniform_hemisphere"].pdf,
             True,
             True,
             True,
-            forward=square_to_uniform_hemisphere,
-            inverse=uniform_hemisphere_to_square,
+            warp=WARPS["uniform_hemisphere"],
             reference="pbrt-v4 SampleUniformHemisphere",
         ),
         Peer(
             "gaussian",
             "sphere",
             _random_only(sample_gaussian),
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             True,
             False,
             True,
@@ -669,31 +676,29 @@ def _build_peers() -> dict[str, Peer]:
             "octahedral",
             "sphere",
             sample_octahedral,
-            uniform_sphere_pdf,
+            WARPS["octahedral_sphere"].pdf,
             True,
             True,
             True,
-            forward=square_to_octahedral_sphere,
-            inverse=octahedral_sphere_to_square,
+            warp=WARPS["octahedral_sphere"],
             reference="Clarberg, Fast equal-area mapping of the (hemi)sphere using SIMD, JGT 2008",
         ),
         Peer(
             "octahedral_hemisphere",
             "hemisphere",
             sample_octahedral_hemisphere,
-            uniform_hemisphere_pdf,
+            WARPS["octahedral_hemisphere"].pdf,
             True,
             True,
             True,
-            forward=square_to_octahedral_hemisphere,
-            inverse=octahedral_hemisphere_to_square,
+            warp=WARPS["octahedral_hemisphere"],
             reference="Clarberg, JGT 2008 (hemisphere variant)",
         ),
         Peer(
             "fibonacci",
             "sphere",
             _fibonacci_sampler(False),
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             False,
             False,
             False,
@@ -704,7 +709,7 @@ def _build_peers() -> dict[str, Peer]:
             "fibonacci_rotated",
             "sphere",
             _fibonacci_sampler(True),
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             True,
             False,
             False,
@@ -715,19 +720,20 @@ def _build_peers() -> dict[str, Peer]:
             "arvo",
             "sphere",
             sample_arvo,
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             True,
             True,
             False,
             multiple=48,
-            orbit_size=48,
+            orbit_size=WARPS["arvo_triangle"].orbit_size,
+            warp=WARPS["arvo_triangle"],
             reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995; on T0, then 48 images",
         ),
         Peer(
             "lebedev",
             "sphere",
             _lebedev_sampler(False),
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             False,
             False,
             False,
@@ -740,7 +746,7 @@ def _build_peers() -> dict[str, Peer]:
             "lebedev_rotated",
             "sphere",
             _lebedev_sampler(True),
-            uniform_sphere_pdf,
+            square_to_uniform_sphere_pdf,
             True,
             False,
             False,
@@ -753,13 +759,12 @@ def _build_peers() -> dict[str, Peer]:
             "cosine",
             "hemisphere",
             sample_cosine,
-            cosine_hemisphere_pdf,
+            WARPS["cosine_hemisphere"].pdf,
             True,
             True,
             True,
             uniform=False,
-            forward=square_to_cosine_hemisphere,
-            inverse=cosine_hemisphere_to_square,
+            warp=WARPS["cosine_hemisphere"],
             reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere",
         ),
     ]

@@ -29,12 +29,9 @@ import numpy.typing as npt
 from . import _blocks, frames
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_normal, check_out, check_unit_directions
-from .maps import get_map
-from .symmetry import fold
+from .warps._scheme import scheme_pdf
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
-
-_PLANE_ULPS = 16  # see hemisphere_pdf
 
 DEFAULT_CHUNK = 48 * 2**16
 """Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
@@ -236,7 +233,7 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 48`` where ``base`` is the fold of *d*
+        ``square_to_triangle_pdf(base, method) / 48`` where ``base`` is the fold of *d*
         into T0: ``1/(4 pi)`` for ``'equal_area'``.  The paper's maps diverge
         (``inf``) at the six images of the vertex (0, 0, 1): the axes.
 
@@ -247,9 +244,7 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     1.0
     """
     d = check_unit_directions(d, "d")
-    triangle_map = get_map(method)
-    _, base = fold(d.astype(np.float64))
-    return (triangle_map.pdf(base.astype(np.float64, copy=False)) / 48).astype(d.dtype, copy=False)
+    return scheme_pdf(d.astype(np.float64), method, 48, d.dtype)
 
 
 def hemisphere_pdf(
@@ -268,7 +263,7 @@ def hemisphere_pdf(
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 24`` on the closed hemisphere about *normal*,
+        ``square_to_triangle_pdf(base, method) / 24`` on the closed hemisphere about *normal*,
         0 below it.  Directions within 16 ulps (of *d*'s dtype) of the plane count as on
         it, so that every direction :func:`sample_hemisphere` returns has a positive density.
 
@@ -280,16 +275,10 @@ def hemisphere_pdf(
     """
     d = check_unit_directions(d, "d")
     normal = check_normal(normal)
-    triangle_map = get_map(method)
     local: FloatArray = d.astype(np.float64)
     if normal is not None:
         local = frames.to_local(local, frames.frame(normal))
-    _, base = fold(local)
-    # The closed hemisphere, up to the rounding of a rotated direction in d's dtype: a sample on the
-    # equator (u = 0) rotated onto `normal` may come out a few ulps below the plane.
-    on = local[..., 2] >= -_PLANE_ULPS * np.finfo(d.dtype).eps
-    density = np.where(on, triangle_map.pdf(base.astype(np.float64, copy=False)) / 24, 0.0)
-    return density.astype(d.dtype, copy=False)
+    return scheme_pdf(local, method, 24, d.dtype)
 
 
 # --- private ------------------------------------------------------------------

@@ -15,8 +15,8 @@ import pytest
 import symsphere as ss
 from symsphere.apps.cli import main
 from symsphere.integrands import INTEGRANDS
-from symsphere.maps import METHODS
 from symsphere.points import POINT_SETS
+from symsphere.warps import METHODS
 
 
 def _one_clean_line(err):

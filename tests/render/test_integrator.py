@@ -57,7 +57,6 @@ from scipy import stats
 from symsphere import frames
 from symsphere._kernels import METHOD_CODES
 from symsphere.integrands import lambert_irradiance, sphere_light_irradiance
-from symsphere.maps import triangle_pdf
 from symsphere.render import (
     INTEGRATORS,
     SAMPLERS,
@@ -75,7 +74,7 @@ from symsphere.render import _emitters as E
 from symsphere.render import _integrator as K
 from symsphere.render import _probes as P
 from symsphere.symmetry import fold, orbit
-from symsphere.wedge import WEDGE_MAPS
+from symsphere.warps import WEDGE_MAPS, square_to_triangle_pdf
 
 FAMILY_SIGNIFICANCE = 0.01
 # The interlaced samplers' pairs last: the seeds of the others (from their index) stay those of docs/rendering.md.
@@ -145,7 +144,7 @@ def test_symmetric_groups_take_every_orbit_member_of_one_base(name, sampler, met
             assert sorted(members.tolist()) == list(range(n))
             np.testing.assert_array_equal(block[np.argsort(members)], orbit(base[0], domain="sphere")[:n])
             # weight = |cos| / (pi pdf), pdf = triangle pdf / n
-            pdf = triangle_pdf(base[0], method) / n
+            pdf = square_to_triangle_pdf(base[0], method) / n
             np.testing.assert_allclose(out[g * n : (g + 1) * n, 3], np.abs(block[:, 2]) / (np.pi * pdf), rtol=1e-12)
             bases.append(base[0])
         assert len({tuple(b) for b in bases}) == groups  # a fresh base point per group
@@ -177,7 +176,7 @@ _COSINE_CODES = (
 @pytest.mark.parametrize("full", [False, True])
 @pytest.mark.parametrize("sampler", _ALL_CODES)
 def test_sampled_directions_weights_and_pdfs(sampler, full):
-    """Weights |cos| / (pi pdf) and pdfs of every sampler against their closed forms (orbit: maps.triangle_pdf)."""
+    """Weights |cos| / (pi pdf) and pdfs of every sampler against their closed forms (orbit: warps.square_to_triangle_pdf)."""
     code = METHOD_CODES["paper1"]
     out = P.pattern_directions(sampler, code, full, np.uint64(11), 5, 2, 480)
     directions, weights, pdfs = out[:, :3], out[:, 3], out[:, 4]
@@ -193,7 +192,7 @@ def test_sampled_directions_weights_and_pdfs(sampler, full):
         expected_weight, expected_pdf = (4.0 if full else 2.0) * z, np.full_like(z, 1 / ((4 if full else 2) * np.pi))
     else:
         _, base = fold(directions, domain="sphere")
-        expected_pdf = triangle_pdf(base, "paper1") / (48 if full else 24)
+        expected_pdf = square_to_triangle_pdf(base, "paper1") / (48 if full else 24)
         expected_weight = z / (np.pi * expected_pdf)
     np.testing.assert_allclose(weights, expected_weight, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(pdfs, expected_pdf, rtol=1e-12, atol=1e-15)
@@ -233,7 +232,7 @@ def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, ful
 def test_paper_map_weights_use_their_density():
     out = P.pattern_directions(K.ORBIT, METHOD_CODES["paper2"], False, np.uint64(1), 0, 0, 240)
     _, base = fold(out[:, :3], domain="sphere")
-    expected = np.abs(out[:, 2]) * 24 / (np.pi * triangle_pdf(base, "paper2"))
+    expected = np.abs(out[:, 2]) * 24 / (np.pi * square_to_triangle_pdf(base, "paper2"))
     np.testing.assert_allclose(out[:, 3], expected, rtol=1e-12)
 
 
@@ -663,6 +662,8 @@ def test_the_disk_cache_guard_covers_every_module_the_kernel_inlines():
     from symsphere._numba_cache import kernel_dependencies
 
     names = {Path(p).name for p in kernel_dependencies(K.render_pass)}
-    assert {"_integrator.py", "_emitters.py", "_random.py", "_kernels.py", "frames.py", "warps.py", "wedge.py"} <= names
+    # the warps' modules whose formulas it inlines: the uniform and cosine maps, the cosine wedge
+    assert {"_integrator.py", "_emitters.py", "_random.py", "_kernels.py", "frames.py"} <= names
+    assert {"_uniform.py", "_concentric.py", "_wedge.py", "_triangle.py"} <= names
     assert "_probes.py" not in names
     assert {"_probes.py", "_integrator.py", "_emitters.py"} <= {Path(p).name for p in kernel_dependencies(P.first_hits)}

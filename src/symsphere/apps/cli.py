@@ -53,8 +53,8 @@ from .._validation import (
 )
 from ..integrands import INTEGRANDS
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
-from ..maps import METHODS
 from ..points import BLOCK, POINT_SETS
+from ..warps import METHODS
 from ._notices import compile_notice
 from .demo import run_demo
 from .study import add_study_parser

@@ -35,9 +35,9 @@ from .. import __version__
 from .._typing import Float64Array, FloatArray, MapMethod
 from .._validation import check_count, check_seed
 from ..io import atomic_directory
-from ..maps import METHODS, get_map, triangle_pdf
 from ..sampling import hemisphere_pdf, sample_hemisphere, sample_sphere, sphere_pdf
 from ..symmetry import fold
+from ..warps import METHODS, square_to_triangle_pdf, triangle_warp
 from ._format import format_p
 
 if TYPE_CHECKING:  # scipy.stats loads only when a demo runs (see run_demo)
@@ -100,7 +100,7 @@ def run_demo(
     hemisphere, and T0 (the sphere samples folded with
     :func:`~symsphere.fold`).  The paper's maps are also tested against their
     own densities (:func:`~symsphere.sphere_pdf`,
-    :func:`~symsphere.hemisphere_pdf`, :func:`~symsphere.triangle_pdf`), which
+    :func:`~symsphere.hemisphere_pdf`, :func:`~symsphere.square_to_triangle_pdf`), which
     they should pass.  All tests share a Sidak correction, so that an exactly
     uniform sampler fails any of them with probability
     :data:`FAMILY_SIGNIFICANCE`.
@@ -174,11 +174,11 @@ def _tests_of(method: MapMethod, sphere: FloatArray, hemisphere: FloatArray) -> 
         _Test("hemisphere", method, "uniform", hemisphere, uniform_pdf("hemisphere")),
         _Test("triangle", method, "uniform", base, uniform_pdf("triangle")),
     ]
-    if not get_map(method).uniform:
+    if not triangle_warp(method).uniform:
         tests += [
             _Test("sphere", method, method, sphere, lambda d: sphere_pdf(d, method)),
             _Test("hemisphere", method, method, hemisphere, lambda d: hemisphere_pdf(d, method)),
-            _Test("triangle", method, method, base, lambda p: triangle_pdf(p, method)),
+            _Test("triangle", method, method, base, lambda p: square_to_triangle_pdf(p, method)),
         ]
     return tests
 
@@ -186,7 +186,7 @@ def _tests_of(method: MapMethod, sphere: FloatArray, hemisphere: FloatArray) -> 
 def _reference_name(test: _Test) -> str:
     if test.reference == "uniform":
         return "uniform"
-    own = {"sphere": "sphere_pdf", "hemisphere": "hemisphere_pdf", "triangle": "triangle_pdf"}[test.domain]
+    own = {"sphere": "sphere_pdf", "hemisphere": "hemisphere_pdf", "triangle": "square_to_triangle_pdf"}[test.domain]
     return f"own: `{own}(·, '{test.method}')`"
 
 
@@ -274,7 +274,7 @@ def _verdict(method: MapMethod, tests: list[_Test], results: list[Chi2Result]) -
             f"**{method} was not tested**: too few samples for two cells of 5 expected counts; rerun with a larger --n."
         )
     failed = [t.domain for t, r in uniform if not r.passed]
-    if get_map(method).uniform:
+    if triangle_warp(method).uniform:
         if not failed:
             return (
                 f"**{method} passes** every test against the uniform density "

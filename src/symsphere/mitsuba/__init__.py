@@ -2,7 +2,7 @@
 
 - The maps in Dr.Jit (:mod:`symsphere.mitsuba` re-exports them): the T0 maps
   (``square_to_triangle``, ``square_to_triangle_pdf``, ``triangle_to_square``), the orbit
-  member and the fold, the whole-sphere/hemisphere bijection of :mod:`symsphere.square_warps`
+  member and the fold, the whole-sphere/hemisphere bijection of :mod:`symsphere.warps`
   and the cosine wedge map, in Mitsuba's ``warp.h`` form; they run in every variant.
 - The integrator ``symsphere_path`` (:func:`integrator_class`): Mitsuba's ``path`` estimator
   whose direction at Lambertian vertices comes from the chosen ``strategy``; registered with

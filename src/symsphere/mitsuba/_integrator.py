@@ -13,10 +13,10 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     Cosine-weighted, i.i.d. (Shirley-Chiu + Malley, ``mi.warp.square_to_cosine_hemisphere``).
 ``symmetric``
     The paper's scheme, uniform: orbits of the 24 hemisphere maps (:func:`symsphere.orbit`) of a base
-    point mapped onto T0 by ``method`` (:mod:`symsphere.maps`).
+    point mapped onto T0 by ``method`` (:func:`symsphere.warps.square_to_triangle`).
 ``symmetric_cosine``
-    The 8 z-keeping images (:data:`symsphere.wedge.WEDGE_MAPS`) of a cosine-weighted base point of the
-    wedge (:func:`symsphere.wedge.square_to_cosine_wedge`).
+    The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
+    wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
 as :mod:`symsphere.render`'s samplers.  The grouping is the renderer's
@@ -42,7 +42,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .._validation import check_choice
-from ..maps import METHODS
+from ..warps import METHODS
 from . import _random
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 

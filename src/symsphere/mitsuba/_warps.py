@@ -8,7 +8,7 @@ variant (``llvm_*``, ``cuda_*``: traced into the caller's kernel) and on Python 
 
 The triples are named as in Mitsuba's ``warp.h``: ``square_to_X``, ``square_to_X_pdf``,
 ``X_to_square``.  ``method`` is a Python string (a trace-time constant), one of
-:data:`symsphere.maps.METHODS`.  Like the numpy originals these trust their inputs: ``uv`` in
+:data:`symsphere.warps.METHODS`.  Like the numpy originals these trust their inputs: ``uv`` in
 [0, 1]^2, unit directions; outputs are clamped into their domain, so u, v in {0, 1} give no NaN.
 """
 
@@ -22,10 +22,9 @@ import mitsuba as mi
 import numpy as np
 
 from .._validation import check_choice
-from ..maps import METHODS
-from ..square_warps import strip_order
 from ..symmetry import SIGNS, SOURCES
 from ..symmetry import fold as numpy_fold
+from ..warps import METHODS, strip_order
 
 __all__ = [
     "square_to_triangle",
@@ -126,7 +125,7 @@ def _azimuth_u(x: Any, y: Any) -> Any:
 
 
 def triangle_point(u: Any, v: Any, method: str = "equal_area") -> tuple[Any, Any, Any]:
-    """Elementwise forward map of the square onto T0 (x, y, z): ``TriangleMap.point`` of :mod:`symsphere.maps`."""
+    """Elementwise forward map of the square onto T0 (x, y, z): ``Warp.point`` of :func:`symsphere.warps.triangle_warp`."""
     if method == "equal_area":
         return _equal_area_point(u, v)
     if method == "paper1":
@@ -135,7 +134,7 @@ def triangle_point(u: Any, v: Any, method: str = "equal_area") -> tuple[Any, Any
 
 
 def triangle_density(x: Any, y: Any, z: Any, method: str = "equal_area") -> Any:
-    """Elementwise solid-angle density on T0: ``TriangleMap.density`` of :mod:`symsphere.maps` (0 outside)."""
+    """Elementwise solid-angle density on T0: ``Warp.density`` of :func:`symsphere.warps.triangle_warp` (0 outside)."""
     inside = _in_triangle(x, y, z)
     if method == "equal_area":
         return dr.select(inside, 12 / _PI, 0.0)
@@ -153,7 +152,7 @@ def _triangle_uv(x: Any, y: Any, z: Any, method: str) -> tuple[Any, Any]:
 
 
 def cosine_wedge_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
-    """Elementwise cosine-weighted map onto the wedge W: :func:`symsphere.wedge.cosine_wedge_point`."""
+    """Elementwise cosine-weighted map onto the wedge W: :func:`symsphere.warps.cosine_wedge_point`."""
     r = dr.sqrt(u)
     sin_p, cos_p = dr.sincos(v * (_PI / 4))
     x = r * cos_p
@@ -281,7 +280,7 @@ def square_to_triangle(sample: Any, method: str = "equal_area") -> Any:
 
 
 def square_to_triangle_pdf(v: Any, method: str = "equal_area") -> Any:
-    """Solid-angle density of :func:`square_to_triangle` (0 outside T0): :func:`symsphere.triangle_pdf`."""
+    """Solid-angle density of :func:`square_to_triangle` (0 outside T0): :func:`symsphere.square_to_triangle_pdf`."""
     return triangle_density(v.x, v.y, v.z, _method(method))
 
 
@@ -309,7 +308,7 @@ def _strip_forward(sample: Any, method: str, count: int) -> Any:
 
 
 def _strip_pdf(v: Any, method: str, count: int) -> Any:
-    # sampling.sphere_pdf / hemisphere_pdf: triangle_pdf(fold(d)) / count, 0 below the equator for 24
+    # sampling.sphere_pdf / hemisphere_pdf: square_to_triangle_pdf(fold(d)) / count, 0 below the equator for 24
     bx, by, bz = _base(v.x, v.y, v.z)
     density = triangle_density(bx, by, bz, _method(method)) / count
     if count == 24:
@@ -331,47 +330,47 @@ def _strip_inverse(v: Any, method: str, count: int) -> Any:
 
 
 def square_to_sphere(sample: Any, method: str = "equal_area") -> Any:
-    """The whole-sphere bijection through the 48 triangles: :func:`symsphere.square_warps.square_to_sphere`."""
+    """The whole-sphere bijection through the 48 triangles: :func:`symsphere.warps.square_to_sphere`."""
     return _strip_forward(sample, method, 48)
 
 
 def square_to_sphere_pdf(v: Any, method: str = "equal_area") -> Any:
-    """Density of :func:`square_to_sphere`: :func:`symsphere.square_warps.square_to_sphere_pdf`."""
+    """Density of :func:`square_to_sphere`: :func:`symsphere.warps.square_to_sphere_pdf`."""
     return _strip_pdf(v, method, 48)
 
 
 def sphere_to_square(v: Any, method: str = "equal_area") -> Any:
-    """Inverse of :func:`square_to_sphere`: :func:`symsphere.square_warps.sphere_to_square`."""
+    """Inverse of :func:`square_to_sphere`: :func:`symsphere.warps.sphere_to_square`."""
     return _strip_inverse(v, method, 48)
 
 
 def square_to_hemisphere(sample: Any, method: str = "equal_area") -> Any:
-    """The hemisphere bijection through the 24 triangles: :func:`symsphere.square_warps.square_to_hemisphere`."""
+    """The hemisphere bijection through the 24 triangles: :func:`symsphere.warps.square_to_hemisphere`."""
     return _strip_forward(sample, method, 24)
 
 
 def square_to_hemisphere_pdf(v: Any, method: str = "equal_area") -> Any:
-    """Density of :func:`square_to_hemisphere`: :func:`symsphere.square_warps.square_to_hemisphere_pdf`."""
+    """Density of :func:`square_to_hemisphere`: :func:`symsphere.warps.square_to_hemisphere_pdf`."""
     return _strip_pdf(v, method, 24)
 
 
 def hemisphere_to_square(v: Any, method: str = "equal_area") -> Any:
-    """Inverse of :func:`square_to_hemisphere`: :func:`symsphere.square_warps.hemisphere_to_square`."""
+    """Inverse of :func:`square_to_hemisphere`: :func:`symsphere.warps.hemisphere_to_square`."""
     return _strip_inverse(v, method, 24)
 
 
 def square_to_cosine_wedge(sample: Any) -> Any:
-    """Cosine-weighted map onto the wedge W: :func:`symsphere.wedge.square_to_cosine_wedge`."""
+    """Cosine-weighted map onto the wedge W: :func:`symsphere.warps.square_to_cosine_wedge`."""
     return _vector(*cosine_wedge_point(sample.x, sample.y))
 
 
 def square_to_cosine_wedge_pdf(v: Any) -> Any:
-    """``8 z / pi`` inside W = {x >= y >= 0, z >= 0}, else 0: :func:`symsphere.wedge.cosine_wedge_pdf`."""
+    """``8 z / pi`` inside W = {x >= y >= 0, z >= 0}, else 0: :func:`symsphere.warps.square_to_cosine_wedge_pdf`."""
     inside = (v.x >= v.y) & (v.y >= 0.0) & (v.z >= 0.0)
     return dr.select(inside, (8 / _PI) * dr.maximum(v.z, 0.0), 0.0)
 
 
 def cosine_wedge_to_square(v: Any) -> Any:
-    """Inverse of :func:`square_to_cosine_wedge`: :func:`symsphere.wedge.cosine_wedge_to_square`."""
+    """Inverse of :func:`square_to_cosine_wedge`: :func:`symsphere.warps.cosine_wedge_to_square`."""
     u = dr.minimum(v.x * v.x + v.y * v.y, 1.0)
     return mi.Point2f(u, _clip(dr.atan2(v.y, v.x) * (4 / _PI), 0.0, 1.0))

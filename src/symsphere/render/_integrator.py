@@ -8,9 +8,9 @@ inlined into :func:`render_pass`.  Direction sampling at diffuse
 vertices goes through scalar library functions -- the maps and the orbit
 (``triangle_point``, ``triangle_density``, ``orbit_member`` of
 :mod:`symsphere._kernels`), the classic uniform and cosine maps
-(``uniform_hemisphere_point`` etc. of :mod:`symsphere.peers`), the frame
+(``uniform_hemisphere_point`` etc. of :mod:`symsphere.warps`), the frame
 (:func:`symsphere.frames.frame_rows`) and the cosine-weighted wedge map
-(:func:`symsphere.wedge.cosine_wedge_point`) -- so
+(:func:`symsphere.warps.cosine_wedge_point`) -- so
 no formula is restated.
 
 Estimators (``integrator``)
@@ -88,8 +88,7 @@ from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from .._threads import run_parts, start_threads
 from ..frames import frame_rows
-from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
-from ..wedge import cosine_wedge_point
+from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
 from ._emitters import (
     INV_2PI,
     TABLE_FUNCTION,
@@ -203,7 +202,7 @@ def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     density; through transmission n = 16, members 8..15 being the same maps
     followed by z -> -z (``orbit_member`` 24..31).  The base point is the
     cosine-weighted map onto the wedge 0 <= phi <= pi/4
-    (:func:`symsphere.wedge.cosine_wedge_point`), whose
+    (:func:`symsphere.warps.cosine_wedge_point`), whose
     8 images tile the hemisphere: each sample is cosine-distributed.
     """
     if fixed == UNIFORM:

@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 
 from ...integrands import INTEGRANDS
-from ...maps import METHODS
 from ...peers import PEERS
 from ...points import POINT_SETS
 from ...symmetry import DOMAINS
+from ...warps import METHODS
 
 __all__ = [
     "BASELINE",

@@ -11,8 +11,15 @@ import math
 import numpy as np
 
 from ...integrands import INTEGRANDS
-from ...maps import METHODS, square_to_triangle, triangle_pdf
-from ...peers import PEERS, T0_VERTICES, spherical_triangle_pdf, square_to_spherical_triangle
+from ...peers import PEERS
+from ...warps import (
+    METHODS,
+    T0_VERTICES,
+    square_to_spherical_triangle,
+    square_to_spherical_triangle_pdf,
+    square_to_triangle,
+    square_to_triangle_pdf,
+)
 from .._format import format_p
 from .config import WARP_MAPS, StudyConfig, domains
 from .results import Results, key
@@ -275,7 +282,7 @@ def _warp_setup(name):
         return (
             "triangle",
             lambda uv: square_to_triangle(uv, name),
-            lambda p: triangle_pdf(p, name),
+            lambda p: square_to_triangle_pdf(p, name),
             f"{name}: unit square -> T0",
         )
     peer = PEERS[name]
@@ -286,7 +293,7 @@ def _warp_setup(name):
         return (
             "triangle",
             lambda uv: square_to_spherical_triangle(uv, *T0_VERTICES),
-            lambda p: spherical_triangle_pdf(p, *T0_VERTICES),
+            lambda p: square_to_spherical_triangle_pdf(p, *T0_VERTICES),
             f"{name}: unit square -> T0{caption}",
         )
     raise ValueError(f"no warp picture for {name!r}")  # pragma: no cover

@@ -19,9 +19,9 @@ import numpy as np
 from ..._validation import check_seed
 from ...integrands import INTEGRANDS
 from ...io import atomic_directory
-from ...maps import METHODS
 from ...peers import PEERS
 from ...quality import LOG_FLOOR, SlopeFit, cap_discrepancy_squared, fit_slope, rmse
+from ...warps import METHODS
 from .config import BASELINE, FAMILY_SIGNIFICANCE, ROUNDING_LEVEL, WARP_MAPS, StudyConfig, domains, resolve_config
 from .figures import density_samplers, warp_maps, write_figures
 from .report import report_html, report_markdown

@@ -15,9 +15,9 @@ import numpy as np
 import numpy.typing as npt
 
 from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sphere_pdf
-from ...maps import get_map
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
+from ...warps import triangle_warp
 from ._compiled import COMPILED_PEERS, compiled_sample
 from .config import StudyConfig, domains
 
@@ -85,7 +85,7 @@ class Sampler:
     @property
     def uniform(self) -> bool:
         """Whether the density is uniform on the domain."""
-        return get_map(self.method).uniform if self.is_scheme else self.peer.uniform
+        return triangle_warp(self.method).uniform if self.is_scheme else self.peer.uniform
 
     @property
     def is_rule(self) -> bool:

@@ -10,14 +10,14 @@ from references import ELEMENTARY_ULPS, assert_power, assert_within_eps
 from scipy import integrate
 
 from symsphere.stats import chi2_test
-from symsphere.wedge import (
+from symsphere.warps import (
     WEDGE_MAPS,
     cosine_wedge_density,
-    cosine_wedge_pdf,
     cosine_wedge_point,
     cosine_wedge_to_square,
     cosine_wedge_uv,
     square_to_cosine_wedge,
+    square_to_cosine_wedge_pdf,
 )
 
 # Two chi-square tests below must not reject a correct sampler (test_forward_chi2 and
@@ -79,8 +79,8 @@ def test_pinned_values():
     # times r = sqrt(u) (1/2 + 1/2), against sqrt-of-sqrt closed forms (<= 3/2): (E + 3) eps on unit vectors.
     assert_within_eps(square_to_cosine_wedge(uv), expected, ELEMENTARY_ULPS + 3, scale=1)
     # the pdf at those points: 8 cos(theta)/pi
-    np.testing.assert_allclose(cosine_wedge_pdf(expected), 8 * expected[:, 2] / np.pi, rtol=1e-15)
-    assert cosine_wedge_pdf(expected[0]) == pytest.approx(4 * math.sqrt(3) / math.pi, rel=1e-15)
+    np.testing.assert_allclose(square_to_cosine_wedge_pdf(expected), 8 * expected[:, 2] / np.pi, rtol=1e-15)
+    assert square_to_cosine_wedge_pdf(expected[0]) == pytest.approx(4 * math.sqrt(3) / math.pi, rel=1e-15)
 
 
 def test_u_is_disk_area_and_v_is_azimuth():
@@ -100,7 +100,7 @@ def test_edges_and_corners_finite_inside_unit(dtype):
     assert d.dtype == dtype
     assert np.all(np.isfinite(d)) and np.all(_in_wedge(d))
     np.testing.assert_allclose(np.linalg.norm(d.astype(np.float64), axis=-1), 1, atol=4 * np.finfo(dtype).eps)
-    pdf = cosine_wedge_pdf(d)
+    pdf = square_to_cosine_wedge_pdf(d)
     assert np.all(np.isfinite(pdf)) and np.all(pdf >= 0)
     back = cosine_wedge_to_square(d)
     assert np.all(np.isfinite(back)) and np.all((back >= 0) & (back <= 1))
@@ -169,13 +169,13 @@ def test_pdf_is_inverse_jacobian():
     du = (square_to_cosine_wedge(uv + [h, 0]) - square_to_cosine_wedge(uv - [h, 0])) / (2 * h)
     dv = (square_to_cosine_wedge(uv + [0, h]) - square_to_cosine_wedge(uv - [0, h])) / (2 * h)
     jacobian = np.linalg.norm(np.cross(du, dv), axis=-1)
-    np.testing.assert_allclose(cosine_wedge_pdf(square_to_cosine_wedge(uv)), 1 / jacobian, rtol=1e-6)
+    np.testing.assert_allclose(square_to_cosine_wedge_pdf(square_to_cosine_wedge(uv)), 1 / jacobian, rtol=1e-6)
 
 
 def test_pdf_integrates_to_one():
     # Quadrature in (theta, phi) over W, d(omega) = sin(theta) d(theta) d(phi); exact value 1.
     def integrand(theta, phi):
-        return float(cosine_wedge_pdf(_direction(theta, phi))) * math.sin(theta)
+        return float(square_to_cosine_wedge_pdf(_direction(theta, phi))) * math.sin(theta)
 
     total, _ = integrate.dblquad(integrand, 0, np.pi / 4, 0, np.pi / 2, epsabs=1e-12, epsrel=1e-12)
     assert total == pytest.approx(1.0, abs=1e-10)
@@ -189,7 +189,7 @@ def test_pdf_integrates_to_one_monte_carlo():
     rng = np.random.default_rng(2024)
     d = rng.standard_normal((1_000_000, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    values = 4 * np.pi * cosine_wedge_pdf(d)
+    values = 4 * np.pi * square_to_cosine_wedge_pdf(d)
     stderr = values.std() / math.sqrt(len(values))
     assert abs(values.mean() - 1) < 5 * stderr
     assert np.count_nonzero(values) == pytest.approx(len(values) / 16, rel=0.02)  # W is 1/16 of the sphere
@@ -200,17 +200,17 @@ def test_pdf_zero_outside_wedge():
     rng = np.random.default_rng(3)
     theta, phi = np.arccos(rng.uniform(0.01, 0.99, 100)), rng.uniform(0.01, np.pi / 4 - 0.01, 100)
     w = _direction(theta, phi).T
-    assert np.all(cosine_wedge_pdf(w) > 0)
+    assert np.all(square_to_cosine_wedge_pdf(w) > 0)
     for k in range(1, 8):
-        assert np.all(cosine_wedge_pdf(w @ WEDGE_MAPS[k]) == 0), k
+        assert np.all(square_to_cosine_wedge_pdf(w @ WEDGE_MAPS[k]) == 0), k
     below = w * [1, 1, -1]
-    assert np.all(cosine_wedge_pdf(below) == 0)
+    assert np.all(square_to_cosine_wedge_pdf(below) == 0)
     # W is closed: its edges phi = 0 and phi = pi/4 are inside, just beyond them is not
     edge = np.array([[0.6, 0.0, 0.8], [0.6, 0.6, math.sqrt(0.28)]])
-    np.testing.assert_allclose(cosine_wedge_pdf(edge), 8 * edge[:, 2] / np.pi, rtol=1e-15)
+    np.testing.assert_allclose(square_to_cosine_wedge_pdf(edge), 8 * edge[:, 2] / np.pi, rtol=1e-15)
     beyond = np.array([[0.6, -1e-300, 0.8], [0.6, 0.6 + 1e-16, math.sqrt(0.28)], [1.0, 0.0, -1e-300]])
-    assert np.all(cosine_wedge_pdf(beyond) == 0)
-    assert not np.any(np.signbit(cosine_wedge_pdf(np.array([[0.6, 0.0, -0.8], [0.0, 0.6, 0.8]]))))
+    assert np.all(square_to_cosine_wedge_pdf(beyond) == 0)
+    assert not np.any(np.signbit(square_to_cosine_wedge_pdf(np.array([[0.6, 0.0, -0.8], [0.0, 0.6, 0.8]]))))
 
 
 def test_forward_chi2():
@@ -219,7 +219,9 @@ def test_forward_chi2():
     # P(bin) = (8/pi) dphi (c1^2 - c0^2)/2 on W's bins, 0 elsewhere.
     rng = np.random.default_rng(20261130)
     d = square_to_cosine_wedge(rng.random((N_CHI2, 2)))
-    res = chi2_test(d, cosine_wedge_pdf, "hemisphere", bins=BINS, significance=SIGNIFICANCE, test_count=CHI2_TESTS)
+    res = chi2_test(
+        d, square_to_cosine_wedge_pdf, "hemisphere", bins=BINS, significance=SIGNIFICANCE, test_count=CHI2_TESTS
+    )
     dphi, c = 2 * np.pi / BINS[0], np.linspace(0, 1, BINS[1] + 1)
     closed_form = np.zeros(BINS)
     closed_form[32:40] = (8 / np.pi) * dphi * np.diff(c**2) / 2
@@ -235,7 +237,9 @@ def test_chi2_has_power():
     u, v = rng.random((2, N_CHI2))
     phi = v * np.pi / 4
     d = np.stack([u * np.cos(phi), u * np.sin(phi), np.sqrt(1 - u * u)], axis=-1)
-    res = chi2_test(d, cosine_wedge_pdf, "hemisphere", bins=BINS, significance=SIGNIFICANCE, test_count=CHI2_TESTS)
+    res = chi2_test(
+        d, square_to_cosine_wedge_pdf, "hemisphere", bins=BINS, significance=SIGNIFICANCE, test_count=CHI2_TESTS
+    )
     assert not res.passed and res.p_value < 1e-12
 
 
@@ -268,7 +272,7 @@ def test_wedge_images_tile_the_hemisphere():
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     pre = np.einsum("nj,kij->kni", d, WEDGE_MAPS.astype(np.float64))  # d @ M[k].T
     assert np.all(_in_wedge(pre).sum(axis=0) == 1)
-    symmetrised = np.mean([cosine_wedge_pdf(p) for p in pre], axis=0)
+    symmetrised = np.mean([square_to_cosine_wedge_pdf(p) for p in pre], axis=0)
     np.testing.assert_allclose(symmetrised, _cosine_hemisphere_pdf(d), rtol=1e-15)
 
 
@@ -339,7 +343,7 @@ def test_numba_matches_numpy():
     uv = np.concatenate([corners, _interior_uv(10_000, seed=9, margin=0.0)])
     got = _numba_triple(uv)
     d = square_to_cosine_wedge(uv)
-    expected = np.column_stack([d, cosine_wedge_pdf(d), cosine_wedge_to_square(d)])
+    expected = np.column_stack([d, square_to_cosine_wedge_pdf(d), cosine_wedge_to_square(d)])
     e = ELEMENTARY_ULPS
     for column, k in enumerate([2 * e + 1, 2 * e + 1, 0, 0, 4 * e + 4, 6 * e + 3]):  # x, y, z, pdf, u', v'
         assert_within_eps(got[:, column], expected[:, column], k)
@@ -353,9 +357,9 @@ def test_vectorised_equals_scalar():
     for i, point in enumerate(uv):
         assert np.array_equal(square_to_cosine_wedge(point), batch[i])
         assert np.array_equal(cosine_wedge_to_square(batch[i]), cosine_wedge_to_square(batch)[i])
-        assert cosine_wedge_pdf(batch[i]) == cosine_wedge_pdf(batch)[i]
+        assert square_to_cosine_wedge_pdf(batch[i]) == square_to_cosine_wedge_pdf(batch)[i]
     assert square_to_cosine_wedge(uv.reshape(4, 5, 2)).shape == (4, 5, 3)
-    assert cosine_wedge_pdf(batch.reshape(4, 5, 3)).shape == (4, 5)
+    assert square_to_cosine_wedge_pdf(batch.reshape(4, 5, 3)).shape == (4, 5)
     assert cosine_wedge_to_square(batch.reshape(4, 5, 3)).shape == (4, 5, 2)
     # the elementwise functions on arrays are the array functions
     np.testing.assert_array_equal(np.stack(cosine_wedge_point(uv[:, 0], uv[:, 1]), axis=-1), batch)
@@ -366,14 +370,16 @@ def test_float32_close_to_float64():
     d32 = square_to_cosine_wedge(uv)
     assert d32.dtype == np.float32
     np.testing.assert_allclose(d32, square_to_cosine_wedge(uv.astype(np.float64)), rtol=0, atol=1e-7)
-    assert cosine_wedge_pdf(d32).dtype == np.float32
-    np.testing.assert_allclose(cosine_wedge_pdf(d32), cosine_wedge_pdf(d32.astype(np.float64)), rtol=2e-7)
+    assert square_to_cosine_wedge_pdf(d32).dtype == np.float32
+    np.testing.assert_allclose(
+        square_to_cosine_wedge_pdf(d32), square_to_cosine_wedge_pdf(d32.astype(np.float64)), rtol=2e-7
+    )
     assert cosine_wedge_to_square(d32).dtype == np.float32
 
 
 def test_integer_input_gives_float64():
     assert square_to_cosine_wedge([1, 0]).dtype == np.float64
-    assert cosine_wedge_pdf([1, 0, 0]).dtype == np.float64
+    assert square_to_cosine_wedge_pdf([1, 0, 0]).dtype == np.float64
     assert cosine_wedge_to_square([0, 0, 1]).dtype == np.float64
 
 
@@ -386,9 +392,9 @@ def test_integer_input_gives_float64():
         (lambda: square_to_cosine_wedge([0.5, 0.5, 0.5]), ValueError, r"'uv' must have shape \(\.\.\., 2\)"),
         (lambda: square_to_cosine_wedge(0.5), ValueError, r"'uv' must have shape"),
         (lambda: square_to_cosine_wedge([["a", "b"]]), TypeError, r"'uv'"),
-        (lambda: cosine_wedge_pdf([0.0, 1.0]), ValueError, r"'d' must have shape \(\.\.\., 3\)"),
-        (lambda: cosine_wedge_pdf([0.0, np.inf, 1.0]), ValueError, r"'d' must be finite"),
-        (lambda: cosine_wedge_pdf("xyz"), TypeError, r"'d'"),
+        (lambda: square_to_cosine_wedge_pdf([0.0, 1.0]), ValueError, r"'d' must have shape \(\.\.\., 3\)"),
+        (lambda: square_to_cosine_wedge_pdf([0.0, np.inf, 1.0]), ValueError, r"'d' must be finite"),
+        (lambda: square_to_cosine_wedge_pdf("xyz"), TypeError, r"'d'"),
         (lambda: cosine_wedge_to_square([0.0, 0.6, 0.8]), ValueError, r"'d' must lie in the wedge W"),
         (lambda: cosine_wedge_to_square([0.6, -0.1, 0.79]), ValueError, r"'d' must lie in the wedge W"),
         (lambda: cosine_wedge_to_square([0.6, 0.0, -0.8]), ValueError, r"'d' must lie in the wedge W"),

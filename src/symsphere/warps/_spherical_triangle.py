@@ -14,19 +14,24 @@ uses them) the arcs start from (1, 0, 1)/sqrt 2: a different map with the same
 from __future__ import annotations
 
 import math
+from typing import Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
-from ._typing import Float64Array, FloatArray
-from ._validation import check_directions, check_triangle, check_unit_directions, check_uv
+from .._typing import Float64Array, FloatArray
+from .._validation import check_directions, check_triangle, check_unit_directions, check_uv
+
+_Setup: TypeAlias = "tuple[Float64Array, Float64Array, Float64Array, float, float, float]"
 
 __all__ = [
     "T0_VERTICES",
     "square_to_spherical_triangle",
     "spherical_triangle_to_square",
-    "spherical_triangle_pdf",
-    "square_to_t0_arvo",
+    "square_to_spherical_triangle_pdf",
+    "square_to_arvo_triangle",
+    "square_to_arvo_triangle_pdf",
+    "arvo_triangle_to_square",
 ]
 
 T0_VERTICES = np.array([[0.0, 0.0, 1.0], [2**-0.5, 0.0, 2**-0.5], [3**-0.5, 3**-0.5, 3**-0.5]])
@@ -61,7 +66,7 @@ def square_to_spherical_triangle(uv: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arr
 
     Examples
     --------
-    >>> from symsphere.peers import T0_VERTICES, square_to_spherical_triangle
+    >>> from symsphere.warps import T0_VERTICES, square_to_spherical_triangle
     >>> A, B, C = T0_VERTICES
     >>> square_to_spherical_triangle([[0.7, 0.0], [0.0, 1.0], [1.0, 1.0]], A, B, C).round(12) + 0.0
     array([[0.70710678, 0.        , 0.70710678],
@@ -94,7 +99,7 @@ def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arra
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.peers import T0_VERTICES, spherical_triangle_to_square, square_to_spherical_triangle
+    >>> from symsphere.warps import T0_VERTICES, spherical_triangle_to_square, square_to_spherical_triangle
     >>> uv = np.array([0.3, 0.6])
     >>> p = square_to_spherical_triangle(uv, *T0_VERTICES)
     >>> bool(np.allclose(spherical_triangle_to_square(p, *T0_VERTICES), uv))
@@ -105,7 +110,9 @@ def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arra
     return _arvo_inverse(d.astype(np.float64), *setup).astype(d.dtype, copy=False)
 
 
-def spherical_triangle_pdf(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Float64Array:
+def square_to_spherical_triangle_pdf(
+    d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike
+) -> Float64Array:
     """Density of :func:`square_to_spherical_triangle`: 1/area inside ABC, 0 outside.
 
     Inside means on the inner side of the three edges' great circles, with a
@@ -115,8 +122,8 @@ def spherical_triangle_pdf(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike,
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.peers import T0_VERTICES, spherical_triangle_pdf
-    >>> spherical_triangle_pdf([[0.3, 0.2, 0.93273791], [0.0, 0.0, -1.0]], *T0_VERTICES) * np.pi
+    >>> from symsphere.warps import T0_VERTICES, square_to_spherical_triangle_pdf
+    >>> square_to_spherical_triangle_pdf([[0.3, 0.2, 0.93273791], [0.0, 0.0, -1.0]], *T0_VERTICES) * np.pi
     array([12.,  0.])
     """
     d = check_directions(d, "d")
@@ -130,7 +137,7 @@ def spherical_triangle_pdf(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.ArrayLike,
     return np.where(inside, 1.0 / _triangle_area(A, B, C), 0.0)
 
 
-def square_to_t0_arvo(uv: npt.ArrayLike) -> FloatArray:
+def square_to_arvo_triangle(uv: npt.ArrayLike) -> FloatArray:
     """Arvo's map onto T0: :func:`square_to_spherical_triangle` with ``T0_VERTICES`` as they are.
 
     The vertices are taken in the order A = (0, 0, 1), B = (1, 0, 1)/sqrt 2,
@@ -139,8 +146,8 @@ def square_to_t0_arvo(uv: npt.ArrayLike) -> FloatArray:
 
     Examples
     --------
-    >>> from symsphere.spherical_triangles import square_to_t0_arvo
-    >>> square_to_t0_arvo([[0.0, 0.0], [1.0, 1.0]]).round(6)
+    >>> from symsphere.warps import square_to_arvo_triangle
+    >>> square_to_arvo_triangle([[0.0, 0.0], [1.0, 1.0]]).round(6)
     array([[0.707107, 0.      , 0.707107],
            [0.57735 , 0.57735 , 0.57735 ]])
     """
@@ -148,19 +155,50 @@ def square_to_t0_arvo(uv: npt.ArrayLike) -> FloatArray:
     return _arvo_forward(uv.astype(np.float64), *_T0_SETUP).astype(uv.dtype, copy=False)
 
 
+def square_to_arvo_triangle_pdf(d: npt.ArrayLike) -> Float64Array:
+    """Density of :func:`square_to_arvo_triangle`: 12/pi in T0, 0 outside.
+
+    :func:`square_to_spherical_triangle_pdf` with ``T0_VERTICES``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import square_to_arvo_triangle_pdf
+    >>> square_to_arvo_triangle_pdf([[0.3, 0.2, 0.93273791], [0.0, 0.0, -1.0]]) * np.pi
+    array([12.,  0.])
+    """
+    return square_to_spherical_triangle_pdf(d, *T0_VERTICES)
+
+
+def arvo_triangle_to_square(d: npt.ArrayLike) -> FloatArray:
+    """Inverse of :func:`square_to_arvo_triangle`: :func:`spherical_triangle_to_square` with ``T0_VERTICES``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import arvo_triangle_to_square, square_to_arvo_triangle
+    >>> uv = np.array([0.3, 0.6])
+    >>> bool(np.allclose(arvo_triangle_to_square(square_to_arvo_triangle(uv)), uv))
+    True
+    """
+    d = check_unit_directions(d, "d")
+    return _arvo_inverse(d.astype(np.float64), *_T0_SETUP).astype(d.dtype, copy=False)
+
+
 # --- private helpers: trust their inputs ------------------------------------------
 
 
-def _triangle_area(A, B, C):
+def _triangle_area(A: Float64Array, B: Float64Array, C: Float64Array) -> float:
     # Van Oosterom & Strackee (1983): tan(E/2) = |A.(B x C)| / (1 + A.B + B.C + C.A).
-    return 2.0 * math.atan2(abs(float(np.dot(A, np.cross(B, C)))), 1.0 + A @ B + B @ C + C @ A)
+    return 2.0 * math.atan2(abs(float(np.dot(A, np.cross(B, C)))), float(1.0 + A @ B + B @ C + C @ A))
 
 
-def _unit(v):
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+def _unit(v: Float64Array) -> Float64Array:
+    unit: Float64Array = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return unit
 
 
-def _triangle_setup(verts):
+def _triangle_setup(verts: Any) -> _Setup:
     """Per-triangle constants of Arvo's algorithm: vertices, alpha, cos c, area."""
     A, B, C = (np.asarray(v, dtype=np.float64) for v in verts)
     # Angle at A between the arcs AB and AC, from the tangent vectors at A.
@@ -169,7 +207,9 @@ def _triangle_setup(verts):
     return A, B, C, alpha, float(A @ B), _triangle_area(A, B, C)
 
 
-def _arvo_forward(uv, A, B, C, alpha, cos_c, area):
+def _arvo_forward(
+    uv: Float64Array, A: Float64Array, B: Float64Array, C: Float64Array, alpha: float, cos_c: float, area: float
+) -> Float64Array:
     # Arvo (1995), Fig. 2: the sub-triangle A B C' of area A' = u * area has
     #   q = cos|AC'| = [cos c (t cos(alpha) - 1) - s sin(alpha)] / D,
     #   D = 1 - t cos(alpha) + s sin(alpha) cos c,  (s, t) = (sin, cos)(A' - alpha)
@@ -197,10 +237,13 @@ def _arvo_forward(uv, A, B, C, alpha, cos_c, area):
     tangent = c_hat - np.sum(c_hat * B, axis=-1, keepdims=True) * B
     norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
     tangent = tangent / np.where(norm > 0, norm, 1.0)
-    return (1.0 - w)[..., None] * B + sin_d[..., None] * tangent
+    d: Float64Array = (1.0 - w)[..., None] * B + sin_d[..., None] * tangent
+    return d
 
 
-def _arvo_inverse(d, A, B, C, alpha, cos_c, area):
+def _arvo_inverse(
+    d: Float64Array, A: Float64Array, B: Float64Array, C: Float64Array, alpha: float, cos_c: float, area: float
+) -> Float64Array:
     d = _unit(d)
     m = np.cross(B, d)  # normal of the great circle through B and d
     n_ac = np.cross(A, C)
@@ -216,7 +259,8 @@ def _arvo_inverse(d, A, B, C, alpha, cos_c, area):
     one_minus_cb = 0.5 * np.sum((c_hat - B) ** 2, axis=-1)
     one_minus_db = 0.5 * np.sum((d - B) ** 2, axis=-1)
     v = np.where(at_b, 0.0, one_minus_db / np.where(at_b, 1.0, one_minus_cb))
-    return np.clip(np.stack([u, v], axis=-1), 0.0, 1.0)
+    uv: Float64Array = np.clip(np.stack([u, v], axis=-1), 0.0, 1.0)
+    return uv
 
 
 _T0_SETUP = _triangle_setup(T0_VERTICES)

@@ -4,8 +4,8 @@ The wedge is W = {0 <= phi <= pi/4, z >= 0} = {x >= y >= 0, z >= 0}, with phi th
 azimuth of (x, y) and z = cos(theta).  The eight signed permutations that keep z,
 (x, y, z) -> (+-x, +-y, z) and (+-y, +-x, z) (:data:`WEDGE_MAPS`), tile the upper
 hemisphere with eight copies of W.  The map is a triple, side by side as in
-:mod:`symsphere.maps`: forward :func:`square_to_cosine_wedge`, pdf
-:func:`cosine_wedge_pdf` and inverse :func:`cosine_wedge_to_square`.
+:func:`symsphere.warps.square_to_triangle`: forward :func:`square_to_cosine_wedge`, pdf
+:func:`square_to_cosine_wedge_pdf` and inverse :func:`cosine_wedge_to_square`.
 
 Derivation (Malley's method restricted to a wedge)
     Project W vertically onto the unit disk: W becomes the sector
@@ -61,13 +61,13 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import overload
 
-from ._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
-from .symmetry import HEMISPHERE_MAPS
+from .._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
+from ..symmetry import HEMISPHERE_MAPS
 
 __all__ = [
     "WEDGE_MAPS",
     "square_to_cosine_wedge",
-    "cosine_wedge_pdf",
+    "square_to_cosine_wedge_pdf",
     "cosine_wedge_to_square",
     "cosine_wedge_point",
     "cosine_wedge_density",
@@ -107,18 +107,18 @@ def square_to_cosine_wedge(uv: npt.ArrayLike) -> np.ndarray:
     ndarray, shape (..., 3)
         Unit directions in W = {x >= y >= 0, z >= 0}, in the dtype of *uv*
         (float64 for integer input), with density ``8 cos(theta) / pi``
-        with respect to solid angle (:func:`cosine_wedge_pdf`).  u = 0 is the
+        with respect to solid angle (:func:`square_to_cosine_wedge_pdf`).  u = 0 is the
         pole (0, 0, 1), u = 1 the rim z = 0; v = 0 is the half-plane y = 0,
         v = 1 the half-plane x = y.
 
     See Also
     --------
-    cosine_wedge_pdf, cosine_wedge_to_square, cosine_wedge_point
+    square_to_cosine_wedge_pdf, cosine_wedge_to_square, cosine_wedge_point
 
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.wedge import square_to_cosine_wedge
+    >>> from symsphere.warps import square_to_cosine_wedge
     >>> square_to_cosine_wedge([[0.0, 0.3], [1.0, 0.0], [1.0, 1.0]])  # pole; rim at phi = 0, pi/4
     array([[0.        , 0.        , 1.        ],
            [1.        , 0.        , 0.        ],
@@ -133,7 +133,7 @@ def square_to_cosine_wedge(uv: npt.ArrayLike) -> np.ndarray:
     return d.astype(uv.dtype, copy=False)
 
 
-def cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
+def square_to_cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
     """Density of :func:`square_to_cosine_wedge` with respect to solid angle.
 
     ``8 cos(theta) / pi = 8 z / pi`` inside the (closed) wedge
@@ -159,8 +159,8 @@ def cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.wedge import cosine_wedge_pdf
-    >>> cosine_wedge_pdf([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.6, 0.8]]) * np.pi  # 8, 6.4, outside
+    >>> from symsphere.warps import square_to_cosine_wedge_pdf
+    >>> square_to_cosine_wedge_pdf([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.6, 0.8]]) * np.pi  # 8, 6.4, outside
     array([8. , 6.4, 0. ])
     """
     d = check_unit_directions(d, "d")
@@ -200,7 +200,7 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.wedge import cosine_wedge_to_square, square_to_cosine_wedge
+    >>> from symsphere.warps import cosine_wedge_to_square, square_to_cosine_wedge
     >>> uv = np.array([[0.25, 0.5], [0.9, 0.1]])
     >>> bool(np.allclose(cosine_wedge_to_square(square_to_cosine_wedge(uv)), uv, rtol=0, atol=1e-15))
     True
@@ -246,7 +246,7 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     Examples
     --------
     >>> from numba import njit
-    >>> from symsphere.wedge import cosine_wedge_point
+    >>> from symsphere.warps import cosine_wedge_point
     >>> [round(float(c), 12) for c in cosine_wedge_point(0.64, 0.0)]
     [0.8, 0.0, 0.6]
 
@@ -275,7 +275,7 @@ def _point(u: Any, v: Any) -> Any:  # the formula (numpy or numba)
 def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     """Elementwise pdf: ``8 z / pi`` where x >= y >= 0 and z >= 0, else 0.
 
-    Checked as :func:`cosine_wedge_pdf` checks its input (finite unit vectors), except
+    Checked as :func:`square_to_cosine_wedge_pdf` checks its input (finite unit vectors), except
     inside a numba kernel.
 
     Parameters
@@ -290,7 +290,7 @@ def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     Examples
     --------
     >>> import math
-    >>> from symsphere.wedge import cosine_wedge_density
+    >>> from symsphere.warps import cosine_wedge_density
     >>> float(cosine_wedge_density(0.6, 0.0, 0.8)) == 6.4 / math.pi
     True
     >>> float(cosine_wedge_density(0.0, 0.6, 0.8))     # phi = pi/2: outside W
@@ -324,7 +324,7 @@ def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
 
     Examples
     --------
-    >>> from symsphere.wedge import cosine_wedge_uv
+    >>> from symsphere.warps import cosine_wedge_uv
     >>> [round(float(c), 12) for c in cosine_wedge_uv(0.6, 0.0, 0.8)]
     [0.36, 0.0]
     """

@@ -6,7 +6,7 @@ import pytest
 from references import ELEMENTARY_ULPS, assert_within_eps
 from scipy import integrate
 
-from symsphere import METHODS, square_to_triangle, triangle_pdf, triangle_to_square
+from symsphere.warps import METHODS, square_to_triangle, square_to_triangle_pdf, triangle_to_square
 
 VERTICES = {  # (u, v) -> vertex of T0, the same for all three maps
     (0.0, 0.0): (0.0, 0.0, 1.0),
@@ -82,13 +82,13 @@ def test_equal_area_known_values():
 def test_equal_area_sine_polynomial_is_as_accurate_as_libm():
     # The map's sine of u pi/12 is a polynomial (vectorisable); against an 80-bit sine it must
     # stay within 0.6 ulp (a correctly rounded sine is within 0.5; glibc measured 0.516).
-    from symsphere.maps import _sin_small
+    from symsphere.warps._triangle import sin_small
 
     if np.finfo(np.longdouble).nmant < 63:
         pytest.skip("needs an 80-bit long double as the reference")
     u = np.concatenate([np.linspace(0.0, 1.0, 1_000_001), [5e-324, 1e-300, 1e-8]])
     s = u * (np.pi / 12)
-    got = _sin_small(s)
+    got = sin_small(s)
     exact = np.sin(s.astype(np.longdouble))
     ulps = np.abs(got.astype(np.longdouble) - exact) / np.spacing(got).astype(np.longdouble)
     assert got[0] == 0.0 and np.all(np.isfinite(got))
@@ -130,7 +130,7 @@ def test_pdf_is_inverse_jacobian(method):
     du = (square_to_triangle(uv + [h, 0], method) - square_to_triangle(uv - [h, 0], method)) / (2 * h)
     dv = (square_to_triangle(uv + [0, h], method) - square_to_triangle(uv - [0, h], method)) / (2 * h)
     jacobian = np.linalg.norm(np.cross(du, dv), axis=-1)
-    np.testing.assert_allclose(triangle_pdf(square_to_triangle(uv, method), method), 1 / jacobian, rtol=1e-6)
+    np.testing.assert_allclose(square_to_triangle_pdf(square_to_triangle(uv, method), method), 1 / jacobian, rtol=1e-6)
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -138,7 +138,7 @@ def test_pdf_integrates_to_one(method):
     # Quadrature over T0 in (phi, s) with 1 - cos(theta) = s^2, which absorbs the paper
     # maps' 1/sin(theta) singularity at the pole: d(omega) = d(phi) d(cos theta) = 2 s ds d(phi).
     def integrand(s, phi):
-        return float(triangle_pdf(_direction(phi, s * s), method)) * 2 * s
+        return float(square_to_triangle_pdf(_direction(phi, s * s), method)) * 2 * s
 
     total, error = integrate.dblquad(
         integrand, 0, np.pi / 4, 0, lambda phi: np.sqrt(1 - _cos_theta_max(phi)), epsabs=1e-11, epsrel=1e-11
@@ -149,11 +149,11 @@ def test_pdf_integrates_to_one(method):
 @pytest.mark.parametrize("method", METHODS)
 def test_pdf_zero_outside_and_inf_only_at_pole(method):
     outside = np.array([[0.5, 0.6, 0.62449980], [0.8, 0.1, 0.59160798], [0.1, -0.1, 0.98994949]])
-    assert np.all(triangle_pdf(outside, method) == 0)
-    pole = triangle_pdf([0.0, 0.0, 1.0], method)
+    assert np.all(square_to_triangle_pdf(outside, method) == 0)
+    pole = square_to_triangle_pdf([0.0, 0.0, 1.0], method)
     assert pole == (12 / np.pi if method == "equal_area" else np.inf)
     p = square_to_triangle(np.array([[0.5, 1e-300], [0.5, 1e-12]]), method)
-    assert np.all(np.isfinite(triangle_pdf(p, method)))
+    assert np.all(np.isfinite(square_to_triangle_pdf(p, method)))
 
 
 @pytest.mark.parametrize("method", ["paper1", "paper2"])
@@ -161,8 +161,8 @@ def test_paper_maps_are_not_uniform(method):
     # Their density diverges at the pole and drops below uniform at the far edge.
     near_pole = square_to_triangle([0.5, 1e-6], method)
     far_edge = square_to_triangle([0.5, 1.0], method)
-    assert triangle_pdf(near_pole, method) > 1e5 * 12 / np.pi
-    assert triangle_pdf(far_edge, method) < 12 / np.pi
+    assert square_to_triangle_pdf(near_pole, method) > 1e5 * 12 / np.pi
+    assert square_to_triangle_pdf(far_edge, method) < 12 / np.pi
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -172,7 +172,7 @@ def test_vectorised_equals_scalar(method):
     for i, point in enumerate(uv):
         assert np.array_equal(square_to_triangle(point, method), batch[i])
         assert np.array_equal(triangle_to_square(batch[i], method), triangle_to_square(batch, method)[i])
-        assert triangle_pdf(batch[i], method) == triangle_pdf(batch, method)[i]
+        assert square_to_triangle_pdf(batch[i], method) == square_to_triangle_pdf(batch, method)[i]
     assert square_to_triangle(uv.reshape(4, 5, 2), method).shape == (4, 5, 3)
 
 
@@ -182,7 +182,7 @@ def test_float32_close_to_float64(method):
     p32 = square_to_triangle(uv, method)
     assert p32.dtype == np.float32
     np.testing.assert_allclose(p32, square_to_triangle(uv.astype(np.float64), method), atol=1e-7)
-    assert triangle_pdf(p32, method).dtype == np.float32
+    assert square_to_triangle_pdf(p32, method).dtype == np.float32
     assert triangle_to_square(p32, method).dtype == np.float32
 
 
@@ -197,8 +197,8 @@ def test_float32_close_to_float64(method):
         (lambda: square_to_triangle([["a", "b"]]), TypeError, r"'uv'"),
         (lambda: square_to_triangle([0.5, 0.5], "arvo"), ValueError, r"'arvo' is not a valid method; use one of"),
         (lambda: square_to_triangle([0.5, 0.5], method=None), ValueError, r"not a valid method"),
-        (lambda: triangle_pdf([0.0, 1.0]), ValueError, r"'p' must have shape \(\.\.\., 3\)"),
-        (lambda: triangle_pdf([0.0, np.inf, 1.0]), ValueError, r"'p' must be finite"),
+        (lambda: square_to_triangle_pdf([0.0, 1.0]), ValueError, r"'p' must have shape \(\.\.\., 3\)"),
+        (lambda: square_to_triangle_pdf([0.0, np.inf, 1.0]), ValueError, r"'p' must be finite"),
         (lambda: triangle_to_square([0.6, 0.0, 0.5]), ValueError, r"'p' must lie in the triangle T0"),
         (lambda: triangle_to_square([0.1, 0.2, 0.97]), ValueError, r"'p' must lie in the triangle T0"),
         (lambda: triangle_to_square([0.5, 0.5, 0.5], "x"), ValueError, r"'x' is not a valid method"),

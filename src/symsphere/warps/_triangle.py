@@ -28,83 +28,25 @@ Outputs are clamped into T0 (``z >= x >= y >= 0``) to absorb rounding, so
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-
 import numpy as np
 import numpy.typing as npt
 from numba.extending import register_jitable
 
-from ._typing import BoolArray, Float64Array, FloatArray, MapMethod
-from ._validation import check_choice, check_directions, check_unit_directions, check_uv
+from .._typing import BoolArray, Float64Array, FloatArray, MapMethod
+from .._validation import check_choice, check_directions, check_unit_directions, check_uv
+from ._record import Warp
 
 __all__ = [
     "METHODS",
     "square_to_triangle",
-    "triangle_pdf",
+    "square_to_triangle_pdf",
     "triangle_to_square",
-    "TriangleMap",
-    "get_map",
+    "triangle_warp",
+    "TRIANGLE_WARPS",
 ]
 
 _SQRT2 = np.sqrt(2.0)
 TRIANGLE_AREA = np.pi / 12
-
-
-@dataclass(frozen=True)
-class TriangleMap:
-    """A map from the unit square onto T0: forward, pdf and inverse.
-
-    ``point(u, v) -> (x, y, z)`` and ``density(x, y, z)`` are elementwise and
-    written with numpy ufuncs only, so the same source serves numpy arrays and,
-    compiled by numba, the scalar kernels of :mod:`symsphere._kernels`.
-    ``inverse`` takes and returns float64 arrays.  All three trust their
-    inputs; the public functions of this module validate.
-
-    Attributes
-    ----------
-    name : str
-        The key in :data:`METHODS`.
-    point : callable
-        ``point(u, v) -> (x, y, z)``, elementwise on float64 arrays (or scalars).
-    density : callable
-        ``density(x, y, z)``: the density with respect to solid angle, elementwise;
-        0 outside T0.
-    inverse : callable
-        Directions (..., 3) in T0 to points (..., 2) of the unit square.
-    uniform : bool
-        Whether the density is the constant 12/pi (only ``'equal_area'``).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from symsphere.maps import get_map
-    >>> m = get_map("equal_area")
-    >>> m.name, m.uniform
-    ('equal_area', True)
-    >>> p = m.forward(np.array([[0.5, 0.5], [0.25, 1.0]]))    # (m, 2) -> (m, 3)
-    >>> p.shape
-    (2, 3)
-    >>> m.pdf(p)                                             # 12/pi on T0
-    array([3.81971863, 3.81971863])
-    >>> bool(np.allclose(m.inverse(p), [[0.5, 0.5], [0.25, 1.0]]))
-    True
-    """
-
-    name: str
-    point: Callable[[Float64Array, Float64Array], tuple[Float64Array, Float64Array, Float64Array]]
-    density: Callable[[Float64Array, Float64Array, Float64Array], FloatArray]
-    inverse: Callable[[Float64Array], Float64Array]
-    uniform: bool
-
-    def forward(self, uv: Float64Array) -> Float64Array:
-        """Points (..., 2) of the unit square to directions (..., 3) in T0."""
-        return np.stack(self.point(uv[..., 0], uv[..., 1]), axis=-1)
-
-    def pdf(self, p: Float64Array) -> Float64Array:
-        """Density with respect to solid angle at directions (..., 3); 0 outside T0."""
-        with np.errstate(divide="ignore", over="ignore"):
-            return np.asarray(self.density(p[..., 0], p[..., 1], p[..., 2]), dtype=np.float64)
 
 
 def square_to_triangle(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -126,17 +68,17 @@ def square_to_triangle(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> F
 
     Examples
     --------
-    >>> from symsphere import square_to_triangle
+    >>> from symsphere.warps import square_to_triangle
     >>> square_to_triangle([[0.0, 0.0], [1.0, 1.0]])     # the pole, and the vertex (1, 1, 1)/sqrt 3
     array([[0.        , 0.        , 1.        ],
            [0.57735027, 0.57735027, 0.57735027]])
     """
     uv = check_uv(uv)
-    triangle_map = get_map(method)
-    return triangle_map.forward(uv.astype(np.float64)).astype(uv.dtype, copy=False)
+    warp = triangle_warp(method)
+    return warp.points(uv.astype(np.float64)).astype(uv.dtype, copy=False)
 
 
-def triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
+def square_to_triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density of a map's points with respect to solid angle on T0.
 
     Parameters
@@ -154,13 +96,13 @@ def triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArr
 
     Examples
     --------
-    >>> from symsphere import triangle_pdf
-    >>> float(triangle_pdf([0.3, 0.2, 0.93273791]))   # 12/pi
+    >>> from symsphere.warps import square_to_triangle_pdf
+    >>> float(square_to_triangle_pdf([0.3, 0.2, 0.93273791]))   # 12/pi
     3.819718634205488
     """
     p = check_unit_directions(p, "p")
-    triangle_map = get_map(method)
-    density = triangle_map.pdf(p.astype(np.float64))
+    warp = triangle_warp(method)
+    density = warp.densities(p.astype(np.float64))
     with np.errstate(over="ignore"):  # beyond float32's range near the vertex: inf, as at the vertex
         return density.astype(p.dtype, copy=False)
 
@@ -183,13 +125,13 @@ def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> Fl
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere import square_to_triangle, triangle_to_square
+    >>> from symsphere.warps import square_to_triangle, triangle_to_square
     >>> uv = np.array([0.25, 0.75])
     >>> bool(np.allclose(triangle_to_square(square_to_triangle(uv)), uv, rtol=0, atol=1e-14))
     True
     """
     p = check_directions(p, "p")
-    triangle_map = get_map(method)
+    method = check_choice(method, "method", METHODS)
     p64 = p.astype(np.float64)
     x, y, z = p64[..., 0], p64[..., 1], p64[..., 2]
     with np.errstate(over="ignore"):  # a huge vector: rejected as non-unit below
@@ -198,11 +140,11 @@ def triangle_to_square(p: npt.ArrayLike, method: MapMethod = "equal_area") -> Fl
     if not inside:
         raise ValueError("'p' must lie in the triangle T0 = {z >= x >= y >= 0}")
     check_unit_directions(p, "p")  # a zero or non-unit vector would map to NaN or a wrong point
-    return triangle_map.inverse(p64).astype(p.dtype, copy=False)
+    return _INVERSES[method](p64).astype(p.dtype, copy=False)
 
 
-def get_map(method: MapMethod) -> TriangleMap:
-    """The registered :class:`TriangleMap` called *method*.
+def triangle_warp(method: MapMethod) -> Warp:
+    """The :class:`~symsphere.warps.Warp` onto T0 called *method*.
 
     Parameters
     ----------
@@ -211,7 +153,8 @@ def get_map(method: MapMethod) -> TriangleMap:
 
     Returns
     -------
-    TriangleMap
+    Warp
+        Its ``point`` and ``density`` are the elementwise formulas the kernels compile.
 
     Raises
     ------
@@ -221,19 +164,19 @@ def get_map(method: MapMethod) -> TriangleMap:
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.maps import METHODS, get_map
-    >>> {name: get_map(name).uniform for name in METHODS}
+    >>> from symsphere.warps import METHODS, triangle_warp
+    >>> {name: triangle_warp(name).uniform for name in METHODS}
     {'equal_area': True, 'paper1': False, 'paper2': False}
-    >>> get_map("paper1").forward(np.array([0.0, 1.0]))      # u = 0, v = 1: (1, 0, 1)/sqrt 2
+    >>> triangle_warp("paper1").forward([0.0, 1.0])      # u = 0, v = 1: (1, 0, 1)/sqrt 2
     array([0.70710678, 0.        , 0.70710678])
     """
-    return _REGISTRY[check_choice(method, "method", METHODS)]
+    return TRIANGLE_WARPS[check_choice(method, "method", METHODS)]
 
 
 # --- private: the triples ------------------------------------------------------
 # Elementwise, numpy ufuncs only (no np.where, no branches): numpy runs them on
 # arrays, and numba compiles them to scalar code inside the kernels of
-# _kernels.py (``register_jitable`` leaves the Python functions unchanged).
+# symsphere._kernels (``register_jitable`` leaves the Python functions unchanged).
 
 
 @register_jitable
@@ -267,7 +210,7 @@ def _equal_area_point(u: Float64Array, v: Float64Array) -> tuple[Float64Array, F
     # tan(phi) = sqrt2 sin(s) / (sqrt2 cos(s) - 1) =: a / b with s = u pi/12 in [0, pi/12]; then
     # (cos phi, sin phi) = (b, a) / |(a, b)|, with b >= sqrt2 cos(pi/12) - 1 > 0.36.  One sine
     # (cos s = sqrt(1 - sin^2 s) is exact enough for sin s <= 0.26) and no atan2, sin, cos of phi.
-    sin_s = _sin_small(u * (np.pi / 12))
+    sin_s = sin_small(u * (np.pi / 12))
     a = _SQRT2 * sin_s
     b = _SQRT2 * np.sqrt(1.0 - sin_s * sin_s) - 1.0
     inv_norm = 1.0 / np.sqrt(a * a + b * b)
@@ -278,7 +221,8 @@ def _equal_area_point(u: Float64Array, v: Float64Array) -> tuple[Float64Array, F
 
 
 @register_jitable
-def _sin_small(s: Float64Array) -> Float64Array:
+def sin_small(s: Float64Array) -> Float64Array:
+    """sin s for 0 <= s <= pi/12: the polynomial of the equal-area map (public for its accuracy test only)."""
     # sin s for 0 <= s <= pi/12 by its Taylor polynomial to s^13 (Horner in s^2): the remainder is
     # below s^15/15! < 2e-21, far under half an ulp, and measured against an 80-bit sine on 2e7
     # points it is within 0.534 ulp (glibc's sin: 0.516), correctly rounded as often.  A polynomial,
@@ -368,13 +312,46 @@ def _vertex_singular_density(
     return inside * (constant * cos_phi / ((smooth_factor + outside) * r))
 
 
-_REGISTRY: dict[MapMethod, TriangleMap] = {
-    "equal_area": TriangleMap("equal_area", _equal_area_point, _equal_area_density, _equal_area_inverse, True),
-    "paper1": TriangleMap("paper1", _paper1_point, _paper1_density, _paper1_inverse, False),
-    "paper2": TriangleMap("paper2", _paper2_point, _paper2_density, _paper2_inverse, False),
+_INVERSES = {"equal_area": _equal_area_inverse, "paper1": _paper1_inverse, "paper2": _paper2_inverse}
+_POINTS = {"equal_area": _equal_area_point, "paper1": _paper1_point, "paper2": _paper2_point}
+_DENSITIES = {"equal_area": _equal_area_density, "paper1": _paper1_density, "paper2": _paper2_density}
+_REFERENCES = {
+    "equal_area": "Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995, in closed form on T0",
+    "paper1": "Dimov, Penzov, Stoilova, Algorithm 1 as printed",
+    "paper2": "Dimov, Penzov, Stoilova, Algorithm 2 as printed",
 }
-METHODS = tuple(_REGISTRY)
+
+
+def _triangle_warp_record(method: MapMethod) -> Warp:
+    def forward(uv: npt.ArrayLike) -> FloatArray:
+        return square_to_triangle(uv, method)
+
+    def pdf(p: npt.ArrayLike) -> FloatArray:
+        return square_to_triangle_pdf(p, method)
+
+    def inverse(p: npt.ArrayLike) -> FloatArray:
+        return triangle_to_square(p, method)
+
+    return Warp(
+        method,
+        "triangle",
+        method == "equal_area",
+        48,
+        forward,
+        pdf,
+        inverse,
+        point=_POINTS[method],
+        density=_DENSITIES[method],
+        reference=_REFERENCES[method],
+    )
+
+
+TRIANGLE_WARPS: dict[MapMethod, Warp] = {
+    method: _triangle_warp_record(method) for method in ("equal_area", "paper1", "paper2")
+}
+"""dict method -> :class:`~symsphere.warps.Warp`: the maps onto T0, the choices of ``method=``."""
+METHODS: tuple[MapMethod, ...] = tuple(TRIANGLE_WARPS)
 """tuple of str: the names of the maps onto T0, the choices of ``method=``.
 
 Only ``'equal_area'``, the default, is uniform; ``'paper1'`` and ``'paper2'`` are the paper's
-Algorithms 1 and 2 as printed, with their exact densities (:func:`triangle_pdf`)."""
+Algorithms 1 and 2 as printed, with their exact densities (:func:`square_to_triangle_pdf`)."""

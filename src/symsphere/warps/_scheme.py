@@ -9,7 +9,7 @@ square, and so a triangle, and the point inside it::
     d = orbit(square_to_triangle((u', v), method))[k_j]      # = p @ SPHERE_MAPS[k_j]
 
 so the strip ``j/48 <= u < (j+1)/48`` of the square goes onto triangle
-``k_j`` of the paper's Table 2, by the chosen map of :mod:`symsphere.maps`
+``k_j`` of the paper's Table 2, by the chosen map of :func:`symsphere.warps.square_to_triangle`
 stretched 48 times along u (mirrored in every other strip).  The order
 ``k_0, k_1, ...`` (:func:`strip_order`) walks around the six axes: the 8
 triangles about (0, 0, 1) first (``k_0 = 0``, so the first strip is
@@ -27,7 +27,7 @@ What it preserves
   (pdf ``1/(4 pi)``, ``1/(2 pi)`` on the hemisphere), so an equal-area
   stratification of the square is one of the sphere.  The paper's maps
   (``'paper1'``, ``'paper2'``) are not uniform; the pdf is then
-  ``triangle_pdf(base) / 48`` and diverges at the six axes.
+  ``square_to_triangle_pdf(base) / 48`` and diverges at the six axes.
 - Strata: a rectangle ``[a, b) x [c, d)`` of the square with ``48 a`` and
   ``48 b`` in the same integer interval is one cell of one triangle.  A jittered
   grid of ``N x M`` strata with N a multiple of 48 (24) gives every triangle the
@@ -40,7 +40,7 @@ What it preserves
   point for point) and jumps at the 5 boundaries between fans (hemisphere: 4),
   as a cube map jumps between faces; v = 0 is the fan's axis.  Where full
   continuity matters, e.g. a smooth integrand with Sobol' points, Clarberg's
-  octahedral map (:mod:`symsphere.warps`) is continuous everywhere.
+  octahedral map (:func:`square_to_octahedral_sphere`) is continuous everywhere.
 
 The strips' boundaries, where two triangles meet, are sets of measure zero:
 there ``sphere_to_square(square_to_sphere(uv))`` may return the point of the
@@ -54,11 +54,10 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from . import sampling
-from ._typing import Domain, FloatArray, MapMethod
-from ._validation import check_choice, check_unit_directions, check_uv
-from .maps import get_map
-from .symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold
+from .._typing import Domain, FloatArray, MapMethod
+from .._validation import check_choice, check_unit_directions, check_uv
+from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold
+from ._triangle import METHODS, triangle_to_square, triangle_warp
 
 __all__ = [
     "square_to_sphere",
@@ -81,7 +80,7 @@ def square_to_sphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> Flo
         ``strip_order('sphere')[j]`` (an index into :data:`symsphere.SPHERE_MAPS`),
         ``48 u - j`` (``1 - (48 u - j)`` for odd j) and v the point in it.
     method : {'equal_area', 'paper1', 'paper2'}
-        The map of the square onto T0 (:mod:`symsphere.maps`); only
+        The map of the square onto T0 (:func:`square_to_triangle`); only
         ``'equal_area'`` makes the warp uniform.
 
     Returns
@@ -96,7 +95,7 @@ def square_to_sphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> Flo
     >>> square_to_sphere([[0.0, 0.0], [1.0, 1.0]])       # the pole; a vertex of the last triangle
     array([[ 0.        ,  0.        ,  1.        ],
            [ 0.70710678,  0.        , -0.70710678]])
-    >>> from symsphere.square_warps import strip_order
+    >>> from symsphere.warps import strip_order
     >>> j, u, v = 12, 0.25, 0.75                          # u' = 0.25 in strip 12 (even: not mirrored)
     >>> k = strip_order("sphere")[j]
     >>> bool(np.allclose(square_to_sphere([(j + u) / 48, v]), orbit(square_to_triangle([u, v]))[k]))
@@ -117,7 +116,7 @@ def square_to_sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> 
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 48`` with ``base`` the fold of *d* into
+        ``square_to_triangle_pdf(base, method) / 48`` with ``base`` the fold of *d* into
         T0: ``1/(4 pi)`` for ``'equal_area'``; ``inf`` on the axes for the
         paper's maps, whose density diverges there.
 
@@ -199,7 +198,7 @@ def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area")
     Returns
     -------
     ndarray, shape (...)
-        ``triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
+        ``square_to_triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
 
     Examples
     --------
@@ -260,7 +259,7 @@ def strip_order(domain: Domain = "sphere") -> npt.NDArray[np.int64]:
 
     Examples
     --------
-    >>> from symsphere.square_warps import strip_order
+    >>> from symsphere.warps import strip_order
     >>> strip_order("sphere")[:8]            # the fan of 8 triangles about (0, 0, 1)
     array([0, 4, 5, 1, 2, 6, 7, 3])
     >>> sorted(strip_order("hemisphere")) == list(range(24))
@@ -271,6 +270,9 @@ def strip_order(domain: Domain = "sphere") -> npt.NDArray[np.int64]:
 
 
 # --- private ------------------------------------------------------------------
+
+
+_PLANE_ULPS = 16  # see scheme_pdf
 
 
 def _walk_fans(maps: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
@@ -304,32 +306,50 @@ _HEMISPHERE_ORDER = _walk_fans(HEMISPHERE_MAPS)
 
 def _forward(uv: npt.ArrayLike, method: MapMethod, maps: npt.NDArray[np.float64]) -> FloatArray:
     uv = check_uv(uv)
-    triangle_map = get_map(method)
+    warp = triangle_warp(method)
     count = len(maps)
     order = _SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER
     uv64 = uv.astype(np.float64)
     t = uv64[..., 0] * count
     j = np.minimum(np.floor(t), count - 1).astype(np.int64)
     local_u = np.where(j % 2 == 1, 1.0 - (t - j), t - j)
-    base = triangle_map.forward(np.stack([local_u, uv64[..., 1]], axis=-1))
+    base = warp.points(np.stack([local_u, uv64[..., 1]], axis=-1))
     d: FloatArray = np.einsum("...i,...ij->...j", base, maps[order[j]])
     return d.astype(uv.dtype, copy=False)
 
 
 def _pdf(d: npt.ArrayLike, method: MapMethod, count: int) -> FloatArray:
-    # The warp's density is the scheme's: a strip of 1/count of the square onto one triangle.
-    return sampling.sphere_pdf(d, method) if count == 48 else sampling.hemisphere_pdf(d, method)
+    d = check_unit_directions(d, "d")
+    return scheme_pdf(d.astype(np.float64), method, count, d.dtype)
+
+
+def scheme_pdf(d: FloatArray, method: MapMethod, count: int, dtype: npt.DTypeLike) -> FloatArray:
+    """The scheme's density at unit directions *d* (float64, about +z), in *dtype*: within the package.
+
+    A strip of 1/count of the square goes onto one triangle, so the density is the base point's in T0
+    over *count* (48: the sphere, 24: the hemisphere, 0 below it).  On the hemisphere, directions within
+    16 ulps (of *dtype*) of the plane count as on it, so that a sample on the equator rotated onto
+    another pole (a few ulps below the plane) keeps a positive density.  :func:`symsphere.sphere_pdf`
+    and :func:`symsphere.hemisphere_pdf` are this, after their checks (and rotation).
+    """
+    warp = triangle_warp(method)
+    _, base = fold(d)
+    density = warp.densities(base.astype(np.float64, copy=False)) / count
+    if count == 24:
+        on = d[..., 2] >= -_PLANE_ULPS * np.finfo(dtype).eps
+        density = np.where(on, density, 0.0)
+    return density.astype(dtype, copy=False)
 
 
 def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
     d = check_unit_directions(d, "d")
-    triangle_map = get_map(method)
+    method = check_choice(method, "method", METHODS)
     count = 48 if domain == "sphere" else 24
     d64 = d.astype(np.float64)
     if count == 24 and np.any(d64[..., 2] < 0):
         raise ValueError("'d' must lie in the hemisphere z >= 0 (rotate other poles with symsphere.frames.to_local)")
     k, base = fold(d64)
-    local = triangle_map.inverse(base.astype(np.float64, copy=False))
+    local = triangle_to_square(base.astype(np.float64, copy=False), method)
     j = np.argsort(_SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER)[k]  # the strip of triangle k
     local_u = np.clip(local[..., 0], 0.0, 1.0)
     u = (j + np.where(j % 2 == 1, 1.0 - local_u, local_u)) / count
