@@ -2,14 +2,17 @@
 
 Scalar numba functions, called by the path-tracing kernel of
 :mod:`symsphere.render._integrator`: :func:`choose_light`, :func:`sample_emitter`,
-:func:`emitter_pdf` and :func:`power_heuristic`.  They are compiled as functions of their
-own, not inlined into the kernel by numba (``inline="always"``): numba then types each of
-them once instead of inside every specialised kernel, which cut a render's first
-compilation from 35 to 17 CPU-seconds (docs/benchmarks.md, "Cold start").  Those that take
-the scene's tables are compiled without numba's reference counting (``TABLE_FUNCTION``:
-``_nrt=False``; they allocate nothing): a call that passes arrays otherwise increments and
-decrements each array's counter, atomic operations that cost a render half its speed
-(measured: docs/benchmarks.md).  The kernel that calls them owns the tables for the call.
+:func:`emitter_pdf` and :func:`power_heuristic`.  Speed against compile time, measured
+(docs/benchmarks.md, "Cold start"): the functions of the hot path that take the scene's
+tables (these three, and the integrator's ``intersect``, NEE's light sample and the specular
+directions) are inlined into the kernel by numba (``inline="always"``).  Called as functions
+of their own, each call passes every array as its nine fields and, with numba's reference
+counting, increments and decrements the array's counter atomically: 0.53-0.77x the paths/s,
+for a first compilation of 20 instead of 36 CPU-seconds; without the reference counting
+0.8-0.9x.  The kernel itself is compiled without reference counting (``_nrt=False``: it
+allocates nothing), so nothing inlined into it counts references; the helpers that stay
+functions of their own (the rectangle's and the cone's set-up) are ``TABLE_FUNCTION``s,
+compiled once each without it.
 The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
 spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
 ``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
@@ -42,7 +45,6 @@ from ._random import next_u64, u01
 
 __all__ = [
     "INV_2PI",
-    "TABLE_FUNCTION",
     "choose_light",
     "disk_point",
     "emitter_pdf",
@@ -190,7 +192,7 @@ def disk_point(state):
             return x, y, r2, state
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")
 def sample_emitter(px, py, pz, obj, state, spheres, quads):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
@@ -314,7 +316,7 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")
 def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
@@ -341,7 +343,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     return t * t / (cos_l * area)
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")
 def choose_light(lights, u):
     """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
     last = lights.shape[1] - 1

@@ -91,7 +91,6 @@ from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
 from ._emitters import (
     INV_2PI,
-    TABLE_FUNCTION,
     choose_light,
     emitter_pdf,
     power_heuristic,
@@ -329,7 +328,7 @@ def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     return det, b - root, b + root
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -407,7 +406,7 @@ def plain_spheres(spheres):
     return n
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
 def _light_sample(
     px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material, quad_material,
     spheres, quads, state,
@@ -418,8 +417,7 @@ def _light_sample(
     local direction (lx, ly, lz) in the frame (t_row, b_row, n), distance, solid-angle pdf
     times the selection probability, the vertex's reflectance (or transmittance) towards w,
     the emitter's material, state).  ok is False when w is on the wrong side or the BSDF
-    is black there.  A function of its own (not inlined by numba), so that numba types it
-    once, not in every specialised kernel.
+    is black there.  Inlined by numba (see :mod:`symsphere.render._emitters` for why).
     """
     choice = 0
     if lights.shape[1] > 1:
@@ -445,11 +443,11 @@ def _light_sample(
     return ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state
 
 
-@njit(**TABLE_FUNCTION)
+@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
 def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, state):
     """The direction after a mirror or a smooth dielectric (exact unpolarised Fresnel), and the state.
 
-    *cos_in* = d . n with n facing the incoming ray (<= 0).  A function of its own, typed once.
+    *cos_in* = d . n with n facing the incoming ray (<= 0).
     """
     if kind == MIRROR:
         c2 = 2.0 * cos_in
@@ -639,7 +637,7 @@ def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
     per estimator (measured: a first case ~14 CPU-s on an empty cache, each further one ~7 s).
     """
 
-    @njit(_nrt=False, **KERNEL_OPTIONS)  # no reference counting (TABLE_FUNCTION); scratch comes from the caller
+    @njit(_nrt=False, **KERNEL_OPTIONS)  # no reference counting (render/_emitters.py); scratch from the caller
     def render_rows(
         spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
         rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum, scratch,
