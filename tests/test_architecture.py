@@ -15,9 +15,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "symsphere"
 SOURCES = sorted(PACKAGE.rglob("*.py"))
 GENERATED: set[str] = set()  # no generated modules
-# The applications' old import paths, kept for users' code (each re-exports symsphere.apps.*): they are
-# entry points, part of the applications' layer; the library imports none of them (checked below).
-SHIMS = {"cli.py", "demo.py", "study.py", "__main__.py"}
+# ``python -m symsphere``: an entry point of the applications' layer (it runs symsphere.apps.cli).
+ENTRY_POINTS = {"__main__.py"}
 MAX_LINES = 850  # 700 before ruff format put long calls one argument per line; the largest modules are for splitting
 
 
@@ -88,7 +87,7 @@ def test_private_names_stay_in_their_module(path):
 
 def _is_application(path: Path) -> bool:
     relative = path.relative_to(PACKAGE)
-    return "apps" in relative.parts or (len(relative.parts) == 1 and relative.name in SHIMS)
+    return "apps" in relative.parts or (len(relative.parts) == 1 and relative.name in ENTRY_POINTS)
 
 
 @pytest.mark.parametrize(
@@ -103,8 +102,7 @@ def test_the_library_never_imports_the_applications(path):
             names = [a.name for a in node.names]
         else:
             continue
-        shims = {f"symsphere.{Path(s).stem}" for s in SHIMS}
-        assert not any(n == "symsphere.apps" or n.startswith("symsphere.apps.") or n in shims for n in names), (
+        assert not any(n == "symsphere.apps" or n.startswith("symsphere.apps.") for n in names), (
             f"{path.name}:{node.lineno} imports the applications"
         )
 

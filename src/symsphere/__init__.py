@@ -13,7 +13,7 @@ its module (:mod:`symsphere.sampling`, :mod:`symsphere.integration`,
 :mod:`symsphere.maps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`,
 :mod:`symsphere.square_warps`).
 :mod:`symsphere.stats`, :mod:`symsphere.peers`, :mod:`symsphere.integrands`,
-:mod:`symsphere.render`, :mod:`symsphere.study` and the other submodules of
+:mod:`symsphere.render` and the other library submodules of
 ``dir(symsphere)`` are imported on first use (``ss.render.render(...)`` works
 without an import of its own); ``import symsphere`` itself stays cheap and
 changes nothing in the process.
@@ -56,7 +56,7 @@ __version__ = "0.2.0.dev0"
 
 _SUBMODULES = (
     "bins", "distributed", "frames", "harmonics", "integrands", "io", "peers", "quality", "render",
-    "spherical_triangles", "stats", "study", "warps", "wedge",
+    "spherical_triangles", "stats", "warps", "wedge",
 )  # fmt: skip
 
 

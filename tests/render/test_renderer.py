@@ -6,7 +6,7 @@ import numba
 import numpy as np
 import pytest
 
-from symsphere.cli import main
+from symsphere.apps.cli import main
 from symsphere.render import INTEGRATORS, SAMPLERS, cornell, load_pfm, plan_passes, render, render_passes
 from symsphere.render import _integrator as K
 

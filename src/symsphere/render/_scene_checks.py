@@ -4,7 +4,7 @@
 Each check returns the value converted to plain Python floats / ints / tuples,
 or raises :class:`SceneError` with a message that names the field (*where*).
 :class:`SceneError` is defined here, below both of its users, and is public as
-``symsphere.render.SceneError`` and ``symsphere.render.scene.SceneError``.
+``symsphere.render.SceneError`` (and in :mod:`symsphere.render.scene`).
 """
 
 from __future__ import annotations
@@ -66,8 +66,6 @@ class SceneError(ValueError):
     scene 's': spheres[0].radius must be positive, got -1.0
     """
 
-    __module__ = "symsphere.render.scene"  # its public home (repr, pickling), which re-exports it
-
 
 def sequence(value: Any, where: str) -> list[Any]:
     """*value* (any iterable but a string or a mapping) as a list.
@@ -94,7 +92,7 @@ def number(value: Any, where: str) -> float:
     >>> number(float("nan"), "camera.fov")
     Traceback (most recent call last):
     ...
-    symsphere.render.scene.SceneError: camera.fov must be finite, got nan
+    symsphere.render._scene_checks.SceneError: camera.fov must be finite, got nan
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise SceneError(f"{where} must be a number, got {shown(value)}")

@@ -13,17 +13,15 @@ the cap.
 Scene files (TOML, JSON) are read by :mod:`symsphere.render.scene_files`
 (:func:`load_scene`, :func:`scene_from_dict`), the built-in scenes are in
 :mod:`symsphere.render.scenes` (:data:`SCENES`, :func:`get_scene`, :func:`cornell`,
-:func:`furnace`, :func:`translucent_scene`); both import this module, and
-their names are importable from here as well.
+:func:`furnace`, :func:`translucent_scene`); both import this module.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -32,13 +30,8 @@ from ..frames import frame_rows
 from . import _integrator as _k
 from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, shown, vector
 
-if TYPE_CHECKING:  # importable from here (see __getattr__ below); those modules import this one
-    from .scene_files import load_scene, scene_from_dict
-    from .scenes import SCENES, cornell, furnace, get_scene, translucent_scene
-
 __all__ = [
     "MATERIAL_KINDS",
-    "SCENES",
     "Camera",
     "HalfSpace",
     "Material",
@@ -46,16 +39,10 @@ __all__ = [
     "Scene",
     "SceneError",
     "Sphere",
-    "cornell",
     "dielectric",
     "diffuse",
-    "furnace",
-    "get_scene",
-    "load_scene",
     "mirror",
-    "scene_from_dict",
     "translucent",
-    "translucent_scene",
 ]
 
 MATERIAL_KINDS = ("diffuse", "translucent", "mirror", "dielectric")
@@ -510,28 +497,3 @@ def _material_name(name, materials, where) -> str:
 def _unit(v) -> np.ndarray:
     v = np.asarray(v, dtype=np.float64)
     return v / math.sqrt(float(v @ v))
-
-
-# --- names of the scene files and the built-in scenes, importable from here ------
-
-_ELSEWHERE = {
-    "load_scene": "scene_files",
-    "scene_from_dict": "scene_files",
-    "SCENES": "scenes",
-    "cornell": "scenes",
-    "furnace": "scenes",
-    "get_scene": "scenes",
-    "translucent_scene": "scenes",
-}
-
-
-def __getattr__(name: str) -> Any:
-    # Lazily: scene_files and scenes import this module (PEP 562; also serves ``from ... import name``)
-    module = _ELSEWHERE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __package__), name)
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *_ELSEWHERE})
