@@ -10,7 +10,8 @@ import warnings
 import numpy as np
 import pytest
 
-from symsphere import _kernels, fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere import fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere._testing import kernels
 from symsphere.frames import frame
 from symsphere.points import BasePoints
 from symsphere.stats import chi2_test, uniform_pdf
@@ -75,18 +76,18 @@ def test_cut_orbit_is_made_in_the_kernel_call(count, normal, rest, offset):
     source = BasePoints("random", 11, total=m + 3)
     members = (m - 1) * count + (offset + np.arange(rest)) % count
     for dtype in (np.float64, np.float32):
-        whole = _kernels.fill_random_orbits(
+        whole = kernels.fill_random_orbits(
             source.seed_words, 3, m, "equal_area", count, basis, np.empty((m * count, 3), dtype)
         )
         expected = np.concatenate([whole[: (m - 1) * count], whole[members]])
         for parts in (1, 2, 3, 7):
             got = np.full(((m - 1) * count + rest, 3), np.nan, dtype)
-            _kernels.fill_random_orbits(
+            kernels.fill_random_orbits(
                 source.seed_words, 3, m, "equal_area", count, basis, got, parts=parts, offset=offset
             )
             assert np.array_equal(got, expected)
             got[:] = np.nan
-            _kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
+            kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
             assert np.array_equal(got, expected)
 
 

@@ -14,9 +14,11 @@ from scipy.stats import qmc
 
 import symsphere as ss
 from symsphere import METHODS, integrate
-from symsphere._integrand_kernels import vexp
+from symsphere._testing import integrand_kernels
 from symsphere.integrands import INTEGRANDS
 from symsphere.points import BLOCK
+
+vexp = integrand_kernels.vexp
 
 A = np.array([0.7, -0.4, 0.5])
 
@@ -178,10 +180,11 @@ def test_specialised_kernel_equals_generic(name, points):
 
 
 CACHED_RUN = """
-import symsphere, symsphere._fused as fused
+import symsphere
+from symsphere._testing import fused
 from symsphere.integrands import INTEGRANDS
 result = symsphere.integrate(INTEGRANDS["exp"], n=48 * 100, rng=1)
-(kernel,) = fused._specialised_kernels.values()
+(kernel,) = fused.specialised_kernels()
 print(result.integral, sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
 """
 

@@ -69,6 +69,7 @@ __all__ = [
     "fused_partials",
     "call_xyz",
     "call_vector",
+    "specialised_kernels",
 ]
 
 CHUNK = 512
@@ -231,6 +232,12 @@ _generic = _chunk_kernel(_ARGUMENT, (0.0,), False)  # a user's f (an argument): 
 _specialised_lock = threading.Lock()
 _specialised_kernels: dict[tuple[int, tuple[float, ...]], Any] = {}
 _cache_checked = False
+
+
+def specialised_kernels() -> list[Any]:
+    """The disk-cached kernels made in this process, in order (their ``stats`` show cache hits)."""
+    with _specialised_lock:
+        return list(_specialised_kernels.values())
 
 
 def _specialised(spec: tuple[int, tuple[float, ...]]) -> Any:

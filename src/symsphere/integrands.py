@@ -12,10 +12,10 @@ derivations and for why the orbit average is exact where it is.
 Building blocks, public so that a study can make more integrands:
 
 - the spherical harmonics and polynomials of :mod:`symsphere.harmonics`
-  (:func:`real_sh`, :func:`real_sh_basis`, :func:`sh_polynomial`,
-  :func:`monomial_integral`, :func:`polynomial_integral`,
-  :func:`evaluate_polynomial`, :func:`cubic_harmonic`), importable from
-  here too;
+  (:func:`~symsphere.harmonics.real_sh`, :func:`~symsphere.harmonics.real_sh_basis`,
+  :func:`~symsphere.harmonics.sh_polynomial`, :func:`~symsphere.harmonics.monomial_integral`,
+  :func:`~symsphere.harmonics.polynomial_integral`,
+  :func:`~symsphere.harmonics.evaluate_polynomial`, :func:`~symsphere.harmonics.cubic_harmonic`);
 - :func:`lambert_irradiance`, :func:`sphere_light_irradiance`: the closed
   forms of irradiance from a polygonal and from a spherical light.
 - :func:`orbit_average`: the mean of ``f`` over the orbit of a point.
@@ -55,10 +55,8 @@ from ._validation import (
 from .harmonics import (
     cubic_harmonic,
     evaluate_polynomial,
-    monomial_integral,
     polynomial_integral,
     real_sh,
-    real_sh_basis,
     sh_polynomial,
 )
 from .symmetry import orbit, orbit_size
@@ -67,13 +65,6 @@ __all__ = [
     "INTEGRANDS",
     "Integrand",
     "suite",
-    "real_sh",
-    "real_sh_basis",
-    "sh_polynomial",
-    "monomial_integral",
-    "polynomial_integral",
-    "evaluate_polynomial",
-    "cubic_harmonic",
     "lambert_irradiance",
     "sphere_light_irradiance",
     "orbit_average",

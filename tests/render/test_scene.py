@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from symsphere._testing import render_probes as P
 from symsphere.render import (
     Camera,
     HalfSpace,
@@ -22,7 +23,6 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.render import _probes as P
 
 # --- smallpt's scene, pinned ------------------------------------------------------
 

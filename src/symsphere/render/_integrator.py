@@ -86,6 +86,7 @@ from numba.extending import register_jitable
 
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
+from .._splitmix import GOLDEN, ODD
 from .._threads import run_parts, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
@@ -119,8 +120,7 @@ _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if nothing is hit this much before it
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_ODD = np.uint64(0xD6E8FEB86659FD93)
+_GOLDEN, _ODD = GOLDEN, ODD  # SplitMix64's constants (symsphere._splitmix), as the kernels name them
 _ONE = np.uint64(1)
 
 
