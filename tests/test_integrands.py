@@ -279,3 +279,18 @@ def test_hemisphere_orbit_is_the_even_extension():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda v: I.sphere_light_irradiance([0, 0, 1], v, 1.0), "distance"),  # check_positive
+        (lambda v: I.sphere_light_irradiance([0, 0, 1], 2.0, 1.0, radiance=v), "radiance"),  # check_nonnegative
+        (lambda v: I.lambert_irradiance([[0, 0, 1], [1, 0, 1], [0, 1, 1]], radiance=v), "radiance"),
+    ],
+)
+@pytest.mark.parametrize("value", [10**400, -(10**400)])
+def test_an_int_beyond_float64_is_a_value_error_naming_the_argument(call, name, value):
+    # A number, only too large: ValueError (not the OverflowError of float(10**400)), its message short.
+    with pytest.raises(ValueError, match=f"'{name}' must be a finite real number, got an integer of 401 digits"):
+        call(value)
