@@ -1,4 +1,4 @@
-"""Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n (issue 13).
+"""Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n.
 
 Whole orbits first, the last orbit cut short (from a random member on).  The statistical test uses significance 0.01 with a Sidak
 correction over the CHI2_TESTS tests of this file (one per row of a cut orbit: 47 on the sphere, 23 on
@@ -106,7 +106,7 @@ def test_bad_n_still_rejected():
 
 
 def test_sobol_warning_is_attributed_to_the_caller():
-    # issue 13, defect 3: the balance warning pointed at a line of symsphere/sampling.py.
+    # the balance warning pointed at a line of symsphere/sampling.py.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         sample_sphere(48 * 6, points="sobol", rng=0)

@@ -273,3 +273,18 @@ def test_the_hook_check_sees_a_private_import(tmp_path):
         "from symsphere._testing import kernels\ncode = 'import symsphere._threads'\n"
     )
     assert len(_private_uses(probe)) == 4
+
+
+def test_no_issue_numbers_in_code_tests_or_docs():
+    # History is CHANGELOG.md's, and even there told by what changed, not by a tracker's numbers
+    # (another project's issue, cited as a source, is a reference: allowed).
+    root = PACKAGE.parents[1]
+    pattern = re.compile(r"\b[Ii]ssues?\s+#?\d+|\(#\d+\)|\b[Ii]ssue-\d+")
+    files = [*SOURCES, *TEST_SOURCES, *sorted((root / "docs").glob("*.md")), root / "README.md", root / "CHANGELOG.md"]
+    found = [
+        f"{path.relative_to(root)}:{number}: {line.strip()}"
+        for path in files
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pattern.search(line) and "OpenBLAS issue" not in line
+    ]
+    assert found == []

@@ -110,7 +110,7 @@ OVERRIDES = {
 MAY_BE_INF = {"triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas.
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
-# since issue 22 (inside kernels they are the bare formulas) and are tested like the others, and below;
+# since the third reliability round (inside kernels they are the bare formulas) and are tested like the others, and below;
 # so do the elementwise warps of symsphere.warps.
 TRUSTED = {"get_map", "check_points", "suite", "uniform_pdf"}
 MODULES = (symsphere, maps, sampling, symmetry, frames, harmonics, stats, integrands, peers, wedge, quality, points_module,

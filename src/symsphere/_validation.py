@@ -684,7 +684,7 @@ def check_seed(seed: int, name: str = "seed") -> int:
 
 
 # ---------------------------------------------------------------------------
-# Output files: what may be written, checked before any work (issue 22)
+# Output files: what may be written, checked before any work
 # ---------------------------------------------------------------------------
 
 TEMPORARY_KINDS = ("tmp", "old", "probe")
