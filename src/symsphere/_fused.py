@@ -59,7 +59,7 @@ from ._kernels import (
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
-from ._typing import Float64Array
+from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 
 __all__ = [
@@ -78,7 +78,7 @@ assert BLOCK % CHUNK == 0
 
 _RANDOM, _STRATIFIED, _GIVEN = 0, 1, 2
 _SEGMENT_BLOCKS = 64  # given base points (QMC) are taken this many blocks at a time: bounded memory
-_OPTIONS = dict(error_model="numpy", nogil=True)
+_OPTIONS: dict[str, Any] = dict(error_model="numpy", nogil=True)
 
 
 @njit(inline="always")
@@ -110,7 +110,7 @@ def compiled_integrand(f: object) -> Compiled | None:
     function is called once here, at (0, 0, 1), so that a wrong signature or a result that is
     not one real number raises TypeError naming 'f' before any work.
     """
-    kernel = getattr(f, "kernel", None) if not is_jitted(f) else f
+    kernel: Any = getattr(f, "kernel", None) if not is_jitted(f) else f  # type: ignore[arg-type]
     if kernel is None or not is_jitted(kernel):
         return None
     spec = getattr(kernel, "symsphere_spec", None)
@@ -276,7 +276,7 @@ def fused_partials(
     orbits: int,
     first_block: int,
     stop_block: int,
-    method: str,
+    method: MapMethod,
     count: int,
     basis: Float64Array | None,
     uniform: bool,

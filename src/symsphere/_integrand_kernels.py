@@ -110,15 +110,16 @@ def vexp(t: float) -> float:
     p = p * r + 0.5
     p = p * r + 1.0
     p = p * r + 1.0
-    scale = _bits_float((_float_bits(shifted) + 1023) << 52)  # 2^k: k sits in the low bits of shifted
-    return p * scale  # type: ignore[no-any-return]
+    # 2^k: k sits in the low bits of shifted (the intrinsics' Python signatures include numba's typing context)
+    scale: float = _bits_float((_float_bits(shifted) + 1023) << 52)  # type: ignore[call-arg]
+    return p * scale
 
 
 # --- the formulas ---------------------------------------------------------------------------
 
 
 @njit(inline="always")
-def evaluate(kind, params, x, y, z):  # type: ignore[no-untyped-def]  # typed by numba
+def evaluate(kind, params, x, y, z):  # typed by numba
     """The integrand *kind* with constants *params* at the direction (x, y, z).
 
     Inlined in numba's IR: with *kind* a constant of the caller, numba prunes the other formulas.
@@ -166,7 +167,7 @@ def integrand_kernel(kind: int, params: tuple[float, ...]) -> Any:
     params = tuple(float(p) for p in params)
 
     @njit(error_model="numpy")
-    def kernel(x, y, z):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled by numba
+    def kernel(x, y, z):  # pragma: no cover - compiled by numba
         return evaluate(kind, params, x, y, z)
 
     # setattr: a numba Dispatcher has no such attribute for mypy.

@@ -66,7 +66,7 @@ _EQUAL_AREA, _PAPER1, _PAPER2 = (get_map(name) for name in METHODS)
 _equal_area_point, _paper1_point, _paper2_point = _EQUAL_AREA.point, _PAPER1.point, _PAPER2.point
 _equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PAPER1.density, _PAPER2.density
 
-_OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
+_OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", nogil=True)
 
 
 @njit(inline="always")  # numba-IR inlining: a constant *code* of the caller prunes the other maps
@@ -131,7 +131,7 @@ def _mul_high(typingctx, a, b):
 @register_jitable
 def _mul128(a_hi, a_lo, b_hi, b_lo):
     """(a * b) mod 2**128 of 128-bit numbers given as (high, low) uint64 halves."""
-    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo
+    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo  # type: ignore[call-arg]  # an intrinsic
 
 
 @register_jitable

@@ -24,7 +24,7 @@ _S27, _S30, _S31 = np.uint64(27), np.uint64(30), np.uint64(31)
 
 
 @register_jitable
-def mix64(z):  # type: ignore[no-untyped-def]  # typed by numba (uint64 -> uint64)
+def mix64(z):  # typed by numba (uint64 -> uint64)
     """SplitMix64's finaliser of a uint64 (wrap-around multiplication)."""
     z = (z ^ (z >> _S30)) * MIX1
     z = (z ^ (z >> _S27)) * MIX2

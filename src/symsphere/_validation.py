@@ -508,7 +508,7 @@ def real_number(value: object) -> float | None:
     try:
         return float(value)
     except OverflowError:  # an int beyond float64
-        return math.inf if value > 0 else -math.inf
+        return math.inf if value > 0 else -math.inf  # type: ignore[operator]  # numbers.Real has no __gt__ in typeshed
 
 
 def check_real(value: object, name: str) -> float:

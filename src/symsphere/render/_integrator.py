@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import Any
 
 import numpy as np
 from numba import get_num_threads, njit
@@ -86,13 +87,13 @@ from numba.extending import register_jitable
 
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
-from .._splitmix import GOLDEN, ODD
+from .._splitmix import GOLDEN, ODD, mix64
 from .._threads import run_parts, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, uniform_hemisphere_point, uniform_sphere_point
 from ..wedge import cosine_wedge_point
 from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
-from ._random import below, mix64, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
+from ._random import below, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
 SYMMETRIC_SOBOL_INTERLACED2, SYMMETRIC_SOBOL_INTERLACED3 = 7, 8
@@ -113,7 +114,7 @@ CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image p
 # lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
 # light_pmf: the selection probability of every object (0 for non-emitters)
 
-KERNEL_OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
+KERNEL_OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
 _INV_PI = 1.0 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
