@@ -46,7 +46,8 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import is_jitted
 
-from ._integrand_kernels import evaluate
+from ._integrand_kernels import no_chain
+from ._integrand_kernels import value as spec_value
 from ._kernels import (
     BATCH,
     METHOD_CODES,
@@ -96,7 +97,7 @@ def call_vector(f, x, y, z, buffer):
     return f(buffer)
 
 
-Compiled = tuple[Any, Any, "tuple[int, tuple[float, ...]] | None"]
+Compiled = tuple[Any, Any, "tuple[int, tuple[float, ...], Any] | None"]
 """(the numba function, the caller that adapts its signature: call_xyz or call_vector, the
 function's spec ``(kind, params)`` when it has one: the suite's integrands, compiled into a
 disk-cached kernel)."""
@@ -137,15 +138,15 @@ _ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called thro
 
 
 @njit(inline="always")
-def _value(kind, params, f, caller, x, y, z, buffer):
-    """f at (x, y, z): the argument f (kind _ARGUMENT) or the spec's formula, inlined in numba's IR:
+def _value(kind, params, chain, f, caller, x, y, z, buffer):
+    """f at (x, y, z): the argument f (kind _ARGUMENT) or the spec's integrand, inlined in numba's IR:
     with *kind* a cell of the kernel, numba prunes the other branch before typing."""
     if kind == _ARGUMENT:
         return caller(f, x, y, z, buffer)
-    return evaluate(kind, params, x, y, z)
+    return spec_value(kind, params, chain, x, y, z)
 
 
-def _chunk_kernel(kind, params, cache):
+def _chunk_kernel(kind, params, chain, cache):
     """The fused kernel of integrands of *kind* with constants *params* (closure cells: constants to
     numba); kind _ARGUMENT: of the argument f (not cacheable on disk, see the module's docstring)."""
 
@@ -197,6 +198,7 @@ def _chunk_kernel(kind, params, cache):
                         sums[j] += _value(
                             kind,
                             params,
+                            chain,
                             f,
                             caller,
                             x * w00 + y * w10 + z * w20,
@@ -228,9 +230,9 @@ def _chunk_kernel(kind, params, cache):
     return chunk_statistics
 
 
-_generic = _chunk_kernel(_ARGUMENT, (0.0,), False)  # a user's f (an argument): one kernel, compiled per f
+_generic = _chunk_kernel(_ARGUMENT, (0.0,), no_chain, False)  # a user's f (an argument): one kernel, compiled per f
 _specialised_lock = threading.Lock()
-_specialised_kernels: dict[tuple[int, tuple[float, ...]], Any] = {}
+_specialised_kernels: dict[tuple[int, tuple[float, ...], Any], Any] = {}
 _cache_checked = False
 
 
@@ -240,7 +242,7 @@ def specialised_kernels() -> list[Any]:
         return list(_specialised_kernels.values())
 
 
-def _specialised(spec: tuple[int, tuple[float, ...]]) -> Any:
+def _specialised(spec: tuple[int, tuple[float, ...], Any]) -> Any:
     """The disk-cached fused kernel of the suite's integrands of *spec*, made once per process."""
     global _cache_checked
     with _specialised_lock:
@@ -249,7 +251,7 @@ def _specialised(spec: tuple[int, tuple[float, ...]]) -> Any:
             _cache_checked = True
         kernel = _specialised_kernels.get(spec)
         if kernel is None:
-            kernel = _specialised_kernels[spec] = _chunk_kernel(spec[0], spec[1], True)
+            kernel = _specialised_kernels[spec] = _chunk_kernel(spec[0], spec[1], spec[2], True)
         return kernel
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 from llvmlite import ir
 from numba import njit, types
-from numba.extending import intrinsic
+from numba.extending import intrinsic, register_jitable
 
 __all__ = [
     "CAP",
@@ -34,6 +34,9 @@ __all__ = [
     "Z",
     "evaluate",
     "integrand_kernel",
+    "no_chain",
+    "polynomial_chain",
+    "value",
     "vexp",
 ]
 
@@ -52,8 +55,6 @@ SPHERE_LIGHT = 5
 POLYGON_LIGHT = 6
 """``L max(z, 0) 1[w . n_i >= 0 for every edge plane i]``; params ``(L, n_1, n_2, ...)`` (3 floats each)."""
 KINDS = (POLYNOMIAL, PHONG, CAP, EXP, Z, SPHERE_LIGHT, POLYGON_LIGHT)
-
-Spec = tuple[int, tuple[float, ...]]
 
 
 # --- a vectorisable exp -------------------------------------------------------------------
@@ -148,7 +149,7 @@ def evaluate(kind, params, x, y, z):  # typed by numba
 def _with_term(previous: Any, c: float, a: int, b: int, e: int) -> Any:
     """``previous(x, y, z) + c x^a y^b z^e``; the exponents are cells (constants: the loops unroll)."""
 
-    @njit(error_model="numpy")
+    @register_jitable
     def polynomial(x, y, z):  # pragma: no cover - compiled by numba
         term = c
         for _ in range(a):
@@ -162,39 +163,57 @@ def _with_term(previous: Any, c: float, a: int, b: int, e: int) -> Any:
     return polynomial
 
 
-def _polynomial_kernel(params: tuple[float, ...]) -> Any:
-    """A polynomial as a chain of numba functions, one per term (LLVM inlines the chain into straight-line
-    code, as if the sum were written out): a loop over the terms in one function would not be unrolled, and
-    runs 4-5 times slower (measured: the suite's cubic8)."""
+def polynomial_chain(params: tuple[float, ...]) -> Any:
+    """The polynomial of *params* (:data:`POLYNOMIAL`) as a chain of ``register_jitable`` functions, one per
+    term, which LLVM inlines into straight-line code, as if the sum were written out (one function looping
+    over the terms is not unrolled: measured 4-5x slower on the suite's cubic8).  Plain closures over
+    numbers: they pickle the same in every process, so numba's disk cache keys a kernel holding one."""
     shift = params[0]
 
-    @njit(error_model="numpy")
+    @register_jitable
     def constant(x, y, z):  # pragma: no cover - compiled by numba
         return shift
 
-    kernel = constant
+    chain = constant
     for i in range(1, len(params), 4):
-        kernel = _with_term(kernel, params[i], int(params[i + 1]), int(params[i + 2]), int(params[i + 3]))
-    return kernel
+        chain = _with_term(chain, params[i], int(params[i + 1]), int(params[i + 2]), int(params[i + 3]))
+    return chain
+
+
+@register_jitable
+def no_chain(x, y, z):  # pragma: no cover - compiled by numba
+    """The chain of a spec that is not a polynomial (never called)."""
+    return 0.0
+
+
+Spec = tuple[int, tuple[float, ...], Any]
+"""(kind, params, the polynomial's chain or :func:`no_chain`)."""
 
 
 def integrand_kernel(kind: int, params: tuple[float, ...]) -> Any:
     """``kernel(x, y, z)``, the formula *kind* with constants *params*, compiled by numba on first call.
 
-    The spec is kept as ``kernel.symsphere_spec`` (:mod:`symsphere._fused` compiles it into its
-    disk-cached fused kernel); a polynomial is a chain of functions (:func:`_polynomial_kernel`) and has
-    no spec: the fused kernel takes it as an argument (compiled once per process, not cached on disk).
+    The spec ``(kind, params, chain)`` is kept as ``kernel.symsphere_spec`` (:mod:`symsphere._fused`
+    compiles it into its disk-cached fused kernel).
     """
     if kind not in KINDS:
         raise ValueError(f"'kind' must be one of {KINDS}, got {kind!r}")
     params = tuple(float(p) for p in params)
-    if kind == POLYNOMIAL:
-        return _polynomial_kernel(params)
+    chain = polynomial_chain(params) if kind == POLYNOMIAL else no_chain
 
     @njit(error_model="numpy")
     def kernel(x, y, z):  # pragma: no cover - compiled by numba
-        return evaluate(kind, params, x, y, z)
+        return value(kind, params, chain, x, y, z)
 
     # setattr: a numba Dispatcher has no such attribute for mypy.
-    setattr(kernel, "symsphere_spec", (kind, params))  # noqa: B010
+    setattr(kernel, "symsphere_spec", (kind, params, chain))  # noqa: B010
     return kernel
+
+
+@njit(inline="always")
+def value(kind, params, chain, x, y, z):  # pragma: no cover - compiled by numba
+    """The spec's integrand at (x, y, z): the polynomial's chain, or :func:`evaluate`; inlined in numba's
+    IR, so that a constant *kind* prunes the other branch."""
+    if kind == POLYNOMIAL:
+        return chain(x, y, z)
+    return evaluate(kind, params, x, y, z)
