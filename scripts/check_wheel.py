@@ -4,7 +4,7 @@ Run by CI (.ci/run) after the test suite; needs the test extra (``build``) and t
 warm pip cache) for the wheel's dependencies.  Checks, each with a clear failure message:
 
 1. ``python -m build`` makes a wheel and an sdist without setuptools' deprecation warnings
-   (issue 13, defect 6); both carry LICENSE, the sdist also CHANGELOG.md; the wheel's metadata has
+  ; both carry LICENSE, the sdist also CHANGELOG.md; the wheel's metadata has
    the SPDX license expression, the author, no project URL (there is no public address yet) and the
    version of ``symsphere.__version__``; its long description (README.md) renders as PyPI renders it
    (``readme_renderer``, as ``twine check``), and each of its relative links and images names a file of
@@ -13,7 +13,7 @@ warm pip cache) for the wheel's dependencies.  Checks, each with a clear failure
 2. In a fresh venv with nothing but ``pip install <wheel>`` (no extras):
    ``symsphere --version`` agrees with ``symsphere.__version__``; the README's example runs;
    ``symsphere sample --n 480`` writes its file; ``symsphere integrate ... --workers 2`` exits 2 with
-   one line that names the extra to install (issue 13, defect 1).  With ``--demo``, also
+   one line that names the extra to install.  With ``--demo``, also
    ``symsphere demo --n 480`` (its small render compiles the path tracer in the fresh install:
    about 3 more minutes on 2 busy cores).
 

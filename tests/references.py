@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-# --- comparing two implementations of one formula (issue 19) -----------------------------------
+# --- comparing two implementations of one formula -----------------------------------
 #
 # The error model every cross-implementation comparison in the tests uses.  numpy's ufuncs run its own
 # SIMD code or Intel's SVML (AVX2, AVX-512: chosen at run time per CPU), or libm; a numba kernel and

@@ -1,4 +1,4 @@
-"""Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n (issue 13).
+"""Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n.
 
 Whole orbits first, the last orbit cut short (from a random member on).  The statistical test uses significance 0.01 with a Sidak
 correction over the CHI2_TESTS tests of this file (one per row of a cut orbit: 47 on the sphere, 23 on
@@ -10,7 +10,8 @@ import warnings
 import numpy as np
 import pytest
 
-from symsphere import _kernels, fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere import fold, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere._testing import kernels
 from symsphere.frames import frame
 from symsphere.points import BasePoints
 from symsphere.stats import chi2_test, uniform_pdf
@@ -75,18 +76,18 @@ def test_cut_orbit_is_made_in_the_kernel_call(count, normal, rest, offset):
     source = BasePoints("random", 11, total=m + 3)
     members = (m - 1) * count + (offset + np.arange(rest)) % count
     for dtype in (np.float64, np.float32):
-        whole = _kernels.fill_random_orbits(
+        whole = kernels.fill_random_orbits(
             source.seed_words, 3, m, "equal_area", count, basis, np.empty((m * count, 3), dtype)
         )
         expected = np.concatenate([whole[: (m - 1) * count], whole[members]])
         for parts in (1, 2, 3, 7):
             got = np.full(((m - 1) * count + rest, 3), np.nan, dtype)
-            _kernels.fill_random_orbits(
+            kernels.fill_random_orbits(
                 source.seed_words, 3, m, "equal_area", count, basis, got, parts=parts, offset=offset
             )
             assert np.array_equal(got, expected)
             got[:] = np.nan
-            _kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
+            kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
             assert np.array_equal(got, expected)
 
 
@@ -105,7 +106,7 @@ def test_bad_n_still_rejected():
 
 
 def test_sobol_warning_is_attributed_to_the_caller():
-    # issue 13, defect 3: the balance warning pointed at a line of symsphere/sampling.py.
+    # the balance warning pointed at a line of symsphere/sampling.py.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         sample_sphere(48 * 6, points="sobol", rng=0)

@@ -2,12 +2,21 @@
 
 - private means private: a name with a leading underscore is used only in its own module;
 - the library never imports the applications (``symsphere.apps``);
-- a module holds one concept, and stays readable: at most ~850 lines (ruff-formatted).
+- a module holds one concept, and stays readable: at most ~850 lines (ruff-formatted);
+- by importing: no library module loads the applications; each public name has one home (a name
+  listed in a public module's ``__all__`` is defined there, or in a private module behind exactly
+  one public module; package ``__init__``s gather names for their documented namespaces);
+- the tests reach private modules only through ``symsphere._testing`` (docs/testing.md).
 """
 
 from __future__ import annotations
 
 import ast
+import importlib
+import re
+import subprocess
+import sys
+import types
 from pathlib import Path
 
 import pytest
@@ -15,9 +24,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "symsphere"
 SOURCES = sorted(PACKAGE.rglob("*.py"))
 GENERATED: set[str] = set()  # no generated modules
-# The applications' old import paths, kept for users' code (each re-exports symsphere.apps.*): they are
-# entry points, part of the applications' layer; the library imports none of them (checked below).
-SHIMS = {"cli.py", "demo.py", "study.py", "__main__.py"}
+# ``python -m symsphere``: an entry point of the applications' layer (it runs symsphere.apps.cli).
+ENTRY_POINTS = {"__main__.py"}
 MAX_LINES = 850  # 700 before ruff format put long calls one argument per line; the largest modules are for splitting
 
 
@@ -88,7 +96,7 @@ def test_private_names_stay_in_their_module(path):
 
 def _is_application(path: Path) -> bool:
     relative = path.relative_to(PACKAGE)
-    return "apps" in relative.parts or (len(relative.parts) == 1 and relative.name in SHIMS)
+    return "apps" in relative.parts or (len(relative.parts) == 1 and relative.name in ENTRY_POINTS)
 
 
 @pytest.mark.parametrize(
@@ -103,8 +111,7 @@ def test_the_library_never_imports_the_applications(path):
             names = [a.name for a in node.names]
         else:
             continue
-        shims = {f"symsphere.{Path(s).stem}" for s in SHIMS}
-        assert not any(n == "symsphere.apps" or n.startswith("symsphere.apps.") or n in shims for n in names), (
+        assert not any(n == "symsphere.apps" or n.startswith("symsphere.apps.") for n in names), (
             f"{path.name}:{node.lineno} imports the applications"
         )
 
@@ -130,3 +137,141 @@ def test_the_checker_sees_a_violation(tmp_path):
     )
     found = _violations(probe, package)
     assert len(found) == 2, found
+
+
+# --- the rules by importing, not only by reading -------------------------------------------------
+
+LIBRARY_MODULES = [
+    _module_name(p)
+    for p in SOURCES
+    if not _is_application(p) and "mitsuba" not in p.relative_to(PACKAGE).parts and p.name != "_testing.py"
+]
+PUBLIC_MODULES = [m for m in LIBRARY_MODULES if not any(part.startswith("_") for part in m.split("."))]
+
+
+def _public(dotted: str) -> bool:
+    return not any(part.startswith("_") for part in dotted.split("."))
+
+
+def test_importing_the_library_loads_no_application():
+    # Every library module, imported in a fresh process (so that a lazy attribute like the old
+    # ``ss.study`` or an import cycle is exercised too): symsphere.apps never appears in sys.modules.
+    code = (
+        "import importlib, sys\n"
+        f"for name in {LIBRARY_MODULES!r}:\n"
+        "    importlib.import_module(name)\n"
+        "import symsphere\n"
+        "for name in dir(symsphere):\n"
+        "    getattr(symsphere, name)\n"
+        "loaded = sorted(m for m in sys.modules if m == 'symsphere.apps' or m.startswith('symsphere.apps.'))\n"
+        "print(loaded)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == "[]", run.stdout
+
+
+def _homes(modules: list[str]) -> dict[tuple[str, str], list[str]]:
+    """(defining module, name) -> the public modules (not package namespaces) whose ``__all__`` lists it."""
+    listed: dict[tuple[str, str], list[str]] = {}
+    for dotted in modules:
+        module = importlib.import_module(dotted)
+        if hasattr(module, "__path__"):  # a package __init__: its documented namespace gathers names
+            continue
+        for name in getattr(module, "__all__", ()):
+            value = getattr(module, name)
+            if isinstance(value, types.ModuleType):
+                continue
+            home = getattr(value, "__module__", None) if callable(value) else None
+            listed.setdefault((home or f"{dotted} (a value)", name), []).append(dotted)
+    return listed
+
+
+def test_each_public_name_has_one_home():
+    # A name defined in a public module is listed in that module's __all__ only; a name defined in a
+    # private module (scipy's _qmc pattern) is listed by one public module.  Package __init__s excepted.
+    problems = []
+    for (home, name), modules in _homes(PUBLIC_MODULES).items():
+        if _public(home.split(" ")[0]) and " (a value)" not in home:
+            if modules != [home]:
+                problems.append(f"{name}: defined in {home}, listed by {modules}")
+        elif len(modules) > 1:
+            problems.append(f"{name} ({home}): listed by {modules}")
+    assert problems == []
+
+
+def test_the_home_check_sees_a_re_export(tmp_path, monkeypatch):
+    package = tmp_path / "probe_pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text("__all__ = ['f']\ndef f(): pass\n")
+    (package / "b.py").write_text("from .a import f\n__all__ = ['f']\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    listed = _homes(["probe_pkg.a", "probe_pkg.b"])
+    assert listed == {("probe_pkg.a", "f"): ["probe_pkg.a", "probe_pkg.b"]}
+
+
+# --- the tests reach the internals through one door ----------------------------------------------
+
+TESTS = Path(__file__).resolve().parent
+TEST_SOURCES = sorted(TESTS.rglob("*.py"))
+TESTING_HOOK = "symsphere._testing"
+
+
+def _private_uses(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and _ours(node.module) and not node.level:
+            if node.module == TESTING_HOOK:
+                continue
+            if not _public(node.module):
+                found.append(f"{path.name}:{node.lineno} imports from {node.module}")
+            found += [f"{path.name}:{node.lineno} imports {a.name}" for a in node.names if _is_private(a.name)]
+        elif isinstance(node, ast.Import):
+            found += [
+                f"{path.name}:{node.lineno} imports {a.name}"
+                for a in node.names
+                if _ours(a.name) and not _public(a.name) and a.name != TESTING_HOOK
+            ]
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            # code run in a subprocess: ``import symsphere._x`` inside a string
+            found += [
+                f"{path.name}:{node.lineno} runs {m}"
+                for m in re.findall(r"\bimport (symsphere(?:\.\w+)+)", node.value)
+                if not _public(m) and m != TESTING_HOOK
+            ]
+    return found
+
+
+@pytest.mark.parametrize(
+    "path",
+    [p for p in TEST_SOURCES if p != Path(__file__).resolve()],  # itself: the probe's text
+    ids=lambda p: str(p.relative_to(TESTS)),
+)
+def test_tests_reach_internals_only_through_the_testing_hook(path):
+    assert _private_uses(path) == []
+
+
+def test_the_hook_check_sees_a_private_import(tmp_path):
+    probe = tmp_path / "test_probe.py"
+    probe.write_text(
+        "from symsphere._kernels import fill\nfrom symsphere.maps import _sin_small\nimport symsphere._fused\n"
+        "from symsphere._testing import kernels\ncode = 'import symsphere._threads'\n"
+    )
+    assert len(_private_uses(probe)) == 4
+
+
+def test_no_issue_numbers_in_code_tests_or_docs():
+    # History is CHANGELOG.md's, and even there told by what changed, not by a tracker's numbers
+    # (another project's issue, cited as a source, is a reference: allowed).
+    root = PACKAGE.parents[1]
+    pattern = re.compile(r"\b[Ii]ssues?\s+#?\d+|\(#\d+\)|\b[Ii]ssue-\d+")
+    files = [*SOURCES, *TEST_SOURCES, *sorted((root / "docs").glob("*.md")), root / "README.md", root / "CHANGELOG.md"]
+    found = [
+        f"{path.relative_to(root)}:{number}: {line.strip()}"
+        for path in files
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pattern.search(line) and "OpenBLAS issue" not in line
+    ]
+    assert found == []

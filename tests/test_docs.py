@@ -35,10 +35,8 @@ API_INDEX = ROOT / "docs" / "api" / "index.rst"
 # Public modules without a page of their own, and why.
 NOT_DOCUMENTED = {
     "symsphere.apps": "a package of applications without names of its own; its modules have pages",
-    "symsphere.cli": "the old import path of symsphere.apps.cli, kept for users' code",
-    "symsphere.demo": "the old import path of symsphere.apps.demo, kept for users' code",
-    "symsphere.study": "the old import path of symsphere.apps.study (and quality), kept for users' code",
     "symsphere.mitsuba": "needs Mitsuba 3 (the extra 'mitsuba', not in the docs build); docs/rendering.md documents it",
+    "symsphere.apps.study.compiled": "the study's compiled peer samplers, an internal of the study; docs/study.md describes them",
     "symsphere.apps.mitsuba_render": "the render verb's Mitsuba scene files; symsphere render --help and docs/rendering.md",
     "symsphere.render.image": "its public names are documented on the symsphere.render page",
     "symsphere.render.renderer": "its public names are documented on the symsphere.render page",

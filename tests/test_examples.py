@@ -1,4 +1,4 @@
-"""examples/: every walkthrough runs as written (issue 13: a notebook-style tour that the suite runs)."""
+"""examples/: every walkthrough runs as written (a notebook-style tour that the suite runs)."""
 
 import runpy
 from pathlib import Path

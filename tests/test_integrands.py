@@ -13,6 +13,7 @@ import pytest
 from references import cap_rule
 
 import symsphere as ss
+from symsphere import harmonics as H
 from symsphere import integrands as I
 
 Z_AXIS = np.array([0.0, 0.0, 1.0])
@@ -61,7 +62,7 @@ def test_cubic4_forms_agree():
     d = np.random.default_rng(3).standard_normal((100, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     np.testing.assert_allclose(
-        I.INTEGRANDS["cubic4"].f(d), 0.4 * I.evaluate_polynomial(I.cubic_harmonic(4), d), atol=1e-14
+        I.INTEGRANDS["cubic4"].f(d), 0.4 * H.evaluate_polynomial(H.cubic_harmonic(4), d), atol=1e-14
     )
 
 
@@ -186,15 +187,15 @@ def test_orbit_average_of_non_invariant_degrees_is_zero():
     p = _base_points(64, seed=7)
     for l in (1, 2, 3, 5, 7):
         for m in range(-l, l + 1):
-            avg = I.orbit_average(lambda d: I.real_sh(l, m, d), p)
+            avg = I.orbit_average(lambda d: H.real_sh(l, m, d), p)
             assert np.abs(avg).max() < 1e-13, (l, m)
 
 
 def test_orbit_average_of_invariant_harmonics_is_the_function():
     p = _base_points(64, seed=8)
     for degree in (4, 6, 8):
-        coeffs = I.cubic_harmonic(degree)
-        f = lambda d: I.evaluate_polynomial(coeffs, d)  # noqa: E731
+        coeffs = H.cubic_harmonic(degree)
+        f = lambda d: H.evaluate_polynomial(coeffs, d)  # noqa: E731
         np.testing.assert_allclose(I.orbit_average(f, p), f(p), rtol=1e-13, atol=1e-13)
 
 
@@ -204,11 +205,11 @@ def test_orbit_average_is_the_projection_onto_the_invariant_harmonic():
     d, w = cap_rule(Z_AXIS, -1, 1, 20, 40)
     p = _base_points(16, seed=9)
     for degree in (4, 6, 8):
-        coeffs = I.cubic_harmonic(degree)
-        norm = np.sqrt(np.sum(I.evaluate_polynomial(coeffs, d) ** 2 * w))
-        K = lambda q: I.evaluate_polynomial(coeffs, q) / norm  # noqa: E731
+        coeffs = H.cubic_harmonic(degree)
+        norm = np.sqrt(np.sum(H.evaluate_polynomial(coeffs, d) ** 2 * w))
+        K = lambda q: H.evaluate_polynomial(coeffs, q) / norm  # noqa: E731
         for m in range(-degree, degree + 1):
-            Y = lambda q: I.real_sh(degree, m, q)  # noqa: E731
+            Y = lambda q: H.real_sh(degree, m, q)  # noqa: E731
             coef = np.sum(Y(d) * K(d) * w)
             np.testing.assert_allclose(I.orbit_average(Y, p), coef * K(p), rtol=0, atol=1e-13)
 
@@ -220,7 +221,7 @@ def test_dimension_of_invariant_harmonics():
     p = _base_points(40, seed=12)
     molien = [sum(1 for a in range(4) for b in range(3) if 4 * a + 6 * b == l) for l in range(13)]
     for l in range(13):
-        rows = np.array([I.orbit_average(lambda d, m=m: I.real_sh(l, m, d), p) for m in range(-l, l + 1)])
+        rows = np.array([I.orbit_average(lambda d, m=m: H.real_sh(l, m, d), p) for m in range(-l, l + 1)])
         sv = np.linalg.svd(rows, compute_uv=False)
         assert int(np.sum(sv > 1e-9 * max(1.0, sv[0]))) == molien[l], (l, sv)
 
@@ -278,3 +279,18 @@ def test_hemisphere_orbit_is_the_even_extension():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda v: I.sphere_light_irradiance([0, 0, 1], v, 1.0), "distance"),  # check_positive
+        (lambda v: I.sphere_light_irradiance([0, 0, 1], 2.0, 1.0, radiance=v), "radiance"),  # check_nonnegative
+        (lambda v: I.lambert_irradiance([[0, 0, 1], [1, 0, 1], [0, 1, 1]], radiance=v), "radiance"),
+    ],
+)
+@pytest.mark.parametrize("value", [10**400, -(10**400)])
+def test_an_int_beyond_float64_is_a_value_error_naming_the_argument(call, name, value):
+    # A number, only too large: ValueError (not the OverflowError of float(10**400)), its message short.
+    with pytest.raises(ValueError, match=f"'{name}' must be a finite real number, got an integer of 401 digits"):
+        call(value)

@@ -135,7 +135,7 @@ def test_bad_input(kwargs, error, match):
 
 
 def test_module_is_not_named_after_the_function():
-    """``symsphere.integrate`` is the function; the module is ``symsphere.integration`` (issue 13, item 7)."""
+    """``symsphere.integrate`` is the function; the module is ``symsphere.integration``."""
     import importlib
     import importlib.util
     import types
@@ -151,7 +151,7 @@ def test_module_is_not_named_after_the_function():
 
 
 def test_sobol_balance_warning_once_at_the_callers_line():
-    """scipy's balance warning (n not a power of 2) is issued once, attributed to this file (issue 13, item 3)."""
+    """scipy's balance warning (n not a power of 2) is issued once, attributed to this file."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         integrate(lambda d: d[:, 2] ** 2, n=48 * 3 * 8, points="sobol", rng=1)

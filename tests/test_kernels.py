@@ -5,11 +5,13 @@ import pytest
 from numba import njit
 from references import ELEMENTARY_ULPS, EPS32, EPS64, GAMMA3, assert_within_eps
 
-from symsphere import METHODS, _kernels, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
-from symsphere._blocks import reference_orbits
+from symsphere import METHODS, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere
+from symsphere._testing import blocks, kernels
 from symsphere.frames import frame
 from symsphere.points import BLOCK, BasePoints
 from symsphere.symmetry import SPHERE_MAPS
+
+reference_orbits = blocks.reference_orbits
 
 # How far the kernels' map may be from the numpy path's, relative to each component, in EPS64
 # (the error model of tests/references.py; E = ELEMENTARY_ULPS per elementary function, 1/2 per
@@ -36,7 +38,7 @@ def test_kernel_matches_numpy_reference(method, count, normal):
     reference = reference_orbits(uv, method, count, basis)
     for dtype in (np.float64, np.float32):
         out = np.empty((len(uv) * count, 3), dtype)
-        _kernels.fill_orbits(uv, method, count, basis, out)
+        kernels.fill_orbits(uv, method, count, basis, out)
         # Unit vectors, so absolute bounds in EPS64: the map's MAP_EPS; a frame rotates that
         # difference (|R d| = |d|) and adds a 3-term dot product per path, numpy's `local @ basis`
         # (BLAS, perhaps with FMA) and the kernel's sum: 2 GAMMA3.  float32: the kernel maps in
@@ -60,17 +62,17 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
     basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
     source = BasePoints("random", 21, total=m + 5)
     for dtype in (np.float64, np.float32):
-        expected = _kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
+        expected = kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
         got = np.full((m * count, 3), np.nan, dtype)
-        _kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
+        kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
 
 
 def test_random_kernel_far_into_the_stream():
     first = 1_000_003
     source = BasePoints("random", 22, total=first + 333)
-    expected = _kernels.fill_orbits(source.take(first, first + 333), "equal_area", 48, None, np.empty((333 * 48, 3)))
-    got = _kernels.fill_random_orbits(source.seed_words, first, 333, "equal_area", 48, None, np.empty((333 * 48, 3)))
+    expected = kernels.fill_orbits(source.take(first, first + 333), "equal_area", 48, None, np.empty((333 * 48, 3)))
+    got = kernels.fill_random_orbits(source.seed_words, first, 333, "equal_area", 48, None, np.empty((333 * 48, 3)))
     assert np.array_equal(got, expected)
 
 
@@ -86,8 +88,8 @@ def test_random_points_are_numpys_pcg64_stream():
     # The kernels' own PCG64 (seeding, jump, step) continues numpy's stream from any index.
     @njit
     def draw(words, index, k):
-        stream = _kernels.pcg64_advanced(_kernels.pcg64_seeded(words), 2 * index)
-        return [_kernels.pcg64_random(stream) for _ in range(k)]
+        stream = kernels.pcg64_advanced(kernels.pcg64_seeded(words), 2 * index)
+        return [kernels.pcg64_random(stream) for _ in range(k)]
 
     assert np.array_equal(draw(source.seed_words, 101, 2 * 400), expected[101:501].ravel())
     assert BasePoints("sobol", 8, total=16).seed_words is None
@@ -107,21 +109,21 @@ def test_pcg64_seeding_and_jump_ahead_equal_numpys(seed):
     rng = np.random.default_rng(seed)
     sequence = np.random.SeedSequence(rng.integers(0, 2**63, size=4).tolist(), spawn_key=(0,))
     words = sequence.generate_state(4, np.uint64)
-    start = njit(_kernels.pcg64_seeded)(words)
+    start = njit(kernels.pcg64_seeded)(words)
     assert _as_int128(start) == _numpy_state(np.random.PCG64(sequence))
-    jump = njit(_kernels.pcg64_advanced)
+    jump = njit(kernels.pcg64_advanced)
     for draws in [0, 1, 2, 3, 2**32 + 5, 2**62 + 999, 2**63 - 1, *rng.integers(0, 2**63, size=20)]:
         bit_generator = np.random.PCG64(sequence)
         bit_generator.advance(int(draws))
         assert _as_int128(jump(start, np.uint64(draws))) == _numpy_state(bit_generator)
         # The kernels' parts start from pcg64_state (Python's integers seed, numpy's advance jumps).
-        assert _as_int128(_kernels.pcg64_state(words, int(draws))) == _numpy_state(bit_generator)
+        assert _as_int128(kernels.pcg64_state(words, int(draws))) == _numpy_state(bit_generator)
 
 
 def test_parts_cover_the_points_in_order():
     for m in [1, 15, 16, 17, 100, 4099]:
         for parts in [1, 2, 3, 7, 1000]:
-            bounds = _kernels.part_bounds(m, parts)
+            bounds = kernels.part_bounds(m, parts)
             assert bounds[0] == 0 and bounds[-1] == m and np.all(np.diff(bounds) > 0)
             assert np.all(bounds[1:-1] % 16 == 0) and len(bounds) - 1 == min(parts, -(-m // 16))
 
@@ -129,7 +131,7 @@ def test_parts_cover_the_points_in_order():
 def test_kernel_exact_signs_and_permutations():
     # Without a frame the orbit stores are exact copies: compare against the tables.
     uv = np.random.default_rng(1).random((100, 2))
-    out = _kernels.fill_orbits(uv, "equal_area", 48, None, np.empty((4800, 3)))
+    out = kernels.fill_orbits(uv, "equal_area", 48, None, np.empty((4800, 3)))
     base = out[::48]
     assert np.array_equal(out.reshape(100, 48, 3), np.einsum("mi,kij->mkj", base, SPHERE_MAPS))
 
@@ -139,17 +141,17 @@ def test_scalar_helpers_match_numpy():
     def evaluate(uv, code, k):
         out = np.empty((len(uv), 7))
         for i in range(len(uv)):
-            x, y, z = _kernels.triangle_point(uv[i, 0], uv[i, 1], code)
-            a, b, c = _kernels.orbit_member(x, y, z, k)
+            x, y, z = kernels.triangle_point(uv[i, 0], uv[i, 1], code)
+            a, b, c = kernels.orbit_member(x, y, z, k)
             out[i, 0], out[i, 1], out[i, 2] = x, y, z
             out[i, 3], out[i, 4], out[i, 5] = a, b, c
-            out[i, 6] = _kernels.triangle_density(x, y, z, code)
+            out[i, 6] = kernels.triangle_density(x, y, z, code)
         return out
 
     from symsphere import square_to_triangle, square_to_triangle_pdf
 
     uv = np.random.default_rng(2).random((200, 2))
-    for method, code in _kernels.METHOD_CODES.items():
+    for method, code in kernels.METHOD_CODES.items():
         for k in (0, 13, 47):
             got = evaluate(uv, code, k)
             p = square_to_triangle(uv, method)

@@ -10,7 +10,9 @@ import pytest
 KERNEL = textwrap.dedent(
     """
     from numba import njit
-    from symsphere._numba_cache import invalidate_if_changed
+    from symsphere._testing import numba_cache
+
+    invalidate_if_changed = numba_cache.invalidate_if_changed
     import helper
 
     @njit(cache=True)
@@ -56,10 +58,9 @@ def test_dependencies_are_derived_from_the_kernel_modules_imports():
     # Independent reference: the files whose functions or tables the sampling kernels inline, by reading the code.
     from pathlib import Path
 
-    from symsphere import _kernels
-    from symsphere._numba_cache import kernel_dependencies
+    from symsphere._testing import kernels, numba_cache
 
-    names = {Path(p).name for p in kernel_dependencies(_kernels.fill_orbits)}
+    names = {Path(p).name for p in numba_cache.kernel_dependencies(kernels.fill_orbits)}
     assert {"_kernels.py", "_triangle.py", "symmetry.py"} <= names  # _triangle.py: the maps onto T0
     assert "sampling.py" not in names and "__init__.py" not in names  # consumers are not dependencies
 
@@ -69,7 +70,7 @@ def test_importing_the_kernels_touches_no_cache(tmp_path):
     # creates the empty cache directory when a cache=True kernel is defined: directories are not counted.)
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["NUMBA_CACHE_DIR"] = str(tmp_path)
-    code = "import symsphere, symsphere._kernels; import pathlib, sys; print(sum(p.is_file() for p in pathlib.Path(sys.argv[1]).rglob('*')))"
+    code = "import symsphere, symsphere._testing; import pathlib, sys; print(sum(p.is_file() for p in pathlib.Path(sys.argv[1]).rglob('*')))"
     result = subprocess.run(
         [sys.executable, "-c", code, str(tmp_path)], env=env, capture_output=True, text=True, timeout=120
     )

@@ -1,4 +1,4 @@
-"""Packaging (issue 13): license, changelog, metadata, one version, a README that renders on PyPI.
+"""Packaging: license, changelog, metadata, one version, a README that renders on PyPI.
 
 The wheel itself is built and used in a bare venv by scripts/check_wheel.py, which CI runs after the
 suite (.ci/run): it needs pip's index and takes minutes.
@@ -20,7 +20,7 @@ def test_license_file_and_spdx_expression():
     text = (ROOT / "LICENSE").read_text(encoding="utf-8")
     assert text.startswith("BSD 3-Clause License") and "symsphere developers" in text
     project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
-    # PEP 639: a string, not the deprecated table that made setuptools warn three times (defect 6).
+    # PEP 639: a string, not the deprecated table that made setuptools warn three times (setuptools deprecated the table form).
     assert project["license"] == "BSD-3-Clause" and project["license-files"] == ["LICENSE"]
     assert not any(c.startswith("License ::") for c in project.get("classifiers", []))  # deprecated with PEP 639
     requires = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["build-system"]["requires"]
@@ -46,7 +46,9 @@ def test_changelog_keeps_a_changelog():
     release = re.search(r"^## \[(\d+\.\d+\.\d+)\] - Unreleased$", text, re.M)
     assert release and symsphere.__version__.startswith(release[1])
     unreleased = text[release.end() : text.index("\n## [", release.end())]
-    assert [h for h in re.findall(r"^### (\w+)$", unreleased, re.M)] == ["Added", "Changed", "Fixed"]
+    headings = re.findall(r"^### (\w+)$", unreleased, re.M)
+    order = ["Added", "Changed", "Deprecated", "Removed", "Fixed", "Security"]  # Keep a Changelog's kinds, in order
+    assert headings and headings == [h for h in order if h in headings]
 
 
 def test_ci_builds_and_uses_the_wheel():

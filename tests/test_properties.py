@@ -109,7 +109,7 @@ OVERRIDES = {
 MAY_BE_INF = {"square_to_triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas.
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
-# since issue 22 (inside kernels they are the bare formulas) and are tested like the others, and below;
+# since the third reliability round (inside kernels they are the bare formulas) and are tested like the others, and below;
 # so do the elementwise warps of symsphere.warps.
 TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf"}
 MODULES = (symsphere, sampling, symmetry, frames, harmonics, stats, integrands, peers, quality, points_module,

@@ -1,4 +1,4 @@
-"""Regression tests of issue 12 (reliability): one or more per numbered defect, each failing on the code
+"""Reliability regression tests (the first review): one or more per defect, each failing on the code
 before the fix.  docs/reliability.md states the guarantees these tests check.
 
 Subprocess tests run the real command (``python -m symsphere``) so that signals, resource limits and

@@ -1,4 +1,4 @@
-"""Regression tests of issue 22 (reliability, third round): one or more per numbered defect, each
+"""Reliability regression tests (the third round): one or more per defect, each
 failing on the code before the fix (docs/reliability.md lists which, and how that was run).
 
 Calls that could hang on the old code (a FIFO) run in a subprocess with a timeout, so that a hang is a

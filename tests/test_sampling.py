@@ -66,7 +66,7 @@ def test_stratified_needs_square_base_count():
     with pytest.raises(ValueError, match=r"n=72 gives 3 \(n/24\); use n=24 or n=96"):
         sample_hemisphere(72, points="stratified")
     # Any size: the message quotes the n the user passed, not the whole orbits' n it was rounded up to
-    # (issue 19: sample_sphere(50) said "n=96 gives 2 (n/48)").
+    # (sample_sphere(50) used to say "n=96 gives 2 (n/48)").
     with pytest.raises(ValueError, match=r"; n=50 gives 2 \(ceil\(n/48\)\); use n=48 or n=192$"):
         sample_sphere(50, points="stratified")
     with pytest.raises(ValueError, match=r"; n=50 gives 3 \(ceil\(n/24\)\); use n=24 or n=96$"):

@@ -26,11 +26,10 @@ from references import cosine_pdf, in_t0, linear_triangle_pdf, pole_pdf
 from scipy import stats as scipy_stats
 
 from symsphere import stats
+from symsphere.bins import bin_probabilities, equal_area_bins
 from symsphere.stats import (
     Chi2Result,
-    bin_probabilities,
     chi2_test,
-    equal_area_bins,
     uniform_pdf,
 )
 

@@ -12,7 +12,7 @@ The names below are the package's everyday interface; each is documented in
 its module (:mod:`symsphere.sampling`, :mod:`symsphere.integration`,
 :mod:`symsphere.warps`, :mod:`symsphere.symmetry`, :mod:`symsphere.points`).
 :mod:`symsphere.stats`, :mod:`symsphere.peers`, :mod:`symsphere.integrands`,
-:mod:`symsphere.render`, :mod:`symsphere.study` and the other submodules of
+:mod:`symsphere.render` and the other library submodules of
 ``dir(symsphere)`` are imported on first use (``ss.render.render(...)`` works
 without an import of its own); ``import symsphere`` itself stays cheap and
 changes nothing in the process.
@@ -58,7 +58,7 @@ __version__ = "0.2.0.dev0"
 
 _SUBMODULES = (
     "bins", "distributed", "frames", "harmonics", "integrands", "io", "peers", "quality", "render",
-    "stats", "study",
+    "stats",
 )  # fmt: skip
 
 

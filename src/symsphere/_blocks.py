@@ -20,6 +20,7 @@ import numpy as np
 
 from . import frames
 from ._kernels import fill_orbits, fill_random_orbits
+from ._splitmix import GOLDEN, mix64_int
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_dtype
 from .points import BasePoints
@@ -158,17 +159,15 @@ def cut_offset(source: BasePoints, orbit_index: int, count: int) -> int:
     """Where a cut orbit's members start: rows ``(s + i) % count``, ``i < n % count``, are taken.
 
     The offset s is uniform on ``range(count)`` and independent of the base points:
-    SplitMix64's finaliser (Steele et al. 2014) of a key made from the source's root
+    SplitMix64's finaliser (:mod:`symsphere._splitmix`) of a key made from the source's root
     entropy, :data:`CUT_ORBIT_KEY` and the orbit's index.  So each row of a cut orbit is a
     uniformly chosen member (uniform on the sphere for a uniform map), no member is taken
     twice, and it costs about a microsecond: any n runs as fast as the nearest multiple of the
     orbit size.
     """
     w0, w1, w2, w3 = source.root_entropy
-    key = (w0 ^ (w1 << 1) ^ (w2 << 2) ^ (w3 << 3) ^ (CUT_ORBIT_KEY << 62) ^ orbit_index * 0x9E3779B97F4A7C15) & _MASK
-    key = ((key ^ (key >> 30)) * 0xBF58476D1CE4E5B9) & _MASK
-    key = ((key ^ (key >> 27)) * 0x94D049BB133111EB) & _MASK
-    return (key ^ (key >> 31)) % count
+    key = (w0 ^ (w1 << 1) ^ (w2 << 2) ^ (w3 << 3) ^ (CUT_ORBIT_KEY << 62) ^ orbit_index * int(GOLDEN)) & _MASK
+    return mix64_int(key) % count
 
 
 def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:

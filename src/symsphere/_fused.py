@@ -23,36 +23,31 @@ and the 48 (24) values of an orbit are summed in image order; about a normal the
 images are ``x W0 + y W1 + z W2`` instead of numpy's ``local @ basis``.  The result
 does not depend on the thread count or on how the blocks are split between tasks.
 
-The kernel takes f as an argument, so numba compiles it once per integrand and process (a few
-seconds), and cannot cache it on disk: a function-typed argument is typed by the dispatcher
-object, which differs in every process, so a cached entry never matches (measured: saved, never
-hit).  An integrand whose kernel was generated from source (the suite's, see
-:mod:`symsphere.integrands`, which sets ``kernel.symsphere_source``) gets a *specialised* kernel
-instead: a module file written once into a cache directory (``NUMBA_CACHE_DIR`` or
-``$XDG_CACHE_HOME/symsphere``, default ``~/.cache/symsphere``) holding the integrand's function
-and this module's ``_chunk_statistics`` with f a global instead of an argument, compiled with
-``cache=True``.  Its name is the SHA-256 of its text, and its numba cache is dropped when a file
-the kernel inlines changes (:mod:`symsphere._numba_cache`), so a later process loads the machine
-code (tens of ms) instead of compiling.  If the directory is not writable the generic kernel runs.
+One kernel, specialised by closure cells (as :func:`symsphere._kernels._fill_kernel` is): the
+cells say where f comes from.  A user's compiled f is an argument, so numba compiles the kernel once
+per integrand and process (a few seconds), and cannot cache it on disk: a function-typed argument is
+typed by the dispatcher object, which differs in every process, so a cached entry never matches
+(measured: saved, never hit).  A suite integrand (:mod:`symsphere.integrands`, whose kernel carries
+its spec ``(kind, params)``, see :mod:`symsphere._integrand_kernels`) is compiled into the kernel
+instead: the spec is in the cells, numba folds it into the machine code and caches the kernel on
+disk keyed by the cells' values (numba hashes a closure's cell contents into its cache index), so a
+later process loads the machine code (tens of ms) instead of compiling.  The cache is numba's, next
+to this module (or under ``NUMBA_CACHE_DIR``), dropped when a file the kernel inlines changes
+(:mod:`symsphere._numba_cache`).
 """
 
 from __future__ import annotations
 
-import contextlib
-import hashlib
-import importlib.util
 import inspect
-import os
-import sys
 import threading
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-from llvmlite import ir
-from numba import njit, prange, types
-from numba.extending import intrinsic, is_jitted
+from numba import njit, prange
+from numba.extending import is_jitted
 
+from ._integrand_kernels import no_chain
+from ._integrand_kernels import value as spec_value
 from ._kernels import (
     BATCH,
     METHOD_CODES,
@@ -64,8 +59,8 @@ from ._kernels import (
     rotated_weights,
     triangle_density,
 )
-from ._numba_cache import invalidate_if_changed, kernel_dependencies
-from ._typing import Float64Array
+from ._numba_cache import invalidate_if_changed
+from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 
 __all__ = [
@@ -73,10 +68,9 @@ __all__ = [
     "Compiled",
     "compiled_integrand",
     "fused_partials",
-    "vexp",
     "call_xyz",
     "call_vector",
-    "cache_directory",
+    "specialised_kernels",
 ]
 
 CHUNK = 512
@@ -85,7 +79,7 @@ assert BLOCK % CHUNK == 0
 
 _RANDOM, _STRATIFIED, _GIVEN = 0, 1, 2
 _SEGMENT_BLOCKS = 64  # given base points (QMC) are taken this many blocks at a time: bounded memory
-_OPTIONS = dict(error_model="numpy", nogil=True)
+_OPTIONS: dict[str, Any] = dict(error_model="numpy", nogil=True)
 
 
 @njit(inline="always")
@@ -103,9 +97,10 @@ def call_vector(f, x, y, z, buffer):
     return f(buffer)
 
 
-Compiled = tuple[Any, Any, "str | None"]
+Compiled = tuple[Any, Any, "tuple[int, tuple[float, ...], Any] | None"]
 """(the numba function, the caller that adapts its signature: call_xyz or call_vector, the
-function's generated source when it has one: the suite's integrands, cached specialised kernels)."""
+function's spec ``(kind, params)`` when it has one: the suite's integrands, compiled into a
+disk-cached kernel)."""
 
 
 def compiled_integrand(f: object) -> Compiled | None:
@@ -116,12 +111,12 @@ def compiled_integrand(f: object) -> Compiled | None:
     function is called once here, at (0, 0, 1), so that a wrong signature or a result that is
     not one real number raises TypeError naming 'f' before any work.
     """
-    kernel = getattr(f, "kernel", None) if not is_jitted(f) else f
+    kernel: Any = getattr(f, "kernel", None) if not is_jitted(f) else f  # type: ignore[arg-type]
     if kernel is None or not is_jitted(kernel):
         return None
-    source = getattr(kernel, "symsphere_source", None)
-    if isinstance(source, str) and source.startswith("def kernel(x, y, z):"):
-        return kernel, call_xyz, source  # generated by symsphere.integrands (tested there): no probe, no compilation
+    spec = getattr(kernel, "symsphere_spec", None)
+    if spec is not None:
+        return kernel, call_xyz, spec  # made by symsphere._integrand_kernels (tested there): no probe, no compilation
     try:
         arity = len(inspect.signature(kernel.py_func).parameters)
     except (TypeError, ValueError):  # pragma: no cover - numba dispatchers always have py_func
@@ -139,71 +134,125 @@ def compiled_integrand(f: object) -> Compiled | None:
     return kernel, (call_xyz if arity == 3 else call_vector), None
 
 
-@njit(parallel=True, **_OPTIONS)
-def _chunk_statistics(f, caller, source_kind, seed_words, side, uv, first_point, m, code, uniform, weights, count, out):
-    # out[c] = (orbits, sum of orbit estimates, sum of squared deviations) of chunk c, the
-    # orbits first_point + c CHUNK ... (+ CHUNK - 1) of the replicate.
-    start = pcg64_seeded(seed_words)
-    images = weights.shape[1] // 3
-    area = 4.0 * np.pi if count == 48 else 2.0 * np.pi
-    for c in prange(out.shape[0]):
-        lo = c * CHUNK
-        hi = min(m, lo + CHUNK)
-        stream = pcg64_advanced(start, 2 * (first_point + lo))
-        u = np.full(BATCH, 0.5)
-        v = np.full(BATCH, 0.5)
-        base = np.empty((3, BATCH))
-        sums = np.empty(BATCH)
-        estimates = np.empty(BATCH)
-        buffer = np.empty(3)
-        orbits, total, m2 = 0.0, 0.0, 0.0
-        for first in range(lo, hi, BATCH):
-            b = min(BATCH, hi - first)
-            for j in range(b):
-                if source_kind == _GIVEN:
-                    u[j] = uv[first + j, 0]
-                    v[j] = uv[first + j, 1]
+_ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called through *caller*
+
+
+@njit(inline="always")
+def _value(kind, params, chain, f, caller, x, y, z, buffer):
+    """f at (x, y, z): the argument f (kind _ARGUMENT) or the spec's integrand, inlined in numba's IR:
+    with *kind* a cell of the kernel, numba prunes the other branch before typing."""
+    if kind == _ARGUMENT:
+        return caller(f, x, y, z, buffer)
+    return spec_value(kind, params, chain, x, y, z)
+
+
+def _chunk_kernel(kind, params, chain, cache):
+    """The fused kernel of integrands of *kind* with constants *params* (closure cells: constants to
+    numba); kind _ARGUMENT: of the argument f (not cacheable on disk, see the module's docstring)."""
+
+    @njit(parallel=True, cache=cache, **_OPTIONS)
+    def chunk_statistics(
+        f, caller, source_kind, seed_words, side, uv, first_point, m, code, uniform, weights, count, out
+    ):  # pragma: no cover - compiled by numba
+        # out[c] = (orbits, sum of orbit estimates, sum of squared deviations) of chunk c, the
+        # orbits first_point + c CHUNK ... (+ CHUNK - 1) of the replicate.  f, caller: the integrand
+        # and its caller for kind _ARGUMENT, else unused zeros.
+        start = pcg64_seeded(seed_words)
+        images = weights.shape[1] // 3
+        area = 4.0 * np.pi if count == 48 else 2.0 * np.pi
+        for c in prange(out.shape[0]):
+            lo = c * CHUNK
+            hi = min(m, lo + CHUNK)
+            stream = pcg64_advanced(start, 2 * (first_point + lo))
+            u = np.full(BATCH, 0.5)
+            v = np.full(BATCH, 0.5)
+            base = np.empty((3, BATCH))
+            sums = np.empty(BATCH)
+            estimates = np.empty(BATCH)
+            buffer = np.empty(3)
+            orbits, total, m2 = 0.0, 0.0, 0.0
+            for first in range(lo, hi, BATCH):
+                b = min(BATCH, hi - first)
+                for j in range(b):
+                    if source_kind == _GIVEN:
+                        u[j] = uv[first + j, 0]
+                        v[j] = uv[first + j, 1]
+                    else:
+                        ju = pcg64_random(stream)
+                        jv = pcg64_random(stream)
+                        if source_kind == _RANDOM:
+                            u[j], v[j] = ju, jv
+                        else:  # as BasePoints.take: (corner + jitter) / side
+                            cell = first_point + first + j
+                            u[j] = (cell // side + ju) / side
+                            v[j] = (cell % side + jv) / side
+                map_batch(u, v, code, base)
+                for j in range(BATCH):
+                    sums[j] = 0.0
+                for k in range(images):
+                    w00, w01, w02 = weights[0, 3 * k], weights[0, 3 * k + 1], weights[0, 3 * k + 2]
+                    w10, w11, w12 = weights[1, 3 * k], weights[1, 3 * k + 1], weights[1, 3 * k + 2]
+                    w20, w21, w22 = weights[2, 3 * k], weights[2, 3 * k + 1], weights[2, 3 * k + 2]
+                    for j in range(BATCH):  # whole batches (stale lanes are finite points, ignored): vectorisable
+                        x, y, z = base[0, j], base[1, j], base[2, j]
+                        sums[j] += _value(
+                            kind,
+                            params,
+                            chain,
+                            f,
+                            caller,
+                            x * w00 + y * w10 + z * w20,
+                            x * w01 + y * w11 + z * w21,
+                            x * w02 + y * w12 + z * w22,
+                            buffer,
+                        )
+                batch_total = 0.0
+                for j in range(b):
+                    weight = area if uniform else count / triangle_density(base[0, j], base[1, j], base[2, j], code)
+                    estimates[j] = (sums[j] / count) * weight
+                    batch_total += estimates[j]
+                batch_mean = batch_total / b
+                batch_m2 = 0.0
+                for j in range(b):
+                    d = estimates[j] - batch_mean
+                    batch_m2 += d * d
+                if orbits == 0.0:
+                    m2 = batch_m2
                 else:
-                    ju = pcg64_random(stream)
-                    jv = pcg64_random(stream)
-                    if source_kind == _RANDOM:
-                        u[j], v[j] = ju, jv
-                    else:  # as BasePoints.take: (corner + jitter) / side
-                        cell = first_point + first + j
-                        u[j] = (cell // side + ju) / side
-                        v[j] = (cell % side + jv) / side
-            map_batch(u, v, code, base)
-            for j in range(BATCH):
-                sums[j] = 0.0
-            for k in range(images):
-                w00, w01, w02 = weights[0, 3 * k], weights[0, 3 * k + 1], weights[0, 3 * k + 2]
-                w10, w11, w12 = weights[1, 3 * k], weights[1, 3 * k + 1], weights[1, 3 * k + 2]
-                w20, w21, w22 = weights[2, 3 * k], weights[2, 3 * k + 1], weights[2, 3 * k + 2]
-                for j in range(BATCH):  # whole batches (stale lanes are finite points, ignored): vectorisable
-                    x, y, z = base[0, j], base[1, j], base[2, j]
-                    sums[j] += caller(
-                        f, x * w00 + y * w10 + z * w20, x * w01 + y * w11 + z * w21, x * w02 + y * w12 + z * w22, buffer
-                    )
-            batch_total = 0.0
-            for j in range(b):
-                weight = area if uniform else count / triangle_density(base[0, j], base[1, j], base[2, j], code)
-                estimates[j] = (sums[j] / count) * weight
-                batch_total += estimates[j]
-            batch_mean = batch_total / b
-            batch_m2 = 0.0
-            for j in range(b):
-                d = estimates[j] - batch_mean
-                batch_m2 += d * d
-            if orbits == 0.0:
-                m2 = batch_m2
-            else:
-                delta = batch_mean - total / orbits
-                m2 += batch_m2 + delta * delta * orbits * b / (orbits + b)
-            orbits += b
-            total += batch_total
-        out[c, 0] = orbits
-        out[c, 1] = total
-        out[c, 2] = m2
+                    delta = batch_mean - total / orbits
+                    m2 += batch_m2 + delta * delta * orbits * b / (orbits + b)
+                orbits += b
+                total += batch_total
+            out[c, 0] = orbits
+            out[c, 1] = total
+            out[c, 2] = m2
+
+    return chunk_statistics
+
+
+_generic = _chunk_kernel(_ARGUMENT, (0.0,), no_chain, False)  # a user's f (an argument): one kernel, compiled per f
+_specialised_lock = threading.Lock()
+_specialised_kernels: dict[tuple[int, tuple[float, ...], Any], Any] = {}
+_cache_checked = False
+
+
+def specialised_kernels() -> list[Any]:
+    """The disk-cached kernels made in this process, in order (their ``stats`` show cache hits)."""
+    with _specialised_lock:
+        return list(_specialised_kernels.values())
+
+
+def _specialised(spec: tuple[int, tuple[float, ...], Any]) -> Any:
+    """The disk-cached fused kernel of the suite's integrands of *spec*, made once per process."""
+    global _cache_checked
+    with _specialised_lock:
+        if not _cache_checked:  # before the first cached kernel of this module runs
+            invalidate_if_changed(_merge_chunks)
+            _cache_checked = True
+        kernel = _specialised_kernels.get(spec)
+        if kernel is None:
+            kernel = _specialised_kernels[spec] = _chunk_kernel(spec[0], spec[1], spec[2], True)
+        return kernel
 
 
 @njit(cache=True, **_OPTIONS)
@@ -229,7 +278,7 @@ def fused_partials(
     orbits: int,
     first_block: int,
     stop_block: int,
-    method: str,
+    method: MapMethod,
     count: int,
     basis: Float64Array | None,
     uniform: bool,
@@ -237,8 +286,8 @@ def fused_partials(
     """Block partials (orbits, sum, M2) of blocks ``first_block ... stop_block - 1`` of a replicate of
     *orbits* base points, as :func:`symsphere._integration.block_partial` gives them (to rounding)."""
     prepare_kernels()
-    kernel, caller, source_text = compiled
-    specialised = _specialised(source_text) if source_text is not None else None
+    kernel, caller, spec = compiled
+    specialised = _specialised(spec) if spec is not None else None
     weights = rotated_weights(_IDENTITY if basis is None else np.ascontiguousarray(basis, dtype=np.float64), count)
     kind = {"random": _RANDOM, "stratified": _STRATIFIED}.get(source.kind, _GIVEN)
     seed_words = source.seed_words if source.seed_words is not None else np.zeros(4, dtype=np.uint64)
@@ -252,147 +301,12 @@ def fused_partials(
         chunks = np.empty(((m + CHUNK - 1) // CHUNK, 3))
         arguments = (kind, seed_words, side, uv, start, m, METHOD_CODES[method], uniform, weights, count, chunks)
         if specialised is not None:
-            specialised(*arguments)
+            specialised(0, 0, *arguments)
         else:
-            _chunk_statistics(kernel, caller, *arguments)
+            _generic(kernel, caller, *arguments)
         blocks = np.empty(((m + BLOCK - 1) // BLOCK, 3))
         _merge_chunks(chunks, BLOCK // CHUNK, blocks)
         if not np.all(np.isfinite(blocks)):
             raise ValueError("'f' returned non-finite values")
         partials += [(int(row[0]), row[1:2].copy(), row[2:3].copy()) for row in blocks]
     return partials
-
-
-# --- specialised kernels of generated integrands, cached on disk ------------------------
-
-
-def cache_directory() -> Path:
-    """Where the specialised kernels' modules are written: ``NUMBA_CACHE_DIR`` if set, else
-    ``$XDG_CACHE_HOME/symsphere`` (default ``~/.cache/symsphere``)."""
-    numba_dir = os.environ.get("NUMBA_CACHE_DIR")
-    if numba_dir:
-        return Path(numba_dir) / "symsphere-fused"
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "symsphere" / "fused"
-
-
-_specialised_lock = threading.Lock()
-_specialised_kernels: dict[str, Any] = {}
-
-
-def _specialised_source(function_source: str) -> str:
-    """The module text: the integrand as ``kernel``, and ``_chunk_statistics`` calling it as a global."""
-    template = inspect.getsource(_chunk_statistics.py_func)
-    header = "def _chunk_statistics(f, caller, source_kind,"
-    call = "sums[j] += caller(\n                        f, "
-    assert template.count(header) == 1 and template.count(call) == 1, "the template of _chunk_statistics changed"
-    body = template[template.index(header) :].replace(header, "def chunk_statistics(source_kind,")
-    body = body.replace(call, "sums[j] += kernel(\n                        ").replace(
-        ", buffer\n                    )", "\n                    )"
-    )
-    assert "caller" not in body and "buffer\n" not in body
-    return "\n".join(
-        [
-            '"""A fused integration kernel for one integrand. GENERATED by symsphere._fused: do not edit."""',
-            "import numpy as np",
-            "from numba import njit, prange",
-            "from symsphere._fused import vexp",
-            "from symsphere._kernels import BATCH, map_batch, pcg64_advanced, pcg64_random, pcg64_seeded, triangle_density",
-            "",
-            f"CHUNK = {CHUNK}",
-            f"_RANDOM, _STRATIFIED, _GIVEN = {_RANDOM}, {_STRATIFIED}, {_GIVEN}",
-            "",
-            '@njit(cache=True, error_model="numpy", nogil=True)',
-            function_source.rstrip(),
-            "",
-            "",
-            '@njit(parallel=True, cache=True, error_model="numpy", nogil=True)',
-            body.rstrip(),
-            "",
-        ]
-    )
-
-
-def _specialised(function_source: str) -> Any:
-    """The cached specialised kernel of an integrand generated from *function_source*, or None."""
-    text = _specialised_source(function_source)
-    name = "symsphere_fused_" + hashlib.sha256(text.encode()).hexdigest()[:24]
-    with _specialised_lock:
-        if name in _specialised_kernels:
-            return _specialised_kernels[name]
-        kernel = None
-        with contextlib.suppress(OSError):  # not writable: the generic kernel
-            folder = cache_directory()
-            folder.mkdir(parents=True, exist_ok=True)
-            path = folder / f"{name}.py"
-            if not (path.is_file() and path.read_text() == text):
-                partial = path.with_suffix(f".{os.getpid()}.tmp")
-                partial.write_text(text)
-                partial.replace(path)  # atomic: concurrent processes write the same text
-            spec = importlib.util.spec_from_file_location(name, path)
-            assert spec is not None and spec.loader is not None
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-            kernel = module.chunk_statistics
-            invalidate_if_changed(kernel, kernel_dependencies(_chunk_statistics))
-        _specialised_kernels[name] = kernel
-        return kernel
-
-
-# --- a vectorisable exp, for integrands --------------------------------------------------
-
-
-@intrinsic
-def _float_bits(typingctx, x):
-    """The bits of a float64 as an int64 (a bitcast: no instruction)."""
-
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.IntType(64))
-
-    return types.int64(types.float64), codegen
-
-
-@intrinsic
-def _bits_float(typingctx, i):
-    """The float64 whose bits are the int64 *i*."""
-
-    def codegen(context, builder, signature, args):
-        return builder.bitcast(args[0], ir.DoubleType())
-
-    return types.float64(types.int64), codegen
-
-
-_SHIFTER = 6755399441055744.0  # 1.5 * 2**52: adding it rounds to an integer kept in the low bits
-_LN2_HI = 0.693145751953125  # ln 2 split for an exact k * ln2_hi (Cody & Waite)
-_LN2_LO = 1.42860682030941723212e-6
-_INV_LN2 = 1.4426950408889634
-
-
-@njit(error_model="numpy", nogil=True)
-def vexp(t):
-    """exp(t) without a libm call, so that LLVM can vectorise loops around it.
-
-    t = k ln 2 + r with |r| <= ln2 / 2 (Cody-Waite), exp(r) by its Taylor polynomial to r^13
-    (remainder below 4e-18), 2^k put into the exponent bits.  Within 1 ulp of numpy's exp on
-    [-708, 709] (tested); t is clamped to that range (no inf, no NaN for finite t).
-    """
-    t = min(max(t, -708.0), 709.0)
-    shifted = t * _INV_LN2 + _SHIFTER
-    k = shifted - _SHIFTER
-    r = (t - k * _LN2_HI) - k * _LN2_LO
-    p = 1.0 / 6227020800.0
-    p = p * r + 1.0 / 479001600.0
-    p = p * r + 1.0 / 39916800.0
-    p = p * r + 1.0 / 3628800.0
-    p = p * r + 1.0 / 362880.0
-    p = p * r + 1.0 / 40320.0
-    p = p * r + 1.0 / 5040.0
-    p = p * r + 1.0 / 720.0
-    p = p * r + 1.0 / 120.0
-    p = p * r + 1.0 / 24.0
-    p = p * r + 1.0 / 6.0
-    p = p * r + 0.5
-    p = p * r + 1.0
-    p = p * r + 1.0
-    scale = _bits_float((_float_bits(shifted) + 1023) << 52)  # 2^k: k sits in the low bits of shifted
-    return p * scale

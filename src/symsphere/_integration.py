@@ -132,7 +132,7 @@ class IntegrationResult:
         low, high = self.confidence_interval
         source = f"from {self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
         source += f"({self.domain}, {self.method}, {self.points})"
-        if np.all(np.isnan(self.standard_error)):  # say why, and what to pass instead (issue 13)
+        if np.all(np.isnan(self.standard_error)):  # say why, and what to pass instead
             text = f"integral = {self.integral} {source}; {self._no_error_bar()}"
         else:
             text = (

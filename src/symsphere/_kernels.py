@@ -25,7 +25,8 @@ the measurements.
 from __future__ import annotations
 
 import functools
-from typing import Any
+from collections.abc import Callable
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -63,10 +64,15 @@ METHOD_CODES = {name: code for code, name in enumerate(METHODS)}
 assert METHOD_CODES == {"equal_area": 0, "paper1": 1, "paper2": 2}
 # The maps' own elementwise formulas (register_jitable in symsphere.warps), taken from their records.
 _EQUAL_AREA, _PAPER1, _PAPER2 = (triangle_warp(name) for name in METHODS)
-_equal_area_point, _paper1_point, _paper2_point = _EQUAL_AREA.point, _PAPER1.point, _PAPER2.point
-_equal_area_density, _paper1_density, _paper2_density = _EQUAL_AREA.density, _PAPER1.density, _PAPER2.density
+assert all(w.point is not None and w.density is not None for w in (_EQUAL_AREA, _PAPER1, _PAPER2))
+_equal_area_point, _paper1_point, _paper2_point = (
+    cast(Callable[..., Any], w.point) for w in (_EQUAL_AREA, _PAPER1, _PAPER2)
+)
+_equal_area_density, _paper1_density, _paper2_density = (
+    cast(Callable[..., Any], w.density) for w in (_EQUAL_AREA, _PAPER1, _PAPER2)
+)
 
-_OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
+_OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", nogil=True)
 
 
 @njit(inline="always")  # numba-IR inlining: a constant *code* of the caller prunes the other maps
@@ -131,7 +137,7 @@ def _mul_high(typingctx, a, b):
 @register_jitable
 def _mul128(a_hi, a_lo, b_hi, b_lo):
     """(a * b) mod 2**128 of 128-bit numbers given as (high, low) uint64 halves."""
-    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo
+    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo  # type: ignore[call-arg]  # an intrinsic
 
 
 @register_jitable

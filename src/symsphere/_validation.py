@@ -23,15 +23,55 @@ import numpy.typing as npt
 from ._typing import Density, Float64Array, FloatArray
 
 __all__ = [
+    "MAX_BINS",
+    "MAX_COUNT",
+    "MAX_DIMENSIONS",
+    "MAX_PATHS",
+    "MAX_PIXELS",
+    "MAX_POLYNOMIAL_DEGREE",
+    "MAX_QUADRATURE_ORDER",
+    "MAX_SH_DEGREE",
+    "MAX_SOBOL_POINTS",
+    "MAX_TASKS",
+    "TEMPORARY_KINDS",
+    "UNIT_TOLERANCE",
     "as_float_array",
+    "check_bins",
+    "check_callable",
     "check_choice",
+    "check_coeffs",
     "check_count",
+    "check_dimensions",
     "check_directions",
     "check_dtype",
+    "check_exponents",
+    "check_finite_array",
+    "check_index",
+    "check_lm",
+    "check_nonnegative",
     "check_normal",
+    "check_open_unit",
     "check_out",
+    "check_output_path",
+    "check_path",
+    "check_pdf",
+    "check_positive",
+    "check_positive_real",
+    "check_real",
+    "check_real_arrays",
+    "check_real_values",
     "check_rng",
+    "check_samples",
+    "check_seed",
+    "check_size",
+    "check_sobol_size",
+    "check_triangle",
+    "check_unit_directions",
     "check_uv",
+    "file_kind",
+    "read_regular_file",
+    "real_number",
+    "short_repr",
 ]
 
 _DTYPES = (np.dtype(np.float64), np.dtype(np.float32))
@@ -67,8 +107,9 @@ def check_count(n: object, name: str = "n", multiple: int = 1, maximum: int | No
 
 
 def short_repr(value: object) -> str:
-    """repr of *value* on one line, shortened: an array's repr spans lines, an int of 10**400 would flood a
-    terminal, and one of 10**5000 has no repr at all.
+    """repr of *value* on one line, shortened, for a message (of an argument's check or a scene file's):
+    an array's repr spans lines, an int of 10**400 would flood a terminal, and one of 10**5000 has no
+    repr at all.
 
     Examples
     --------
@@ -76,12 +117,19 @@ def short_repr(value: object) -> str:
     >>> from symsphere._validation import short_repr
     >>> short_repr(np.zeros((2, 3)))
     'array([[0., 0., 0.], [0., 0., 0.]])'
+    >>> short_repr(10**400)
+    'an integer of 401 digits'
     """
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        try:
+            return f"an integer of {len(str(abs(value)))} digits"
+        except ValueError:  # beyond sys.get_int_max_str_digits()
+            return "an integer of thousands of digits"
     if isinstance(value, np.ndarray) and value.size > 12:
         return f"an array of shape {value.shape} and dtype {value.dtype}"
     try:
         text = " ".join(repr(value).split())
-    except (ValueError, RecursionError):  # an int beyond sys.get_int_max_str_digits(), a deep nest
+    except (ValueError, RecursionError):  # a deep nest; an object whose repr fails
         return f"a {type(value).__name__}"
     return text if len(text) <= 60 else f"{text[:25]}...{text[-10:]} ({len(text)} characters)"
 
@@ -404,37 +452,9 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     return arr
 
 
-__all__ += [
-    "MAX_BINS",
-    "MAX_COUNT",
-    "MAX_DIMENSIONS",
-    "MAX_QUADRATURE_ORDER",
-    "MAX_PATHS",
-    "MAX_POLYNOMIAL_DEGREE",
-    "MAX_SH_DEGREE",
-]
-__all__ += ["MAX_PIXELS", "MAX_SOBOL_POINTS", "MAX_TASKS", "UNIT_TOLERANCE", "check_dimensions", "check_size"]
-__all__ += ["check_real_values", "check_sobol_size", "check_unit_directions", "short_repr"]
-
-
 # ---------------------------------------------------------------------------
 # Validators of stats, bins, harmonics, integrands and peers
 # ---------------------------------------------------------------------------
-
-__all__ += [
-    "check_bins",
-    "check_coeffs",
-    "check_exponents",
-    "check_lm",
-    "check_nonnegative",
-    "check_open_unit",
-    "check_pdf",
-    "check_positive",
-    "check_positive_real",
-    "check_real",
-    "check_samples",
-    "check_triangle",
-]
 
 
 def check_samples(samples: object, name: str = "samples") -> FloatArray:
@@ -472,17 +492,33 @@ def check_bins(bins: Any) -> tuple[int, int]:
     return (int(pair[0]), int(pair[1]))
 
 
+def real_number(value: object) -> float | None:
+    """The number rule, shared by the arguments' checks and the scene files' (``render._scene_checks``):
+    a real number that is not a bool, as a float (an int beyond float64 becomes +-inf); None if
+    *value* is not one.
+
+    Examples
+    --------
+    >>> from symsphere._validation import real_number
+    >>> real_number(2), real_number(-(10**400)), real_number(True), real_number("1")
+    (2.0, -inf, None, None)
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return None
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond float64
+        return math.inf if value > 0 else -math.inf  # type: ignore[operator]  # numbers.Real has no __gt__ in typeshed
+
+
 def check_real(value: object, name: str) -> float:
     """Return *value* as a finite float: TypeError if it is not a real number, ValueError if not finite."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+    result = real_number(value)
+    if result is None:
         raise TypeError(f"'{name}' must be a real number, got {type(value).__name__}")
-    try:
-        value = float(value)
-    except OverflowError:  # an int beyond float64
-        raise ValueError(f"'{name}' must be finite, got {_short(value)}") from None
-    if not math.isfinite(value):
-        raise ValueError(f"'{name}' must be finite, got {value}")
-    return value
+    if not math.isfinite(result):
+        raise ValueError(f"'{name}' must be finite, got {_short(value)}")
+    return result
 
 
 def check_open_unit(value: object, name: str) -> float:
@@ -505,26 +541,35 @@ def check_positive_real(value: object, name: str) -> float:
     return value
 
 
+def _finite_real(value: object, name: str) -> float:
+    # check_positive's and check_nonnegative's rule: TypeError unless a finite real number, except
+    # an int beyond float64 (a number, too large): ValueError
+    result = real_number(value)
+    if result is None or (not math.isfinite(result) and not isinstance(value, numbers.Integral)):
+        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
+    if not math.isfinite(result):
+        raise ValueError(f"'{name}' must be a finite real number, got {_short(value)}")
+    return result
+
+
 def check_positive(value: object, name: str) -> float:
     """Return *value* as a positive float; TypeError unless it is a finite real number.
 
     See :func:`check_positive_real` for the variant that raises ValueError
     for inf and NaN.
     """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
-    if value <= 0:
+    result = _finite_real(value, name)
+    if result <= 0:
         raise ValueError(f"'{name}' must be positive, got {value}")
-    return float(value)
+    return result
 
 
 def check_nonnegative(value: object, name: str) -> float:
     """Return *value* as a float >= 0; TypeError unless it is a finite real number."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise TypeError(f"'{name}' must be a finite real number, got {_short(value)}")
-    if value < 0:
+    result = _finite_real(value, name)
+    if result < 0:
         raise ValueError(f"'{name}' must be >= 0, got {value}")
-    return float(value)
+    return result
 
 
 def check_lm(l: object, m: object, l_name: str = "l") -> tuple[int, int]:
@@ -638,11 +683,8 @@ def check_seed(seed: int, name: str = "seed") -> int:
     return int(seed)
 
 
-__all__ += ["check_seed"]  # appended here, not in the list above, to keep this addition in one place
-
-
 # ---------------------------------------------------------------------------
-# Output files: what may be written, checked before any work (issue 22)
+# Output files: what may be written, checked before any work
 # ---------------------------------------------------------------------------
 
 TEMPORARY_KINDS = ("tmp", "old", "probe")
@@ -727,9 +769,6 @@ def check_output_path(path: object, name: str = "path", *, probe: bool = True) -
     return given
 
 
-__all__ += ["TEMPORARY_KINDS", "check_output_path", "file_kind"]
-
-
 def read_regular_file(path: Path, where: str, limit: int | None = None) -> bytes:
     """The bytes of the regular file *path* (at most *limit* + 1 of them), refusing anything else first.
 
@@ -760,9 +799,6 @@ def read_regular_file(path: Path, where: str, limit: int | None = None) -> bytes
         if not stat.S_ISREG(mode):
             raise ValueError(f"{where}: is {file_kind(mode)}, not a regular file")
         return handle.read() if limit is None else handle.read(limit + 1)
-
-
-__all__ += ["read_regular_file"]
 
 
 def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -> list[Any]:
@@ -798,6 +834,3 @@ def check_real_arrays(*named: tuple[object, str], unit_interval: bool = False) -
     if any(a.ndim for a in arrays):  # every output then has the broadcast shape (z = sqrt(1 - u) ignores v)
         return list(np.broadcast_arrays(*arrays))
     return [a[()] for a in arrays]
-
-
-__all__ += ["check_real_arrays"]

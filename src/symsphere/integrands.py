@@ -12,18 +12,18 @@ derivations and for why the orbit average is exact where it is.
 Building blocks, public so that a study can make more integrands:
 
 - the spherical harmonics and polynomials of :mod:`symsphere.harmonics`
-  (:func:`real_sh`, :func:`real_sh_basis`, :func:`sh_polynomial`,
-  :func:`monomial_integral`, :func:`polynomial_integral`,
-  :func:`evaluate_polynomial`, :func:`cubic_harmonic`), importable from
-  here too;
+  (:func:`~symsphere.harmonics.real_sh`, :func:`~symsphere.harmonics.real_sh_basis`,
+  :func:`~symsphere.harmonics.sh_polynomial`, :func:`~symsphere.harmonics.monomial_integral`,
+  :func:`~symsphere.harmonics.polynomial_integral`,
+  :func:`~symsphere.harmonics.evaluate_polynomial`, :func:`~symsphere.harmonics.cubic_harmonic`);
 - :func:`lambert_irradiance`, :func:`sphere_light_irradiance`: the closed
   forms of irradiance from a polygonal and from a spherical light.
 - :func:`orbit_average`: the mean of ``f`` over the orbit of a point.
 
 Every registered integrand also has a ``kernel``: the same function of one direction
-compiled by numba, ``kernel(x, y, z) -> float``, generated from the integrand's
-parameters (constants written into the source as exact float literals, polynomials
-as explicit monomials, ``exp`` as a polynomial instead of libm's).  Given an
+compiled by numba, ``kernel(x, y, z) -> float``: one of the formulas of
+``symsphere._integrand_kernels`` with the integrand's parameters as constants of the compiled
+code (polynomials as explicit monomials, ``exp`` as a polynomial instead of libm's).  Given an
 integrand with a kernel, :func:`symsphere.integrate` evaluates it inside its
 parallel kernel (``integrate(INTEGRANDS["exp"], ...)``), vectorised across base
 points where the expression has no libm call.
@@ -42,6 +42,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy import integrate, special
 
+from ._integrand_kernels import CAP, EXP, PHONG, POLYGON_LIGHT, POLYNOMIAL, SPHERE_LIGHT, Z, integrand_kernel
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
 from ._validation import (
     check_choice,
@@ -54,10 +55,8 @@ from ._validation import (
 from .harmonics import (
     cubic_harmonic,
     evaluate_polynomial,
-    monomial_integral,
     polynomial_integral,
     real_sh,
-    real_sh_basis,
     sh_polynomial,
 )
 from .symmetry import orbit, orbit_size
@@ -66,13 +65,6 @@ __all__ = [
     "INTEGRANDS",
     "Integrand",
     "suite",
-    "real_sh",
-    "real_sh_basis",
-    "sh_polynomial",
-    "monomial_integral",
-    "polynomial_integral",
-    "evaluate_polynomial",
-    "cubic_harmonic",
     "lambert_irradiance",
     "sphere_light_irradiance",
     "orbit_average",
@@ -351,43 +343,13 @@ def _frozen(**kwargs: Any) -> Mapping[str, Any]:
     )
 
 
-def _kernel(expression: str, **constants: float) -> Any:
-    """A numba function ``kernel(x, y, z) = expression``, the constants written in as exact literals.
-
-    Generated source rather than a closure, so that numba sees plain constants (and can
-    fold and vectorise) and the integrand needs no state; ``vexp`` is a libm-free exp.  The
-    source is kept as ``kernel.symsphere_source``: :func:`symsphere.integrate` writes it into a
-    module file with the fused kernel, so that numba caches the pair on disk.
-    """
-    from numba import njit
-
-    from ._fused import vexp
-
-    lines = [f"    {name} = {float(value)!r}" for name, value in constants.items()]
-    source = "def kernel(x, y, z):\n" + "\n".join(lines + [f"    return {expression}"]) + "\n"
-    namespace: dict[str, Any] = {"vexp": vexp}
-    exec(compile(source, "<symsphere.integrands kernel>", "exec"), namespace)
-    dispatcher = njit(error_model="numpy")(namespace["kernel"])
-    # integrate() writes it into a cached specialised kernel (symsphere._fused); setattr: a numba Dispatcher
-    # has no such attribute for mypy.
-    setattr(dispatcher, "symsphere_source", source)  # noqa: B010
-    return dispatcher
-
-
 def _polynomial_kernel(coeffs: Mapping[tuple[int, int, int], float | Fraction], shift: float = 0.0) -> Any:
-    """The kernel of ``shift + sum c x^a y^b z^c``, as explicit products."""
-    terms = [repr(float(shift))]
+    """The kernel of ``shift + sum c x^a y^b z^c``, the terms in sorted order (zero terms left out)."""
+    params = [float(shift)]
     for (a, b, c), coefficient in sorted(coeffs.items()):
         if coefficient:
-            factors = ["x"] * a + ["y"] * b + ["z"] * c
-            terms.append("*".join([f"({float(coefficient)!r})"] + factors))
-    return _kernel(" + ".join(terms))
-
-
-def _dot(names: str, v: npt.ArrayLike) -> tuple[str, dict[str, float]]:
-    """``names0*x + names1*y + names2*z`` and its constants."""
-    w = np.asarray(v, dtype=np.float64)
-    return f"({names}0*x + {names}1*y + {names}2*z)", {f"{names}{i}": float(w[i]) for i in range(3)}
+            params += [float(coefficient), a, b, c]
+    return integrand_kernel(POLYNOMIAL, tuple(params))
 
 
 def _phong_hemisphere_integral(r: Float64Array, n: int) -> float:
@@ -436,12 +398,7 @@ def _quad_kernel(vertices: npt.ArrayLike, radiance: float) -> Any:
     v = np.asarray(vertices, dtype=np.float64)
     normals = np.cross(v, np.roll(v, -1, axis=0))
     normals = np.sign(v.mean(axis=0) @ normals[0]) * normals
-    tests, constants = [], {"radiance": radiance}
-    for i, normal in enumerate(normals):
-        dot, named = _dot(f"n{i}_", normal)
-        tests.append(f"{dot} >= 0.0")
-        constants.update(named)
-    return _kernel(f"radiance * max(z, 0.0) * (1.0 if ({' and '.join(tests)}) else 0.0)", **constants)
+    return integrand_kernel(POLYGON_LIGHT, (radiance, *normals.ravel().tolist()))
 
 
 def _polygon_inside(vertices: npt.ArrayLike) -> Callable[[FloatArray], BoolArray]:
@@ -557,13 +514,8 @@ def _build_integrands() -> dict[str, Integrand]:
         d = np.asarray(d, dtype=np.float64)
         return (n + 1) / (2 * math.pi) * np.maximum(d @ r, 0.0) ** n
 
-    dot, constants = _dot("r", r)
-    assert n == 20  # t^20 = (t^4)^4 t^4 below
-    phong_kernel = _kernel(
-        f"scale * (max(0.0, {dot}) * max(0.0, {dot}) * max(0.0, {dot}) * max(0.0, {dot})) ** 5",
-        scale=(n + 1) / (2 * math.pi),
-        **constants,
-    )
+    assert n == 20  # the kernel's formula: (t^4)^5
+    phong_kernel = integrand_kernel(PHONG, ((n + 1) / (2 * math.pi), *r.tolist()))
     out.append(
         Integrand(
             "phong",
@@ -603,8 +555,7 @@ def _build_integrands() -> dict[str, Integrand]:
     def cap(d: FloatArray, c: Float64Array = c, cos_alpha: float = cos_alpha) -> Float64Array:
         return (np.asarray(d, dtype=np.float64) @ c >= cos_alpha).astype(np.float64)
 
-    dot, constants = _dot("c", c)
-    cap_kernel = _kernel(f"1.0 if {dot} >= cos_alpha else 0.0", cos_alpha=cos_alpha, **constants)
+    cap_kernel = integrand_kernel(CAP, (cos_alpha, *c.tolist()))
     for domain in _DOMAINS:
         out.append(
             Integrand(
@@ -629,8 +580,7 @@ def _build_integrands() -> dict[str, Integrand]:
     def expo(d: FloatArray, a: Float64Array = a) -> Float64Array:
         return np.exp(np.asarray(d, dtype=np.float64) @ a)
 
-    dot, constants = _dot("a", a)
-    exp_kernel = _kernel(f"vexp({dot})", **constants)
+    exp_kernel = integrand_kernel(EXP, tuple(a.tolist()))
     out.append(
         Integrand(
             "exp",
@@ -672,7 +622,7 @@ def _build_integrands() -> dict[str, Integrand]:
             False,
             False,
             _frozen(),
-            _kernel("z"),
+            integrand_kernel(Z, (0.0,)),
         )
     )
     out += [
@@ -693,7 +643,6 @@ def _build_integrands() -> dict[str, Integrand]:
         d = np.asarray(d, dtype=np.float64)
         return radiance * np.maximum(d[..., 2], 0.0) * (d @ c >= cos_light)
 
-    light_dot, constants = _dot("c", light_c)
     out.append(
         Integrand(
             "sphere_light",
@@ -706,12 +655,7 @@ def _build_integrands() -> dict[str, Integrand]:
             False,
             False,
             _frozen(center=light_c, distance=distance, radius=radius, radiance=radiance, cos_alpha=cos_light),
-            _kernel(
-                f"radiance * max(z, 0.0) * (1.0 if {light_dot} >= cos_light else 0.0)",
-                radiance=radiance,
-                cos_light=cos_light,
-                **constants,
-            ),
+            integrand_kernel(SPHERE_LIGHT, (radiance, cos_light, *light_c.tolist())),
         )
     )
 

@@ -10,8 +10,7 @@ with the chi-square distribution.
 The domains are the sphere, the hemisphere z >= 0 and the fundamental
 triangle T0 = {z >= x >= y >= 0}; the equal-area bins in (phi, cos theta)
 and the quadrature of the density over them are in :mod:`symsphere.bins`
-(:func:`bin_probabilities` and :func:`equal_area_bins` are importable from
-here too).
+(:func:`~symsphere.bins.bin_probabilities`, :func:`~symsphere.bins.equal_area_bins`).
 """
 
 from __future__ import annotations
@@ -44,9 +43,7 @@ from .bins import bin_probabilities, equal_area_bins
 
 __all__ = [
     "Chi2Result",
-    "bin_probabilities",
     "chi2_test",
-    "equal_area_bins",
     "one_per_orbit",
     "uniform_pdf",
 ]

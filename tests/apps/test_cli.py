@@ -11,6 +11,7 @@ import pytest
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
+from symsphere._testing import blocks
 from symsphere.apps.cli import main
 
 
@@ -118,12 +119,11 @@ def test_sample_into_missing_directory_fails_cleanly(tmp_path, capsys):
 
 
 def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monkeypatch, capsys):
-    import symsphere.sampling
 
     out = tmp_path / "d.npy"
     out.write_bytes(b"previous run")
     calls = []
-    original = symsphere._blocks.fill_range
+    original = blocks.fill_range
 
     def interrupted_on_third_chunk(*args):
         calls.append(1)
@@ -131,7 +131,7 @@ def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monk
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(symsphere._blocks, "fill_range", interrupted_on_third_chunk)
+    monkeypatch.setattr(blocks, "fill_range", interrupted_on_third_chunk)
     assert main(["sample", "--n", "960", "--chunk", "96", "--seed", "1", "--out", str(out)]) == 130
     assert len(calls) == 3
     assert "interrupted" in capsys.readouterr().err

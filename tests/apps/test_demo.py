@@ -115,7 +115,7 @@ def test_run_demo_writes_its_report_atomically(tmp_path, monkeypatch):
 
 
 def test_figure_and_report_agree_on_the_scatter_directions_for_small_n(tmp_path, monkeypatch):
-    # issue 13, defect 5: for n < 48 * 64 the report said 64 whole orbits (3072 directions) while the
+    # for n < 48 * 64 the report said 64 whole orbits (3072 directions) while the
     # scatter plots showed all n directions.
     report, titles = _run_demo_capturing_figure_titles(monkeypatch, tmp_path / "demo", 48)
     text = report.read_text(encoding="utf-8")
@@ -125,7 +125,7 @@ def test_figure_and_report_agree_on_the_scatter_directions_for_small_n(tmp_path,
 
 
 def test_demo_names_all_its_files_in_help_and_closing_line(tmp_path, capsys):
-    # issue 13, defect 5: render.png was mentioned neither in --help nor in the closing line.
+    # render.png was mentioned neither in --help nor in the closing line.
     assert main(["demo", "--help"]) == 0
     assert "render.png" in capsys.readouterr().out
     assert main(["demo", "--out", str(tmp_path / "d"), "--n", "480", "--no-progress"]) == 0

@@ -1,4 +1,4 @@
-"""The study's compiled peer samplers (symsphere.apps.study._compiled) reproduce the library's peers.
+"""The study's compiled peer samplers (symsphere.apps.study.compiled) reproduce the library's peers.
 
 The reference is the library's numpy implementation (symsphere.peers), itself tested against its
 papers in tests/test_peers.py: same base points, same rotations, same directions to rounding.
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from references import ELEMENTARY_ULPS, GAMMA3, assert_within_eps
 
-from symsphere.apps.study._compiled import COMPILED_PEERS, compiled_sample
+from symsphere.apps.study.compiled import COMPILED_PEERS, compiled_sample
 from symsphere.peers import PEERS
 
 # How far a compiled peer (numba: libm's sin, cos) may be from the numpy peer (numpy's SIMD sin, cos),
@@ -48,17 +48,6 @@ def test_compiled_sample_is_the_peers_sample(name, points, n):
         got = compiled_sample(peer, n, seed, points)
         assert got.shape == (n, 3) and got.dtype == np.float64
         assert_within_eps(got, expected, PEER_EPS[name], scale=1)
-
-
-def test_octahedral_edges_and_corners():
-    # The square's edges and corners, where the map folds: the same directions as the library's map.
-    values = np.array([0.0, 1e-300, 0.25, 0.5, 0.75, 1 - 1e-16])
-    uv = np.array([[a, b] for a in values for b in values])
-    from symsphere.apps.study._compiled import _octahedral
-
-    out = np.empty((len(uv), 3))
-    _octahedral(uv, out)
-    assert_within_eps(out, PEERS["octahedral"].forward(uv), PEER_EPS["octahedral"], scale=1)
 
 
 def test_compiled_sample_rejects_other_peers():

@@ -1,7 +1,8 @@
-"""Issue 13 (user experience): one test per defect, discoverability, notebooks, the lazy modules.
+"""First contact with the command line and the package: optional extras, error bars, warnings, help
+and choices, the lazy modules, the docs' citations, notebook reprs.
 
-The defects are numbered as in the issue; the demo's (5) are in test_demo.py, the wheel's (1, 6, bare
-install) in tests/test_packaging.py.
+The demo's first contact is in test_demo.py, the wheel's (extras, metadata, a bare install) in
+tests/test_packaging.py.
 """
 
 import importlib.metadata
@@ -26,7 +27,7 @@ def _one_clean_line(err):
     return lines[0]
 
 
-# --- 1: --workers without the distributed extra ---------------------------------------------------
+# --- optional extras: --workers without the distributed extra -------------------------------------
 
 
 @pytest.mark.parametrize("verb", [["integrate", "--integrand", "exp", "--n", "4800"], ["render", "--spp", "24"]])
@@ -49,7 +50,7 @@ def test_cluster_options_say_they_need_the_extra(capsys):
     assert "symsphere[distributed]" in capsys.readouterr().out
 
 
-# --- 2: no '± nan' ---------------------------------------------------------------------------------
+# --- error bars: none rather than '± nan' ----------------------------------------------------------
 
 
 def test_integrate_without_an_error_bar_says_why(capsys):
@@ -71,7 +72,7 @@ def test_integration_result_without_an_error_bar_says_why():
     assert "pass replicates >= 2" in str(one)
 
 
-# --- 3: scipy's Sobol' balance warning --------------------------------------------------------------
+# --- warnings: scipy's Sobol' balance warning on the CLI --------------------------------------------
 
 
 @pytest.mark.parametrize("verb", [["sample", "--n", "480"], ["integrate", "--integrand", "exp", "--n", "4608"]])
@@ -87,7 +88,7 @@ def test_sobol_balance_warning_is_one_note_on_the_cli(tmp_path, verb):
     assert "--n" in line and ".py" not in line and "UserWarning" not in line
 
 
-# --- 4: the docs cite files that exist --------------------------------------------------------
+# --- the docs cite files that exist -----------------------------------------------------------
 
 _ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 
@@ -109,16 +110,18 @@ def test_docs_cite_only_files_that_exist(page):
     assert missing == []
 
 
-# --- 7: the lazy modules -----------------------------------------------------------------------------
+# --- the lazy modules --------------------------------------------------------------------------------
 
 
-def test_render_and_study_load_lazily_and_dir_lists_them():
+def test_render_loads_lazily_and_dir_lists_it():
+    # The library's lazy table names library modules only: the study is an application (symsphere.apps.study).
     code = (
         "import sys, symsphere as ss; "
-        "assert not any(m in sys.modules for m in ('symsphere.render', 'symsphere.study', 'scipy.stats', 'dask')); "
-        "names = dir(ss); assert {'render', 'study', 'stats', 'distributed', 'peers'} <= set(names), names; "
+        "assert not any(m in sys.modules for m in ('symsphere.render', 'symsphere.apps', 'scipy.stats', 'dask')); "
+        "names = dir(ss); assert {'render', 'stats', 'distributed', 'peers'} <= set(names), names; "
+        "assert 'study' not in names and not hasattr(ss, 'study'); "
         "assert ss.render.render.__module__ == 'symsphere.render.renderer'; "
-        "assert callable(ss.study.run_study); print('ok')"
+        "assert 'symsphere.apps' not in sys.modules; print('ok')"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.stdout.strip() == "ok", run.stderr
@@ -126,7 +129,7 @@ def test_render_and_study_load_lazily_and_dir_lists_them():
         ss.nope  # noqa: B018
 
 
-# --- 8: render, integrate --help, the study's slope labels ------------------------------------------
+# --- help, choices and output of the verbs; the study's figure labels -------------------------------
 
 
 def test_furnace_prints_mean_radiance_against_exact_and_is_not_white(tmp_path, capsys):

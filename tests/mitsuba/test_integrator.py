@@ -44,8 +44,8 @@ def _ids(case):
 
 def test_random_equals_the_renderers_bitwise(llvm):
     mi = llvm
-    from symsphere.mitsuba import _random as dj
-    from symsphere.render import _random as nb
+    from symsphere._testing import mitsuba_random as dj
+    from symsphere._testing import render_random as nb
 
     rng = np.random.default_rng(5)
     keys = rng.integers(0, 2**63, size=64, dtype=np.uint64) * np.uint64(2) + np.uint64(1)
@@ -72,9 +72,11 @@ def test_random_equals_the_renderers_bitwise(llvm):
 def test_a_group_takes_every_image_of_one_base_point(llvm, case):
     mi = llvm
     import symsphere.mitsuba  # noqa: F401  (registers the plugin)
+    from symsphere._testing import mitsuba_integrator
     from symsphere.mitsuba import fold
-    from symsphere.mitsuba._integrator import GROUP_SIZES
     from symsphere.symmetry import SPHERE_MAPS
+
+    GROUP_SIZES = mitsuba_integrator.GROUP_SIZES
 
     integrator = mi.load_dict({"type": "symsphere_path", **case})
     n = GROUP_SIZES[case["strategy"]]

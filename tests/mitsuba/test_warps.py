@@ -207,7 +207,7 @@ def _sampler_and_pdf(mi, kind, method):
     import drjit as dr
 
     import symsphere.mitsuba as sm
-    from symsphere.mitsuba import _warps
+    from symsphere._testing import mitsuba_warps as _warps
 
     frame = _rotation(mi)
     if kind == "triangle":

@@ -3,7 +3,7 @@ the kernels' disk cache first, as the renderer does before its first kernel (not
 
 import pytest
 
-from symsphere.render import _probes
+from symsphere._testing import render_probes as _probes
 
 
 @pytest.fixture(autouse=True, scope="session")

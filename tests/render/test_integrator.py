@@ -55,7 +55,10 @@ from numba import njit
 from scipy import stats
 
 from symsphere import frames
-from symsphere._kernels import METHOD_CODES
+from symsphere._testing import kernels
+from symsphere._testing import render_emitters as E
+from symsphere._testing import render_integrator as K
+from symsphere._testing import render_probes as P
 from symsphere.integrands import lambert_irradiance, sphere_light_irradiance
 from symsphere.render import (
     INTEGRATORS,
@@ -70,11 +73,10 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.render import _emitters as E
-from symsphere.render import _integrator as K
-from symsphere.render import _probes as P
 from symsphere.symmetry import fold, orbit
 from symsphere.warps import WEDGE_MAPS, square_to_triangle_pdf
+
+METHOD_CODES = kernels.METHOD_CODES
 
 FAMILY_SIGNIFICANCE = 0.01
 # The interlaced samplers' pairs last: the seeds of the others (from their index) stay those of docs/rendering.md.
@@ -659,7 +661,9 @@ def test_the_disk_cache_guard_covers_every_module_the_kernel_inlines():
     # _integrator.py, and the random numbers are in it; the test probes (their own guard) are not.
     from pathlib import Path
 
-    from symsphere._numba_cache import kernel_dependencies
+    from symsphere._testing import numba_cache
+
+    kernel_dependencies = numba_cache.kernel_dependencies
 
     names = {Path(p).name for p in kernel_dependencies(K.render_pass)}
     # the warps' modules whose formulas it inlines: the uniform and cosine maps, the cosine wedge

@@ -4,8 +4,15 @@ import numpy as np
 import pytest
 from references import net_t_value
 
-from symsphere.render import _probes as P
-from symsphere.render._random import nested_uniform_scramble, reverse_bits32, sobol2
+from symsphere._testing import render_probes as P
+from symsphere._testing import render_random, splitmix
+
+nested_uniform_scramble, reverse_bits32, sobol2 = (
+    render_random.nested_uniform_scramble,
+    render_random.reverse_bits32,
+    render_random.sobol2,
+)
+mix64 = splitmix.mix64
 
 
 def test_sobol2_first_points():
@@ -22,12 +29,10 @@ def test_owen_sobol_equals_its_definition():
     """The fast bit-reversed form equals scramble(sobol2(scramble(index))) (Burley 2020, listing 3)."""
     from numba import njit
 
-    from symsphere.render._random import _GOLDEN, _MIX1, mix64
-
     @njit
     def definition(index, key):  # njit: the uint64 products wrap silently, as in the kernels
         m32 = np.uint64(0xFFFFFFFF)
-        h1, h2 = mix64(key ^ _GOLDEN), mix64(key ^ _MIX1)
+        h1, h2 = mix64(key ^ splitmix.GOLDEN), mix64(key ^ splitmix.MIX1)
         x, y = sobol2(nested_uniform_scramble(np.uint64(index), h1 & m32))
         return nested_uniform_scramble(x, h1 >> np.uint64(32)), nested_uniform_scramble(y, h2 & m32)
 
@@ -74,7 +79,7 @@ def test_sobol_direction_numbers_are_scipys():
     """
     from scipy.stats import qmc
 
-    from symsphere.render._random import sobol_coordinate
+    sobol_coordinate = render_random.sobol_coordinate
 
     engine = qmc.Sobol(d=6, scramble=False, bits=32)
 
@@ -119,7 +124,8 @@ def test_interlace_fractions_is_interlace_digits():
     from numba import njit
 
     from symsphere.points import interlace_digits
-    from symsphere.render._random import interlace_fractions
+
+    interlace_fractions = render_random.interlace_fractions
 
     @njit
     def interlace(words, factor):
@@ -139,12 +145,17 @@ def test_owen_sobol_interlaced_equals_its_definition():
     """The table-driven form equals: shuffle the index, scramble each Sobol' coordinate, interlace."""
     from numba import njit
 
-    from symsphere.render._random import _GOLDEN, _MIX1, _MIX2, _ODD, interlace_fractions, mix64, sobol_coordinate
+    interlace_fractions, sobol_coordinate = render_random.interlace_fractions, render_random.sobol_coordinate
 
     @njit
     def definition(index, key, factor):
         m32, s32 = np.uint64(0xFFFFFFFF), np.uint64(32)
-        h1, h2, h3, h4 = mix64(key ^ _GOLDEN), mix64(key ^ _MIX1), mix64(key ^ _MIX2), mix64(key ^ _ODD)
+        h1, h2, h3, h4 = (
+            mix64(key ^ splitmix.GOLDEN),
+            mix64(key ^ splitmix.MIX1),
+            mix64(key ^ splitmix.MIX2),
+            mix64(key ^ splitmix.ODD),
+        )
         seeds = (h1 >> s32, h2 & m32, h2 >> s32, h3 & m32, h3 >> s32, h4 & m32)
         i = nested_uniform_scramble(np.uint64(index), h1 & m32)
         x = [nested_uniform_scramble(sobol_coordinate(i, d), seeds[d]) for d in range(6)]

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from symsphere._testing import render_probes as P
 from symsphere.render import (
     Camera,
     HalfSpace,
@@ -22,7 +23,6 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.render import _probes as P
 
 # --- smallpt's scene, pinned ------------------------------------------------------
 
@@ -324,26 +324,19 @@ def test_the_documented_scene_file_loads_and_renders(tmp_path):
     assert render(str(path), width=16, height=12, spp=24, seed=0).image.mean() > 0
 
 
-def test_every_name_is_still_importable_from_scene():
-    # The scene files and the built-in scenes have their own modules; symsphere.render.scene re-exports
-    # their names (lazily: they import it), and SceneError keeps its public identity.
+def test_scene_names_have_one_home_each():
+    # The scene files and the built-in scenes have their own modules, which import symsphere.render.scene
+    # (and not the other way round); the package namespace gathers them.  SceneError pickles.
     import pickle
 
     import symsphere.render as render_package
     from symsphere.render import scene, scene_files, scenes
 
-    moved = {"load_scene": scene_files, "scene_from_dict": scene_files, "SCENES": scenes, "cornell": scenes,
-             "furnace": scenes, "get_scene": scenes, "translucent_scene": scenes}  # fmt: skip
-    for name in scene.__all__:
-        assert getattr(scene, name) is getattr(render_package, name), name
-        if name in moved:
-            assert getattr(scene, name) is getattr(moved[name], name), name
-    assert set(moved) <= set(dir(scene))
-    with pytest.raises(AttributeError, match="no attribute 'nope'"):
-        scene.nope  # noqa: B018
-    from symsphere.render.scene import SceneError as error_class
-    from symsphere.render.scene import get_scene as getter
-
-    assert getter is scenes.get_scene and error_class is render_package.SceneError
-    assert f"{error_class.__module__}.{error_class.__qualname__}" == "symsphere.render.scene.SceneError"
+    for module in (scene, scene_files, scenes):
+        for name in module.__all__:
+            assert getattr(module, name) is getattr(render_package, name, getattr(module, name)), name
+    assert not {"load_scene", "scene_from_dict"} & set(dir(scene)) and not {"SCENES", "get_scene"} & set(dir(scene))
+    with pytest.raises(AttributeError, match="no attribute 'get_scene'"):
+        scene.get_scene  # noqa: B018
+    error_class = render_package.SceneError
     assert type(pickle.loads(pickle.dumps(error_class("x")))) is error_class

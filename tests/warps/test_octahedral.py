@@ -80,3 +80,22 @@ def test_elementwise_is_the_array_map():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+def test_compiled_formula_at_the_edges_and_corners():
+    # The square's edges and corners, where the map folds: the formula numba compiles (the study's
+    # compiled octahedral peer runs it) gives the numpy map's directions there, within the error model's
+    # bound for one sine and one cosine of the same angle times the same factor (2E + 1 eps, absolute).
+    from numba import njit
+
+    @njit
+    def compiled(uv, out):
+        for i in range(uv.shape[0]):
+            out[i, 0], out[i, 1], out[i, 2] = octahedral_sphere_point(uv[i, 0], uv[i, 1])
+
+    values = np.array([0.0, 1e-300, 0.25, 0.5, 0.75, 1 - 1e-16, 1.0])
+    uv = np.array([[a, b] for a in values for b in values])
+    out = np.empty((len(uv), 3))
+    compiled(uv, out)
+    assert np.all(np.isfinite(out))
+    assert np.max(np.abs(out - square_to_octahedral_sphere(uv))) <= (2 * ELEMENTARY_ULPS + 1) * EPS64

@@ -328,7 +328,7 @@ def _write_figure(path: Path, tests: list[_Test], results: list[Chi2Result], sca
     from matplotlib.colors import TwoSlopeNorm
     from matplotlib.figure import Figure
 
-    from ..stats import equal_area_bins
+    from ..bins import equal_area_bins
 
     triangle = {
         t.method: r for t, r in zip(tests, results, strict=False) if t.domain == "triangle" and t.reference == "uniform"

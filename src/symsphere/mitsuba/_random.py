@@ -22,12 +22,12 @@ from typing import Any
 
 import mitsuba as mi
 
+from .. import _splitmix
+
 __all__ = ["GOLDEN", "ODD", "mix64", "pixel_key", "below", "u01", "owen_sobol2", "fraction"]
 
-GOLDEN = 0x9E3779B97F4A7C15
-_MIX1 = 0xBF58476D1CE4E5B9
-_MIX2 = 0x94D049BB133111EB
-ODD = 0xD6E8FEB86659FD93
+GOLDEN, ODD = int(_splitmix.GOLDEN), int(_splitmix.ODD)  # SplitMix64's constants, as Python ints
+_MIX1, _MIX2 = int(_splitmix.MIX1), int(_splitmix.MIX2)
 _LK = (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6)  # Laine-Karras constants (Burley 2020, listing 2)
 _M32 = 0xFFFFFFFF
 
@@ -44,7 +44,7 @@ _SOBOL2 = _pascal()
 
 
 def mix64(z: Any) -> Any:
-    """splitmix64's finaliser (``render._random.mix64``) on a UInt64 array."""
+    """splitmix64's finaliser (``symsphere._splitmix.mix64``) on a UInt64 array."""
     z = (z ^ (z >> 30)) * _MIX1
     z = (z ^ (z >> 27)) * _MIX2
     return z ^ (z >> 31)

@@ -35,6 +35,7 @@ integrator, which imports them from here.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -59,7 +60,7 @@ INV_2PI = 0.5 / math.pi
 # The numba options of the scalar functions that take the scene's tables (here and in the integrator):
 # compiled once each, cached, no reference counting of their array arguments (they allocate nothing),
 # and the kernels' error model (a division by zero gives inf or NaN, as in numpy, not an exception).
-TABLE_FUNCTION = dict(_nrt=False, cache=True, error_model="numpy", nogil=True)
+TABLE_FUNCTION: dict[str, Any] = dict(_nrt=False, cache=True, error_model="numpy", nogil=True)
 _PI = math.pi
 _MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
 _ONE_MINUS_EPSILON = 1.0 - 2.0**-53

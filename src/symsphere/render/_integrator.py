@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import Any
 
 import numpy as np
 from numba import get_num_threads, njit
@@ -86,18 +87,12 @@ from numba.extending import register_jitable
 
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
+from .._splitmix import GOLDEN, ODD, mix64
 from .._threads import run_parts, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
-from ._emitters import (
-    INV_2PI,
-    choose_light,
-    emitter_pdf,
-    power_heuristic,
-    rows_to_world,
-    sample_emitter,
-)
-from ._random import below, mix64, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
+from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
+from ._random import below, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
 SYMMETRIC_SOBOL_INTERLACED2, SYMMETRIC_SOBOL_INTERLACED3 = 7, 8
@@ -118,15 +113,16 @@ CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image p
 # lights: a (2, L) table, rows object index (spheres first, then quads) and cumulative selection probability;
 # light_pmf: the selection probability of every object (0 for non-emitters)
 
-KERNEL_OPTIONS = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
+KERNEL_OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
+# The pass kernel: no reference counting (it allocates nothing; see render/_emitters.py)
+_PASS_KERNEL_OPTIONS: dict[str, Any] = dict(KERNEL_OPTIONS, _nrt=False)
 _INV_PI = 1.0 / math.pi
 _INV_4PI = 0.25 / math.pi
 _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if nothing is hit this much before it
 _BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(0x5851F42D4C957F2D)
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_ODD = np.uint64(0xD6E8FEB86659FD93)
+_GOLDEN, _ODD = GOLDEN, ODD  # SplitMix64's constants (symsphere._splitmix), as the kernels name them
 _ONE = np.uint64(1)
 
 
@@ -637,7 +633,7 @@ def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
     per estimator (measured: a first case ~14 CPU-s on an empty cache, each further one ~7 s).
     """
 
-    @njit(_nrt=False, **KERNEL_OPTIONS)  # no reference counting (render/_emitters.py); scratch from the caller
+    @njit(**_PASS_KERNEL_OPTIONS)  # scratch comes from the caller
     def render_rows(
         spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
         rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum, scratch,

@@ -9,8 +9,8 @@ Random numbers
 --------------
 No generator state is shared between pixels or samples: the stream of sample
 *s* of pixel *p* starts at ``path_state(pixel_key(seed, p), s)`` and advances
-by the splitmix64 increment (Steele, Lea & Flood 2014; finaliser variant 13 of
-Stafford).  An image is therefore a pure function of the seed, whatever the
+by the splitmix64 increment (:mod:`symsphere._splitmix`: Steele, Lea & Flood 2014;
+finaliser variant 13 of Stafford).  An image is therefore a pure function of the seed, whatever the
 number of threads and however the samples are split into passes.
 
 Owen-scrambled Sobol'
@@ -46,8 +46,9 @@ from __future__ import annotations
 import numpy as np
 from numba.extending import register_jitable
 
+from .._splitmix import GOLDEN, MIX1, MIX2, ODD, mix64
+
 __all__ = [
-    "mix64",
     "next_u64",
     "u01",
     "below",
@@ -62,13 +63,6 @@ __all__ = [
     "owen_sobol_interlaced",
 ]
 
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-_ODD = np.uint64(0xD6E8FEB86659FD93)  # any odd constant: keys the sample index into the stream
-_S30 = np.uint64(30)
-_S27 = np.uint64(27)
-_S31 = np.uint64(31)
 _S11 = np.uint64(11)
 _S32 = np.uint64(32)
 _ONE = np.uint64(1)
@@ -123,17 +117,9 @@ _SOBOL6 = _sobol_direction_numbers()
 
 
 @register_jitable
-def mix64(z):
-    """splitmix64's finaliser: a bijective avalanche of a uint64."""
-    z = (z ^ (z >> _S30)) * _MIX1
-    z = (z ^ (z >> _S27)) * _MIX2
-    return z ^ (z >> _S31)
-
-
-@register_jitable
 def next_u64(state):
     """Advance a splitmix64 stream: returns (new state, 64 random bits)."""
-    state = state + _GOLDEN
+    state = state + GOLDEN
     return state, mix64(state)
 
 
@@ -152,13 +138,13 @@ def below(bits, n):
 @register_jitable
 def pixel_key(seed, pixel):
     """The key of one pixel: every random decision in the pixel derives from it."""
-    return mix64(mix64(seed + _GOLDEN) ^ (np.uint64(pixel) * _GOLDEN + _ONE))
+    return mix64(mix64(seed + GOLDEN) ^ (np.uint64(pixel) * GOLDEN + _ONE))
 
 
 @register_jitable
 def path_state(key, sample):
     """Initial splitmix64 state of sample *sample* of the pixel with key *key*."""
-    return mix64(key ^ ((np.uint64(sample) + _ONE) * _ODD))
+    return mix64(key ^ ((np.uint64(sample) + _ONE) * ODD))
 
 
 @register_jitable
@@ -226,8 +212,8 @@ def owen_sobol2(index, key):
     table-driven xor over the bytes of i (reverse(y) = xor of reverse(v_j)
     over the set bits j of i), so that no loop over the bits remains.
     """
-    h1 = mix64(key ^ _GOLDEN)
-    h2 = mix64(key ^ _MIX1)
+    h1 = mix64(key ^ GOLDEN)
+    h2 = mix64(key ^ MIX1)
     i = _reverse_fast(_laine_karras(_reverse_fast(np.uint64(index) & _M32), h1 & _M32))
     y_reversed = (
         _YREV[0, i & _B255] ^ _YREV[1, (i >> _S8) & _B255] ^ _YREV[2, (i >> _S16) & _B255] ^ _YREV[3, i >> _S24]
@@ -315,9 +301,9 @@ def owen_sobol_interlaced(index, key, factor):
 
     (pinned by a test), with the dimensions' xor over the bits of i done by byte tables.
     """
-    h1 = mix64(key ^ _GOLDEN)
-    h2 = mix64(key ^ _MIX1)
-    h3 = mix64(key ^ _MIX2)
+    h1 = mix64(key ^ GOLDEN)
+    h2 = mix64(key ^ MIX1)
+    h3 = mix64(key ^ MIX2)
     i = _reverse_fast(_laine_karras(_reverse_fast(np.uint64(index) & _M32), h1 & _M32))
     x0 = _scrambled_coordinate(i, 0, h1 >> _S32)
     x1 = _scrambled_coordinate(i, 1, h2 & _M32)
@@ -325,7 +311,7 @@ def owen_sobol_interlaced(index, key, factor):
     x3 = _scrambled_coordinate(i, 3, h3 & _M32)
     if factor == 2:
         return interlace_fractions(x0, x1, x1, 2), interlace_fractions(x2, x3, x3, 2)
-    h4 = mix64(key ^ _ODD)
+    h4 = mix64(key ^ ODD)
     x4 = _scrambled_coordinate(i, 4, h3 >> _S32)
     x5 = _scrambled_coordinate(i, 5, h4 & _M32)
     return interlace_fractions(x0, x1, x2, 3), interlace_fractions(x3, x4, x5, 3)

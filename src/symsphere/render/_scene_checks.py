@@ -4,16 +4,19 @@
 Each check returns the value converted to plain Python floats / ints / tuples,
 or raises :class:`SceneError` with a message that names the field (*where*).
 :class:`SceneError` is defined here, below both of its users, and is public as
-``symsphere.render.SceneError`` and ``symsphere.render.scene.SceneError``.
+``symsphere.render.SceneError`` (and in :mod:`symsphere.render.scene`).
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+
+from .._validation import real_number, short_repr
 
 __all__ = ["BLACK", "MAX_DEPTH", "MAX_MAGNITUDE", "SceneError", "color", "integer", "number", "sequence", "vector"]
 
@@ -29,30 +32,6 @@ MAX_DEPTH = 1_000_000
 deeper path carries no measurable energy."""
 
 
-def shown(value: Any) -> str:
-    """A short repr of *value* for a message (an integer of 10**400 would flood it, one of 10**5000
-    cannot even be printed).
-
-    Examples
-    --------
-    >>> from symsphere.render._scene_checks import shown
-    >>> shown(10**400)
-    'an integer of 401 digits'
-    """
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
-        try:
-            return f"an integer of {len(str(abs(value)))} digits"
-        except ValueError:  # beyond sys.get_int_max_str_digits()
-            return "an integer of thousands of digits"
-    if isinstance(value, np.ndarray) and value.size > 12:
-        return f"an array of shape {value.shape} and dtype {value.dtype}"
-    try:
-        text = " ".join(repr(value).split())  # one line: an array's repr spans several
-    except (ValueError, RecursionError):
-        return f"a {type(value).__name__}"
-    return text if len(text) <= 80 else text[:60] + "..."
-
-
 class SceneError(ValueError):
     """A scene (from Python or a file) is invalid; the message names the field.
 
@@ -65,8 +44,6 @@ class SceneError(ValueError):
     ...     print(error)
     scene 's': spheres[0].radius must be positive, got -1.0
     """
-
-    __module__ = "symsphere.render.scene"  # its public home (repr, pickling), which re-exports it
 
 
 def sequence(value: Any, where: str) -> list[Any]:
@@ -94,14 +71,13 @@ def number(value: Any, where: str) -> float:
     >>> number(float("nan"), "camera.fov")
     Traceback (most recent call last):
     ...
-    symsphere.render.scene.SceneError: camera.fov must be finite, got nan
+    symsphere.render._scene_checks.SceneError: camera.fov must be finite, got nan
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise SceneError(f"{where} must be a number, got {shown(value)}")
-    try:
-        result = float(value)
-    except OverflowError:  # an int beyond float64
-        raise SceneError(f"{where} must be at most {MAX_MAGNITUDE:g} in magnitude, got {shown(value)}") from None
+    result = real_number(value)  # the library's number rule (symsphere._validation)
+    if result is None:
+        raise SceneError(f"{where} must be a number, got {short_repr(value)}")
+    if math.isinf(result) and isinstance(value, numbers.Integral):  # an int beyond float64
+        raise SceneError(f"{where} must be at most {MAX_MAGNITUDE:g} in magnitude, got {short_repr(value)}")
     if not math.isfinite(result):
         raise SceneError(f"{where} must be finite, got {result!r}")
     if abs(result) > MAX_MAGNITUDE:
@@ -119,11 +95,11 @@ def integer(value: Any, where: str, minimum: int, maximum: int = MAX_DEPTH) -> i
     5
     """
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise SceneError(f"{where} must be an integer, got {shown(value)}")
+        raise SceneError(f"{where} must be an integer, got {short_repr(value)}")
     if value < minimum:
-        raise SceneError(f"{where} must be >= {minimum}, got {shown(value)}")
+        raise SceneError(f"{where} must be >= {minimum}, got {short_repr(value)}")
     if value > maximum:
-        raise SceneError(f"{where} must be at most {maximum}, got {shown(value)}")
+        raise SceneError(f"{where} must be at most {maximum}, got {short_repr(value)}")
     return int(value)
 
 
@@ -145,7 +121,7 @@ def vector(value: Any, where: str) -> tuple[float, ...]:
     (0.0, 1.0, 5.0)
     """
     if isinstance(value, (str, bytes, Mapping)) or _length(value) != 3:
-        raise SceneError(f"{where} must be 3 numbers [x, y, z], got {shown(value)}")
+        raise SceneError(f"{where} must be 3 numbers [x, y, z], got {short_repr(value)}")
     return tuple(number(c, f"{where}[{i}]") for i, c in enumerate(value))
 
 
@@ -161,7 +137,7 @@ def color(value: Any, where: str, upper: float | None) -> tuple[float, ...]:
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         value = (value, value, value)
     elif isinstance(value, (str, bytes, Mapping)) or _length(value) != 3:
-        raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {shown(value)}")
+        raise SceneError(f"{where} must be a number or 3 numbers [r, g, b], got {short_repr(value)}")
     rgb = tuple(number(c, where) for c in value)
     for c in rgb:
         if c < 0 or (upper is not None and c > upper):

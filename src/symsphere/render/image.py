@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from .._validation import check_finite_array, check_path, read_regular_file, short_repr
+from .._validation import check_finite_array, check_path, read_regular_file, real_number, short_repr
 from ..io import atomic_paths
 
 __all__ = [
@@ -92,12 +92,9 @@ def _check_float32_range(image: np.ndarray) -> None:
 
 
 def _check_exposure(exposure: object) -> float:
-    if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.integer, np.floating)):
+    value = real_number(exposure)
+    if value is None:
         raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
-    try:
-        value = float(exposure)
-    except OverflowError:  # an int beyond float64
-        value = math.inf
     if not (math.isfinite(value) and value > 0):
         raise ValueError(f"'exposure' must be a positive finite number, got {short_repr(exposure)}")
     return value

@@ -13,32 +13,25 @@ the cap.
 Scene files (TOML, JSON) are read by :mod:`symsphere.render.scene_files`
 (:func:`load_scene`, :func:`scene_from_dict`), the built-in scenes are in
 :mod:`symsphere.render.scenes` (:data:`SCENES`, :func:`get_scene`, :func:`cornell`,
-:func:`furnace`, :func:`translucent_scene`); both import this module, and
-their names are importable from here as well.
+:func:`furnace`, :func:`translucent_scene`); both import this module.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
+from .._validation import short_repr
 from ..frames import frame_rows
 from . import _integrator as _k
-from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, shown, vector
-
-if TYPE_CHECKING:  # importable from here (see __getattr__ below); those modules import this one
-    from .scene_files import load_scene, scene_from_dict
-    from .scenes import SCENES, cornell, furnace, get_scene, translucent_scene
+from ._scene_checks import BLACK, SceneError, color, integer, number, sequence, vector
 
 __all__ = [
     "MATERIAL_KINDS",
-    "SCENES",
     "Camera",
     "HalfSpace",
     "Material",
@@ -46,16 +39,10 @@ __all__ = [
     "Scene",
     "SceneError",
     "Sphere",
-    "cornell",
     "dielectric",
     "diffuse",
-    "furnace",
-    "get_scene",
-    "load_scene",
     "mirror",
-    "scene_from_dict",
     "translucent",
-    "translucent_scene",
 ]
 
 MATERIAL_KINDS = ("diffuse", "translucent", "mirror", "dielectric")
@@ -261,7 +248,7 @@ class Scene:
     source: str | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
-        where = f"scene file {self.source!r}" if self.source else f"scene {shown(self.name)}"
+        where = f"scene file {self.source!r}" if self.source else f"scene {short_repr(self.name)}"
         try:
             _normalise(self)
         except SceneError as exc:
@@ -384,7 +371,7 @@ def _normalise(scene: Scene) -> None:
     """Convert every field to plain floats / tuples in place and check it; SceneError names the field."""
     put = object.__setattr__
     if not isinstance(scene.name, str) or not scene.name:
-        raise SceneError(f"name must be a non-empty string, got {shown(scene.name)}")
+        raise SceneError(f"name must be a non-empty string, got {short_repr(scene.name)}")
     if not isinstance(scene.camera, Camera):
         raise SceneError(f"camera must be a Camera, got {type(scene.camera).__name__}")
     put(scene, "camera", _check_camera(scene.camera))
@@ -393,7 +380,7 @@ def _normalise(scene: Scene) -> None:
     materials = {}
     for name, material in scene.materials.items():
         if not isinstance(name, str) or not name:
-            raise SceneError(f"material names must be non-empty strings, got {shown(name)}")
+            raise SceneError(f"material names must be non-empty strings, got {short_repr(name)}")
         materials[name] = _check_material(material, f"materials.{name}")
     put(scene, "materials", materials)
     spheres = []
@@ -476,7 +463,7 @@ def _check_material(material, where) -> Material:
     if not isinstance(material, Material):
         raise SceneError(f"{where} must be a Material, got {type(material).__name__}")
     if not isinstance(material.kind, str) or material.kind not in MATERIAL_KINDS:
-        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {shown(material.kind)}")
+        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {short_repr(material.kind)}")
     color_name = {"diffuse": "albedo", "dielectric": "tint"}.get(material.kind, "reflectance")
     rgb = color(material.color, f"{where}.{color_name}", upper=1.0)
     transmittance = color(material.transmittance, f"{where}.transmittance", upper=1.0)
@@ -500,38 +487,13 @@ def _rgb(value, where):
 
 def _material_name(name, materials, where) -> str:
     if not isinstance(name, str):
-        raise SceneError(f"{where} must be the name of a material, got {shown(name)}")
+        raise SceneError(f"{where} must be the name of a material, got {short_repr(name)}")
     if name not in materials:
         known = ", ".join(sorted(materials))
-        raise SceneError(f"{where} names an unknown material {shown(name)}; defined: {known}")
+        raise SceneError(f"{where} names an unknown material {short_repr(name)}; defined: {known}")
     return name
 
 
 def _unit(v) -> np.ndarray:
     v = np.asarray(v, dtype=np.float64)
     return v / math.sqrt(float(v @ v))
-
-
-# --- names of the scene files and the built-in scenes, importable from here ------
-
-_ELSEWHERE = {
-    "load_scene": "scene_files",
-    "scene_from_dict": "scene_files",
-    "SCENES": "scenes",
-    "cornell": "scenes",
-    "furnace": "scenes",
-    "get_scene": "scenes",
-    "translucent_scene": "scenes",
-}
-
-
-def __getattr__(name: str) -> Any:
-    # Lazily: scene_files and scenes import this module (PEP 562; also serves ``from ... import name``)
-    module = _ELSEWHERE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f".{module}", __package__), name)
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *_ELSEWHERE})

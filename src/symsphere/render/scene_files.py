@@ -56,7 +56,7 @@ from collections.abc import Collection, Iterable, Mapping
 from typing import Any
 
 from .._validation import check_path, read_regular_file, short_repr
-from ._scene_checks import BLACK, SceneError, shown, vector
+from ._scene_checks import BLACK, SceneError, vector
 from .scene import MATERIAL_KINDS, Camera, HalfSpace, Material, Quad, Scene, Sphere
 
 __all__ = ["MAX_SCENE_BYTES", "load_scene", "scene_from_dict"]
@@ -213,10 +213,10 @@ def _from_dict(data: Any, source: str | None, default_name: str) -> Scene:
 
 def _material_from_dict(value: Any, where: str) -> Material:
     if not isinstance(value, Mapping):
-        raise SceneError(f"{where} must be a table, got {shown(value)}")
+        raise SceneError(f"{where} must be a table, got {short_repr(value)}")
     kind = value.get("type")
     if kind not in MATERIAL_KINDS:
-        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {shown(kind)}")
+        raise SceneError(f"{where}.type must be one of {', '.join(MATERIAL_KINDS)}; got {short_repr(kind)}")
     parameters = _KIND_KEYS[kind]
     allowed = {"type", "emission"} | {key for key, _, _ in parameters}
     _table(value, where, allowed)
@@ -236,7 +236,7 @@ def _table(
     if allowed is not None:
         unknown = sorted(set(value) - set(allowed))
         if unknown:
-            raise SceneError(f"unknown key {shown(unknown[0])} in {where}; allowed: {_join(sorted(allowed))}")
+            raise SceneError(f"unknown key {short_repr(unknown[0])} in {where}; allowed: {_join(sorted(allowed))}")
     missing = sorted(set(required) - set(value))
     if missing:
         raise SceneError(f"{where}.{missing[0]} is missing")

@@ -312,7 +312,8 @@ def _broken(phi, cos):
 def _warp_figure(path, results, name):
     from matplotlib.colors import LogNorm  # function-level: see _figure
 
-    from ...stats import bin_probabilities, chi2_test, equal_area_bins, uniform_pdf  # scipy.stats: ~1 s
+    from ...bins import bin_probabilities, equal_area_bins
+    from ...stats import chi2_test, uniform_pdf  # scipy.stats: ~1 s
 
     domain, forward, pdf, title = _warp_setup(name)
     bins = {"triangle": (20, 20), "sphere": (48, 24), "hemisphere": (48, 12)}[domain]

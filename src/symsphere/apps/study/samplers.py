@@ -18,7 +18,7 @@ from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sph
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
 from ...warps import triangle_warp
-from ._compiled import COMPILED_PEERS, compiled_sample
+from .compiled import COMPILED_PEERS, compiled_sample
 from .config import StudyConfig, domains
 
 __all__ = ["Sampler", "all_samplers", "samplers", "weighted"]
@@ -117,7 +117,7 @@ class Sampler:
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
         :meth:`symsphere.peers.Peer.estimate`, ``mean(f / pdf)`` over its n directions (a rule:
-        ``sum(w f)``), the directions from a compiled kernel (:mod:`._compiled`) for the peers of
+        ``sum(w f)``), the directions from a compiled kernel (:mod:`.compiled`) for the peers of
         ``COMPILED_PEERS``.
         """
         if self.is_scheme:

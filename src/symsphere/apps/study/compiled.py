@@ -82,7 +82,7 @@ def compiled_sample(peer: Peer, n: int, rng, points: str = "random") -> np.ndarr
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.apps.study._compiled import compiled_sample
+    >>> from symsphere.apps.study.compiled import compiled_sample
     >>> from symsphere.peers import PEERS
     >>> peer = PEERS["octahedral"]
     >>> bool(np.allclose(compiled_sample(peer, 512, 3, "sobol"), peer.sample(512, rng=3, points="sobol"),
