@@ -17,6 +17,7 @@ Usage::
         benchmarks/bench_integrate.py --rounds 3
     python benchmarks/compare_revisions.py --base db6d760 --rate -- \
         benchmarks/bench_render.py paths-vs-mitsuba --no-mitsuba --samplers cosine symmetric_sobol --rounds 3
+    python benchmarks/compare_revisions.py --base db6d760 --rate --same-script --keys . -- benchmarks/render_rate.py
 """
 
 from __future__ import annotations
@@ -56,9 +57,11 @@ def _numbers(payload, pattern, prefix="", parent=""):
     return found
 
 
-def _run(tree: Path, cache: Path, script: list[str], out: Path, pattern: str) -> dict[str, float]:
+def _run(
+    tree: Path, cache: Path, script: list[str], out: Path, pattern: str, script_tree: Path | None = None
+) -> dict[str, float]:
     env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=str(cache))
-    command = [sys.executable, str(tree / script[0]), *script[1:], "--json", str(out)]
+    command = [sys.executable, str((script_tree or tree) / script[0]), *script[1:], "--json", str(out)]
     subprocess.run(command, cwd=tree, env=env, check=True, stdout=subprocess.DEVNULL)
     return _numbers(json.loads(out.read_text()), pattern)
 
@@ -72,6 +75,11 @@ def main(argv=None):
         "--keys", default="median", help="regular expression for the keys to compare (default: %(default)s)"
     )
     parser.add_argument("--rate", action="store_true", help="the numbers are rates (higher is faster), not times")
+    parser.add_argument(
+        "--same-script",
+        action="store_true",
+        help="run this checkout's script against both revisions (for a script the base does not have)",
+    )
     parser.add_argument(
         "script",
         nargs=argparse.REMAINDER,
@@ -90,14 +98,17 @@ def main(argv=None):
         try:
             trees = {"base": base_tree, "new": ROOT}
             caches = {name: scratch / f"numba-{name}" for name in trees}
+            script_tree = ROOT if args.same_script else None
             for name in trees:  # untimed: fill each revision's numba cache
-                _run(trees[name], caches[name], script, scratch / "warm.json", args.keys)
+                _run(trees[name], caches[name], script, scratch / "warm.json", args.keys, script_tree)
             rounds: dict[str, list[dict[str, float]]] = {"base": [], "new": []}
             for index in range(args.rounds):
                 order = ["base", "new"] if index % 2 == 0 else ["new", "base"]
                 for name in order:
                     rounds[name].append(
-                        _run(trees[name], caches[name], script, scratch / f"{name}-{index}.json", args.keys)
+                        _run(
+                            trees[name], caches[name], script, scratch / f"{name}-{index}.json", args.keys, script_tree
+                        )
                     )
                 print(f"round {index + 1}/{args.rounds} done", file=sys.stderr)
         finally:
