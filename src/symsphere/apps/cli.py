@@ -68,6 +68,7 @@ _DOMAINS = ("sphere", "hemisphere")
 _DTYPES = ("float64", "float32")
 _DEMO_DEFAULT_N = 48 * 2**14
 _DISTRIBUTED_EXTRA = "symsphere[distributed]"
+_Blocks = Callable[["FloatArray | None"], Iterator["FloatArray"]]  # stream_directions' blocks(out)
 
 
 class _UsageError(Exception):
@@ -160,9 +161,7 @@ def _signals_as_interrupts(pending: list[int]) -> Iterator[None]:
         pending.append(signum)
         _raise_terminated(signum, frame)
 
-    def unraisable(
-        report: sys.UnraisableHookArgs, previous_hook: Callable[[sys.UnraisableHookArgs], object] = sys.unraisablehook
-    ) -> None:
+    def unraisable(report: sys.UnraisableHookArgs, previous_hook: Callable[..., object] = sys.unraisablehook) -> None:
         if not (isinstance(report.exc_type, type) and issubclass(report.exc_type, KeyboardInterrupt)):
             previous_hook(report)
 
@@ -426,12 +425,8 @@ def _close_client(client: Any) -> None:
         _distributed().close_client(client)
 
 
-def _distributed() -> Any:
-    """:mod:`symsphere.distributed`, imported here (function-level: dask is slow to import and optional).
-
-    Typed Any while that module's signatures are not annotated (its mypy override).
-    """
-    from .. import distributed
+def _distributed() -> Any:  # Any while symsphere.distributed is not annotated (its mypy override)
+    from .. import distributed  # function-level: dask is slow to import and optional
 
     return distributed
 
@@ -605,9 +600,7 @@ def _run_sample(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cluster_blocks(
-    client: Any, args: argparse.Namespace, options: dict[str, Any], chunk: int
-) -> Callable[[FloatArray | None], Iterator[FloatArray]]:
+def _cluster_blocks(client: Any, args: argparse.Namespace, options: dict[str, Any], chunk: int) -> _Blocks:
     """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
     distributed = _distributed()
     count = 48 if args.domain == "sphere" else 24
@@ -824,7 +817,6 @@ def _run_mitsuba_render(args: argparse.Namespace, out: Path) -> int:
         check_count(getattr(args, name), f"--{name}")
     if args.integrator != "path":
         raise _UsageError("--integrator: Mitsuba scene files are rendered with NEE and MIS (path) only")
-    # a fresh SeedSequence's entropy is an int
     seed = args.seed if args.seed is not None else int(cast(int, np.random.SeedSequence().entropy) % 2**32)
     r = render_scene_file(args.scene, width=args.width, height=args.height, spp=args.spp, sampler=args.sampler,
                           method=args.method, seed=seed)  # fmt: skip
