@@ -35,12 +35,15 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from types import FrameType
+from typing import Any, NoReturn, cast
 
 import numpy as np
 
-from .. import __version__, integrate, iter_hemisphere, iter_sphere
+from .. import IntegrationResult, __version__, integrate, iter_hemisphere, iter_sphere
+from .._typing import FloatArray
 from .._validation import (
     MAX_PATHS,
     MAX_PIXELS,
@@ -51,7 +54,7 @@ from .._validation import (
     check_size,
     file_kind,
 )
-from ..integrands import INTEGRANDS
+from ..integrands import INTEGRANDS, Integrand
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..points import BLOCK, POINT_SETS
 from ..warps import METHODS
@@ -65,6 +68,7 @@ _DOMAINS = ("sphere", "hemisphere")
 _DTYPES = ("float64", "float32")
 _DEMO_DEFAULT_N = 48 * 2**14
 _DISTRIBUTED_EXTRA = "symsphere[distributed]"
+_Blocks = Callable[["FloatArray | None"], Iterator["FloatArray"]]  # stream_directions' blocks(out)
 
 
 class _UsageError(Exception):
@@ -82,7 +86,7 @@ class _Terminated(KeyboardInterrupt):
 _CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
-def _raise_terminated(signum, frame):
+def _raise_terminated(signum: int, frame: FrameType | None) -> NoReturn:
     if signum == signal.SIGINT:
         raise KeyboardInterrupt
     raise _Terminated(signum)
@@ -96,7 +100,7 @@ class _Outputs:
         self.before: list[tuple[int, int] | None] = []
         self.done = False
 
-    def watch(self, paths) -> None:
+    def watch(self, paths: Sequence[str | os.PathLike[str]]) -> None:
         """Call just before the write: remember what is at *paths* now (followed through symbolic links)."""
         self.paths = [Path(p) for p in paths]
         self.before = [_identity(p) for p in self.paths]
@@ -123,7 +127,7 @@ _FASTEST_EVALUATIONS_PER_SECOND = 1e9  # integrate: 17x the 59 M/s measured (doc
 _FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread measured (docs/rendering.md)
 
 
-def _check_duration(seconds: float, what: str, args) -> None:
+def _check_duration(seconds: float, what: str, args: argparse.Namespace) -> None:
     """Refuse work estimated beyond a day unless --allow-long was given (a usage error, before any work)."""
     if seconds > _LONG_SECONDS and not args.allow_long:
         raise _UsageError(
@@ -131,7 +135,7 @@ def _check_duration(seconds: float, what: str, args) -> None:
         )
 
 
-def _add_allow_long(verb) -> None:
+def _add_allow_long(verb: argparse.ArgumentParser) -> None:
     verb.add_argument(
         "--allow-long", action="store_true",
         help="run even if the work is estimated to take more than a day (refused otherwise, before any work)",
@@ -139,7 +143,7 @@ def _add_allow_long(verb) -> None:
 
 
 @contextlib.contextmanager
-def _signals_as_interrupts(pending: list[int]):
+def _signals_as_interrupts(pending: list[int]) -> Iterator[None]:
     """While the command runs, SIGINT raises KeyboardInterrupt and SIGTERM, SIGHUP _Terminated (the main
     thread only: signal's rule), and every signal is also recorded in *pending*.
 
@@ -153,11 +157,11 @@ def _signals_as_interrupts(pending: list[int]):
         yield
         return
 
-    def handler(signum, frame):
+    def handler(signum: int, frame: FrameType | None) -> None:
         pending.append(signum)
         _raise_terminated(signum, frame)
 
-    def unraisable(report, previous_hook=sys.unraisablehook):
+    def unraisable(report: sys.UnraisableHookArgs, previous_hook: Callable[..., object] = sys.unraisablehook) -> None:
         if not (isinstance(report.exc_type, type) and issubclass(report.exc_type, KeyboardInterrupt)):
             previous_hook(report)
 
@@ -171,7 +175,7 @@ def _signals_as_interrupts(pending: list[int]):
             signal.signal(signum, old)
 
 
-def _check_pending(args) -> None:
+def _check_pending(args: argparse.Namespace) -> None:
     """Raise a signal that arrived but whose exception was lost (see _signals_as_interrupts)."""
     if args.pending:
         _raise_terminated(args.pending[0], None)
@@ -369,7 +373,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _render_samplers():
+def _render_samplers() -> tuple[str, ...]:
     # Function-level: symsphere.render takes ~0.3 s to import; the renderer module alone gives the tuple
     # without loading the kernels.
     from ..render.renderer import SAMPLERS
@@ -377,7 +381,7 @@ def _render_samplers():
     return SAMPLERS + ("bsdf",)  # bsdf: Mitsuba's own sampling, for Mitsuba scene files (apps.mitsuba_render)
 
 
-def _add_cluster_options(verb):
+def _add_cluster_options(verb: argparse.ArgumentParser) -> None:
     cluster = verb.add_mutually_exclusive_group()
     cluster.add_argument(
         "--workers", type=int, default=None, metavar="N",
@@ -392,7 +396,7 @@ def _add_cluster_options(verb):
     )
 
 
-def _cluster_client(args):
+def _cluster_client(args: argparse.Namespace) -> Any:  # a dask.distributed Client, or None
     """A Dask client for --workers / --scheduler, or None to run in this process."""
     if args.workers is None and args.scheduler is None:
         return None
@@ -408,8 +412,7 @@ def _cluster_client(args):
         raise _UsageError(
             f"{option} needs Dask, which is not installed; install it with: pip install '{_DISTRIBUTED_EXTRA}'"
         ) from None
-    from .. import distributed
-
+    distributed = _distributed()
     if args.scheduler is not None:
         return distributed.connect(args.scheduler, timeout=args.timeout)
     if args.workers < 1:
@@ -417,11 +420,15 @@ def _cluster_client(args):
     return distributed.local_client(args.workers)
 
 
-def _close_client(client):
+def _close_client(client: Any) -> None:
     if client is not None:
-        from ..distributed import close_client  # function-level: dask (see _cluster_client)
+        _distributed().close_client(client)
 
-        close_client(client)
+
+def _distributed() -> Any:  # Any while symsphere.distributed is not annotated (its mypy override)
+    from .. import distributed  # function-level: dask is slow to import and optional
+
+    return distributed
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -506,7 +513,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
 
 
-def _exit_now(status: int, argv) -> int:
+def _exit_now(status: int, argv: Sequence[str] | None) -> int:
     """Run as the program (no *argv*) after an interrupt: exit with *status* now.  The interpreter's own
     exit could still die by the signal (the audit once saw exit -2 after this line was printed, an
     interrupt having been dropped inside a numba callback); everything of ours is already cleaned up."""
@@ -527,7 +534,7 @@ def _one_line(exc: object) -> str:
     return text if len(text) <= 500 else text[:480] + " ..."
 
 
-def _with_notes(handler, args, prog) -> int:
+def _with_notes(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, prog: str) -> int:
     """Run a verb; a library warning (scipy's Sobol' balance note) becomes one line on stderr."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
@@ -544,7 +551,7 @@ _NOTE_HINTS = {
 }
 
 
-def _run_sample(args) -> int:
+def _run_sample(args: argparse.Namespace) -> int:
     from tqdm.auto import tqdm  # function-level: ~60 ms, only for the verbs that show progress
 
     if args.normal is not None and args.domain != "hemisphere":
@@ -561,10 +568,12 @@ def _run_sample(args) -> int:
     check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
     _check_duration(args.n / _FASTEST_DIRECTIONS_PER_SECOND, f"--n {args.n}", args)
     chunk = args.chunk if args.chunk is not None else count * 2**16
-    if args.domain == "sphere":
-        iterate = lambda out: iter_sphere(args.n, chunk=chunk, out=out, **options)  # noqa: E731
-    else:
-        iterate = lambda out: iter_hemisphere(args.n, chunk=chunk, normal=args.normal, out=out, **options)  # noqa: E731
+
+    def iterate(out: FloatArray | None) -> Iterator[FloatArray]:
+        if args.domain == "sphere":
+            return iter_sphere(args.n, chunk=chunk, out=out, **options)
+        return iter_hemisphere(args.n, chunk=chunk, normal=args.normal, out=out, **options)
+
     iterate(None)  # validate every argument before the output file is created
     client = _cluster_client(args)
     try:
@@ -572,7 +581,7 @@ def _run_sample(args) -> int:
         with tqdm(total=args.n, unit="dir", unit_scale=True, disable=None, desc="sampling", leave=False) as bar:
             args.outputs.watch([args.out])
 
-            def progress(count):
+            def progress(count: int) -> None:
                 _check_pending(args)  # an interrupt lost while a kernel compiled: roll back now
                 bar.update(count)
 
@@ -591,10 +600,9 @@ def _run_sample(args) -> int:
     return 0
 
 
-def _cluster_blocks(client, args, options, chunk):
+def _cluster_blocks(client: Any, args: argparse.Namespace, options: dict[str, Any], chunk: int) -> _Blocks:
     """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
-    from .. import distributed  # function-level: dask is slow to import and optional
-
+    distributed = _distributed()
     count = 48 if args.domain == "sphere" else 24
     chunk = max(count * BLOCK, chunk - chunk % (count * BLOCK))  # cluster chunks are whole blocks
     if args.domain == "sphere":
@@ -604,7 +612,7 @@ def _cluster_blocks(client, args, options, chunk):
     pieces = array.to_delayed().ravel().tolist()
     in_flight = 2 * max(1, len(client.scheduler_info()["workers"]))
 
-    def blocks(out):
+    def blocks(out: FloatArray | None) -> Iterator[FloatArray]:
         futures = [client.compute(piece) for piece in pieces[:in_flight]]
         for index in range(len(pieces)):
             block = futures[index].result()
@@ -616,7 +624,7 @@ def _cluster_blocks(client, args, options, chunk):
     return blocks
 
 
-def _run_integrate(args) -> int:
+def _run_integrate(args: argparse.Namespace) -> int:
     if args.integrand not in INTEGRANDS:
         raise _UsageError(f"--integrand {args.integrand!r} is not known; use one of {sorted(INTEGRANDS)}")
     integrand = INTEGRANDS[args.integrand]
@@ -643,9 +651,7 @@ def _run_integrate(args) -> int:
                 _print_estimate(integrand, kwargs, args)  # the integrand's compiled kernel: the fused path
                 result = integrate(integrand, **kwargs)
             else:
-                from .. import distributed  # function-level: dask is slow to import and optional
-
-                result = distributed.integrate(integrand, client=client, progress=True, **kwargs)
+                result = _distributed().integrate(integrand, client=client, progress=True, **kwargs)
     finally:
         _close_client(client)
     elapsed = time.perf_counter() - start
@@ -670,7 +676,7 @@ def _run_integrate(args) -> int:
     return 0
 
 
-def _no_error_bar(result) -> str:
+def _no_error_bar(result: IntegrationResult) -> str:
     """Why a result has no standard error, and what to pass for one."""
     if result.unit == "replicate":
         return "one replicate of the point set has no spread to measure; use --replicates 2 or more (default 8)"
@@ -680,7 +686,7 @@ def _no_error_bar(result) -> str:
 _ESTIMATE_ABOVE = 48 * 2**22  # evaluations (~2 s): longer in-process runs first say how long they will take
 
 
-def _print_estimate(f, kwargs, args):
+def _print_estimate(f: Integrand, kwargs: dict[str, Any], args: argparse.Namespace) -> None:
     """For a long in-process integration: time a pilot of 48 * 2**14 evaluations, print the estimate."""
     n = kwargs["n"]
     if kwargs.get("n_max") is not None or "rtol" in kwargs:  # to a tolerance: up to n_max (default 48 * 2**24)
@@ -708,7 +714,7 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.3g} s"
 
 
-def _run_demo(args) -> int:
+def _run_demo(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     args.outputs.watch([args.out])
     report = run_demo(out_dir=args.out, n=args.n, seed=args.seed, progress=not args.no_progress)
@@ -719,7 +725,7 @@ def _run_demo(args) -> int:
     return 0
 
 
-def _run_render(args) -> int:
+def _run_render(args: argparse.Namespace) -> int:
     from ..render import render, write_outputs  # function-level: ~0.3 s, only for this verb
 
     out = Path(args.out)
@@ -774,9 +780,7 @@ def _run_render(args) -> int:
         if client is None:
             result = render(args.scene, threads=args.threads, **options)
         else:
-            from .. import distributed  # function-level: dask is slow to import and optional
-
-            result = distributed.render(args.scene, client=client, **options)
+            result = _distributed().render(args.scene, client=client, **options)
     finally:
         _close_client(client)
     _check_pending(args)  # an interrupt lost while the kernels compiled: nothing is written
@@ -805,7 +809,7 @@ def _run_render(args) -> int:
     return 0
 
 
-def _run_mitsuba_render(args, out) -> int:
+def _run_mitsuba_render(args: argparse.Namespace, out: Path) -> int:
     from ..render import save_image_set
     from .mitsuba_render import render_scene_file  # function-level: imports Mitsuba
 
@@ -813,7 +817,7 @@ def _run_mitsuba_render(args, out) -> int:
         check_count(getattr(args, name), f"--{name}")
     if args.integrator != "path":
         raise _UsageError("--integrator: Mitsuba scene files are rendered with NEE and MIS (path) only")
-    seed = args.seed if args.seed is not None else int(np.random.SeedSequence().entropy % 2**32)
+    seed = args.seed if args.seed is not None else int(cast(int, np.random.SeedSequence().entropy) % 2**32)
     r = render_scene_file(args.scene, width=args.width, height=args.height, spp=args.spp, sampler=args.sampler,
                           method=args.method, seed=seed)  # fmt: skip
     paths = save_image_set([out.with_suffix(s) for s in (".png", ".pfm", ".npy")], r["image"], args.exposure)

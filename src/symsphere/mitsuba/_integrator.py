@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from typing import Any, cast
 
 import drjit as dr
 import mitsuba as mi
@@ -71,6 +71,11 @@ def _mis_weight(pdf_a: Any, pdf_b: Any) -> Any:
     return dr.detach(dr.select(dr.isfinite(w), w, 0.0))
 
 
+def _bsdf_ids(bsdfs: Any) -> Any:
+    """The Dr.Jit registry ids (UInt32) of a ``BSDFPtr`` array: the keys of the Lambertian table."""
+    return dr.reinterpret_array(mi.UInt32, bsdfs)
+
+
 _BRDF_LINE = re.compile(r"^  brdf\[(\d)\] = (\w+)\[", re.MULTILINE)
 
 
@@ -97,7 +102,8 @@ class _PathMethods:
     """
 
     def __init__(self, props: Any) -> None:
-        mi.SamplingIntegrator.__init__(self, props)  # the current variant's base (this class is a template)
+        # the current variant's base (this class is a template: its methods run on that subclass)
+        mi.SamplingIntegrator.__init__(cast(mi.SamplingIntegrator, self), props)
         if not dr.is_jit_v(mi.Float):
             raise ValueError(f"symsphere_path runs in Mitsuba's JIT variants (llvm_*, cuda_*), not in {mi.variant()!r}")
         if mi.is_polarized:
@@ -202,7 +208,7 @@ class _PathMethods:
             bsdf = shape.bsdf()
             if bsdf is None:
                 continue
-            ident = int(dr.reinterpret_array(mi.UInt32, mi.BSDFPtr(bsdf))[0])
+            ident = int(_bsdf_ids(mi.BSDFPtr(bsdf))[0])
             codes[ident] = lambertian_codes(bsdf)
         size = max(codes, default=0) + 1
         values = [0] * size
@@ -254,13 +260,14 @@ class _PathMethods:
     @dr.syntax
     def _trace(self, scene: Any, sampler: Any, ray: Any, key: Any, s: Any, table: Any) -> tuple[Any, Any]:
         ray = mi.Ray3f(ray)
-        throughput = mi.Spectrum(1.0)
+        # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
+        throughput: Any = mi.Spectrum(1.0)
         result = mi.Spectrum(0.0)
         eta = mi.Float(1.0)
         depth = mi.UInt32(0)
         valid_ray = mi.Bool((not self.hide_emitters) and scene.environment() is not None)
         prev_si = dr.zeros(mi.Interaction3f)
-        prev_bsdf_pdf = mi.Float(1.0)
+        prev_bsdf_pdf: Any = mi.Float(1.0)
         prev_bsdf_delta = mi.Bool(True)
         active = mi.Bool(self.max_depth != 0)
         ctx = mi.BSDFContext()
@@ -271,7 +278,7 @@ class _PathMethods:
             if dr.hint(self.hide_emitters, mode="scalar"):  # Mitsuba's: the camera ray passes through area emitters
                 skip = (depth == 0) & si.is_valid() & (si.shape.emitter() != None)  # noqa: E711 - a Dr.Jit comparison
                 ray_skip = si.spawn_ray(ray.d)
-                after = self.skip_area_emitters(scene, ray_skip, True, skip)
+                after = cast(mi.SamplingIntegrator, self).skip_area_emitters(scene, ray_skip, True, skip)
                 si = dr.select(skip, after.compute_surface_interaction(ray_skip, mi.RayFlags.All, skip), si)
 
             # direct emission, weighted against the previous vertex's emitter sampling
@@ -296,9 +303,7 @@ class _PathMethods:
             )
 
             if dr.hint(symmetric, mode="scalar"):
-                lambertian = active_next & (
-                    dr.gather(mi.UInt32, table, dr.reinterpret_array(mi.UInt32, bsdf), active_next) != 0
-                )
+                lambertian = active_next & (dr.gather(mi.UInt32, table, _bsdf_ids(bsdf), active_next) != 0)
                 local, pdf_local = self._local_direction(sample_2, key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
                 value_local = bsdf.eval(ctx, si, local, lambertian)

@@ -21,10 +21,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 import numpy.typing as npt
 
+from .._typing import Float64Array, IntArray
 from .._validation import short_repr
 from ..frames import frame_rows
 from . import _integrator as _k
@@ -53,6 +55,23 @@ _KIND_CODES = {"diffuse": _k.DIFFUSE, "translucent": _k.TRANSLUCENT, "mirror": _
 # --- the data -----------------------------------------------------------------
 
 
+class _SceneArrays(TypedDict):
+    """:meth:`Scene.arrays`: the scene packed for the kernels."""
+
+    spheres: Float64Array
+    sphere_material: IntArray
+    quads: Float64Array
+    quad_material: IntArray
+    materials: Float64Array
+    lights: Float64Array
+    light_pmf: Float64Array
+    camera: Float64Array
+    background: Float64Array
+    eps: float
+    rr_depth: int
+    max_depth: int
+
+
 @dataclass(frozen=True)
 class Material:
     """A surface material (made with :func:`diffuse`, :func:`translucent`, :func:`mirror`, :func:`dielectric`).
@@ -77,10 +96,10 @@ class Material:
     """
 
     kind: str
-    color: tuple = (0.0, 0.0, 0.0)
-    transmittance: tuple = (0.0, 0.0, 0.0)
+    color: tuple[float, ...] = (0.0, 0.0, 0.0)
+    transmittance: tuple[float, ...] = (0.0, 0.0, 0.0)
     ior: float = 1.5
-    emission: tuple = (0.0, 0.0, 0.0)
+    emission: tuple[float, ...] = (0.0, 0.0, 0.0)
 
 
 def diffuse(albedo: npt.ArrayLike, emission: npt.ArrayLike = 0.0) -> Material:
@@ -153,8 +172,8 @@ class HalfSpace:
     (0, -1, 0)
     """
 
-    point: tuple
-    normal: tuple
+    point: tuple[float, ...]
+    normal: tuple[float, ...]
 
 
 @dataclass(frozen=True)
@@ -169,7 +188,7 @@ class Sphere:
     10
     """
 
-    center: tuple
+    center: tuple[float, ...]
     radius: float
     material: str
     clip: HalfSpace | None = None
@@ -186,9 +205,9 @@ class Quad:
     (0, 1, 0)
     """
 
-    corner: tuple
-    edge1: tuple
-    edge2: tuple
+    corner: tuple[float, ...]
+    edge1: tuple[float, ...]
+    edge2: tuple[float, ...]
     material: str
 
 
@@ -214,10 +233,10 @@ class Camera:
     (0.0, 1.0, 0.0)
     """
 
-    position: tuple
-    direction: tuple
+    position: tuple[float, ...]
+    direction: tuple[float, ...]
     fov: float
-    up: tuple = (0.0, 1.0, 0.0)
+    up: tuple[float, ...] = (0.0, 1.0, 0.0)
     near: float = 0.0
 
 
@@ -239,15 +258,15 @@ class Scene:
     name: str
     camera: Camera
     materials: Mapping[str, Material]
-    spheres: tuple = ()
-    quads: tuple = ()
-    background: tuple = (0.0, 0.0, 0.0)
+    spheres: tuple[Sphere, ...] = ()
+    quads: tuple[Quad, ...] = ()
+    background: tuple[float, ...] = (0.0, 0.0, 0.0)
     epsilon: float | None = None
     rr_depth: int = 5
     max_depth: int = 1024
     source: str | None = field(default=None, compare=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         where = f"scene file {self.source!r}" if self.source else f"scene {short_repr(self.name)}"
         try:
             _normalise(self)
@@ -261,7 +280,7 @@ class Scene:
             return self.epsilon
         return 1e-6 * max(1.0, math.sqrt(sum(c * c for c in self.camera.position)))
 
-    def arrays(self, width: int, height: int) -> dict:
+    def arrays(self, width: int, height: int) -> _SceneArrays:
         """The scene packed for the kernels (float64 / int64 arrays), for an image of width x height.
 
         Objects are numbered as the kernels see them: the unclipped spheres
@@ -276,7 +295,7 @@ class Scene:
         # unclipped spheres first (the kernels test them in their own loop), each group in scene order
         ordered = [s for s in self.spheres if s.clip is None] + [s for s in self.spheres if s.clip is not None]
         spheres = np.zeros((len(ordered), _k.SPHERE_COLUMNS))
-        areas = []
+        areas: list[float] = []
         for i, s in enumerate(ordered):
             axis, offset, cap_height = _clip_table(s)
             t_row, b_row = frame_rows(*axis)  # the sampling frame of the cap (t, b, axis), once per render
@@ -297,8 +316,9 @@ class Scene:
                 *(e1 / l1), *(e2 / l2), l1, l2, float(rectangle),
             ]  # fmt: skip
             areas.append(math.sqrt(squared))
-        lights, light_pmf = _light_tables([materials[index[o.material], 8:11] for o in (*ordered, *self.quads)], areas)
-        return dict(
+        objects: tuple[Sphere | Quad, ...] = (*ordered, *self.quads)
+        lights, light_pmf = _light_tables([materials[index[o.material], 8:11] for o in objects], areas)
+        return _SceneArrays(
             spheres=np.ascontiguousarray(spheres.T),  # structure of arrays: the kernels vectorise over objects
             sphere_material=np.array([index[s.material] for s in ordered], dtype=np.int64),
             quads=np.ascontiguousarray(quads.T),
@@ -313,7 +333,7 @@ class Scene:
             max_depth=int(self.max_depth),
         )
 
-    def camera_array(self, width: int, height: int) -> np.ndarray:
+    def camera_array(self, width: int, height: int) -> Float64Array:
         """position, forward (unit), right and up spanning the image plane at distance 1, near.
 
         A pixel position (sx, sy) in [-0.5, 0.5]^2 (sy up) looks along
@@ -330,7 +350,7 @@ class Scene:
         )
 
 
-def _clip_table(sphere):
+def _clip_table(sphere: Sphere) -> tuple[tuple[float, ...], float, float]:
     """Kernel rows of a sphere's clip: unit axis a into the kept side, offset d (keep a . p >= d), cap height.
 
     The kept cap is {p on the sphere : a . (p - c) >= d - a . c}; its height
@@ -346,7 +366,7 @@ def _clip_table(sphere):
     return tuple(float(c) for c in axis), offset, sphere.radius - max(lowest, -sphere.radius)
 
 
-def _light_tables(emissions, areas):
+def _light_tables(emissions: list[Float64Array], areas: list[float]) -> tuple[Float64Array, Float64Array]:
     """Emitters chosen by power: (2, L) rows object index, cumulative probability; and the pmf per object.
 
     Power of an emitter = mean emitted radiance over RGB x area (x pi, x 2
@@ -377,7 +397,7 @@ def _normalise(scene: Scene) -> None:
     put(scene, "camera", _check_camera(scene.camera))
     if not isinstance(scene.materials, Mapping) or not scene.materials:
         raise SceneError("materials must be a non-empty mapping of names to materials")
-    materials = {}
+    materials: dict[str, Material] = {}
     for name, material in scene.materials.items():
         if not isinstance(name, str) or not name:
             raise SceneError(f"material names must be non-empty strings, got {short_repr(name)}")
@@ -391,10 +411,10 @@ def _normalise(scene: Scene) -> None:
         radius = number(sphere.radius, f"{where}.radius")
         if not radius > 0:
             raise SceneError(f"{where}.radius must be positive, got {radius!r}")
-        material = _material_name(sphere.material, materials, f"{where}.material")
+        material_name = _material_name(sphere.material, materials, f"{where}.material")
         center = vector(sphere.center, f"{where}.center")
         clip = _check_clip(sphere.clip, center, radius, f"{where}.clip")
-        spheres.append(Sphere(center, radius, material, clip))
+        spheres.append(Sphere(center, radius, material_name, clip))
     put(scene, "spheres", tuple(spheres))
     quads = []
     for i, quad in enumerate(sequence(scene.quads, "quads")):
@@ -407,8 +427,8 @@ def _normalise(scene: Scene) -> None:
         normal = np.cross(edge1, edge2)
         if not float(normal @ normal) > 0 or not np.all(np.isfinite(normal)):
             raise SceneError(f"{where}: edge1 and edge2 must be non-zero and not parallel")
-        material = _material_name(quad.material, materials, f"{where}.material")
-        quads.append(Quad(corner, edge1, edge2, material))
+        material_name = _material_name(quad.material, materials, f"{where}.material")
+        quads.append(Quad(corner, edge1, edge2, material_name))
     put(scene, "quads", tuple(quads))
     if not spheres and not quads:
         raise SceneError("needs at least one sphere or quad")
@@ -440,7 +460,7 @@ def _check_camera(cam: Camera) -> Camera:
     return Camera(position, direction, fov, up, near)
 
 
-def _check_clip(clip, center, radius, where) -> HalfSpace | None:
+def _check_clip(clip: object, center: tuple[float, ...], radius: float, where: str) -> HalfSpace | None:
     if clip is None:
         return None
     if not isinstance(clip, HalfSpace):
@@ -459,7 +479,7 @@ def _check_clip(clip, center, radius, where) -> HalfSpace | None:
     return HalfSpace(point, normal)
 
 
-def _check_material(material, where) -> Material:
+def _check_material(material: object, where: str) -> Material:
     if not isinstance(material, Material):
         raise SceneError(f"{where} must be a Material, got {type(material).__name__}")
     if not isinstance(material.kind, str) or material.kind not in MATERIAL_KINDS:
@@ -478,14 +498,14 @@ def _check_material(material, where) -> Material:
     return Material(material.kind, rgb, transmittance, ior, emission)
 
 
-def _rgb(value, where):
+def _rgb(value: npt.ArrayLike, where: str) -> tuple[float, ...]:
     try:
         return color(value, where, upper=None)
     except SceneError as exc:
         raise ValueError(str(exc)) from None
 
 
-def _material_name(name, materials, where) -> str:
+def _material_name(name: object, materials: Mapping[str, Material], where: str) -> str:
     if not isinstance(name, str):
         raise SceneError(f"{where} must be the name of a material, got {short_repr(name)}")
     if name not in materials:
@@ -494,6 +514,7 @@ def _material_name(name, materials, where) -> str:
     return name
 
 
-def _unit(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / math.sqrt(float(v @ v))
+def _unit(v: npt.ArrayLike) -> Float64Array:
+    a = np.asarray(v, dtype=np.float64)
+    unit: Float64Array = a / math.sqrt(float(a @ a))
+    return unit

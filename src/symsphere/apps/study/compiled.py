@@ -12,11 +12,14 @@ compiled for one point at a time.  :func:`compiled_sample` returns what ``peer.s
 
 from __future__ import annotations
 
+from typing import Literal, TypedDict
+
 import numpy as np
 from numba import njit, prange
 from scipy.spatial.transform import Rotation
 
 from ..._threads import start_threads
+from ..._typing import Float64Array, FloatArray, PointSet, RNGLike
 from ..._validation import check_rng
 from ...peers import Peer, fibonacci_point, lebedev_size, sample_lebedev
 from ...points import BasePoints
@@ -27,25 +30,33 @@ __all__ = ["COMPILED_PEERS", "compiled_sample"]
 COMPILED_PEERS = ("classic", "octahedral", "fibonacci_rotated", "lebedev_rotated")
 """The peers whose sampling :func:`compiled_sample` compiles."""
 
-_OPTIONS = dict(cache=True, parallel=True, nogil=True, error_model="numpy")
+
+class _JitOptions(TypedDict):
+    cache: bool
+    parallel: bool
+    nogil: bool
+    error_model: Literal["python", "numpy"]
+
+
+_OPTIONS: _JitOptions = {"cache": True, "parallel": True, "nogil": True, "error_model": "numpy"}
 
 
 @njit(**_OPTIONS)
-def _classic(uv, out):
+def _classic(uv: Float64Array, out: Float64Array) -> None:
     for i in prange(uv.shape[0]):
         x, y, z = uniform_sphere_point(uv[i, 0], uv[i, 1])
         out[i, 0], out[i, 1], out[i, 2] = x, y, z
 
 
 @njit(**_OPTIONS)
-def _octahedral(uv, out):
+def _octahedral(uv: Float64Array, out: Float64Array) -> None:
     for i in prange(uv.shape[0]):
         x, y, z = octahedral_sphere_point(uv[i, 0], uv[i, 1])
         out[i, 0], out[i, 1], out[i, 2] = x, y, z
 
 
 @njit(**_OPTIONS)
-def _fibonacci_rotated(rotation, out):
+def _fibonacci_rotated(rotation: Float64Array, out: Float64Array) -> None:
     n = out.shape[0]
     for i in prange(n):
         x, y, z = fibonacci_point(i, n)
@@ -54,7 +65,7 @@ def _fibonacci_rotated(rotation, out):
 
 
 @njit(**_OPTIONS)
-def _rotated_copies(nodes, rotations, out):
+def _rotated_copies(nodes: FloatArray, rotations: Float64Array, out: Float64Array) -> None:
     m = nodes.shape[0]
     for c in prange(rotations.shape[0]):
         for i in range(m):
@@ -63,7 +74,7 @@ def _rotated_copies(nodes, rotations, out):
                 out[c * m + i, k] = rotations[c, k, 0] * x + rotations[c, k, 1] * y + rotations[c, k, 2] * z
 
 
-def compiled_sample(peer: Peer, n: int, rng, points: str = "random") -> np.ndarray:
+def compiled_sample(peer: Peer, n: int, rng: RNGLike, points: PointSet = "random") -> FloatArray:
     """``peer.sample(n, rng=rng, points=points)`` (float64), computed by a compiled, parallel kernel.
 
     Parameters

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._typing import Domain
 from ...integrands import INTEGRANDS
 from ...peers import PEERS
 from ...points import POINT_SETS
@@ -297,7 +298,7 @@ def resolve_config(config: str | StudyConfig) -> StudyConfig:
     raise ValueError(f"'config' must be one of {', '.join(repr(c) for c in CONFIGS)} or a StudyConfig, got {config!r}")
 
 
-def domains(config: StudyConfig) -> list[str]:
+def domains(config: StudyConfig) -> list[Domain]:
     """The domains of *config*'s integrands: ``'sphere'`` before ``'hemisphere'``."""
     present = {INTEGRANDS[g].domain for g in config.integrands}
     return [d for d in DOMAINS if d in present]

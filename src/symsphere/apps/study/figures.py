@@ -7,10 +7,15 @@ matplotlib is imported inside the functions that draw, so that importing the stu
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
-from ...integrands import INTEGRANDS
+from ..._typing import ChiDomain, FloatArray, MapMethod, PointSet
+from ...integrands import INTEGRANDS, Integrand
 from ...peers import PEERS
 from ...warps import (
     METHODS,
@@ -22,8 +27,11 @@ from ...warps import (
 )
 from .._format import format_p
 from .config import WARP_MAPS, StudyConfig, domains
-from .results import Results, key
+from .results import Progress, Results, key
 from .samplers import Sampler, all_samplers
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["density_samplers", "warp_maps", "write_figures"]
 
@@ -54,7 +62,8 @@ _POINT_STYLES = {
 
 def density_samplers(config: StudyConfig) -> list[Sampler]:
     """The samplers that get a density map: one per name, with random points."""
-    seen, out = set(), []
+    seen: set[str] = set()
+    out: list[Sampler] = []
     for sampler in all_samplers(config):
         if sampler.points == "random" and sampler.name not in seen and not sampler.is_rule:
             seen.add(sampler.name)
@@ -65,7 +74,7 @@ def density_samplers(config: StudyConfig) -> list[Sampler]:
 def warp_maps(config: StudyConfig) -> list[str]:
     """The maps of :data:`~.config.WARP_MAPS` that *config* has (as a scheme map or a peer)."""
     peers = {p for p, _ in config.sphere_peers + config.hemisphere_peers}
-    out = []
+    out: list[str] = []
     for name in WARP_MAPS:
         if name in METHODS:
             if name in config.scheme_methods:
@@ -75,7 +84,7 @@ def warp_maps(config: StudyConfig) -> list[str]:
     return out
 
 
-def _figure(size):
+def _figure(size: tuple[float, float]) -> Figure:
     # The object-oriented API with an Agg canvas: no pyplot state, no GUI backend (as the demo).
     # Function-level: matplotlib loads only when a figure is drawn.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -86,7 +95,7 @@ def _figure(size):
     return figure
 
 
-def write_figures(results: Results, build_dir, bar) -> None:
+def write_figures(results: Results, build_dir: Path, bar: Progress) -> None:
     """Draw every figure of :func:`~.run.study_files` into *build_dir*, advancing the progress *bar* by one each."""
     config = results.config
     by_label = {(s.name, s.points): s for s in all_samplers(config)}
@@ -108,18 +117,20 @@ def write_figures(results: Results, build_dir, bar) -> None:
         bar.update(1)
 
 
-def _style(name, points, method=None):
+def _style(name: str, points: PointSet, method: MapMethod | None = None) -> dict[str, Any]:
     colour = _METHOD_COLOURS[method] if method else _PEER_COLOURS.get(name, "#7f7f7f")
     line, marker = _POINT_STYLES[points]
     return dict(color=colour, linestyle=line, marker=marker, markersize=3.5, linewidth=1.2)
 
 
-def _convergence_figure(path, results, integrand, by_label):
+def _convergence_figure(
+    path: Path, results: Results, integrand: Integrand, by_label: dict[tuple[str, PointSet], Sampler]
+) -> None:
     rows = [r for r in results.convergence if r["integrand"] == integrand.name]
     relative = integrand.exact != 0
     column = "relative_rmse" if relative else "rmse"
     floor = 1e-17
-    series = {}
+    series: dict[tuple[str, PointSet], list[dict[str, Any]]] = {}
     for r in rows:
         series.setdefault((r["sampler"], r["points"]), []).append(r)
     summary = {(r["sampler"], r["points"]): r for r in results.summary if r["integrand"] == integrand.name}
@@ -173,10 +184,10 @@ def _convergence_figure(path, results, integrand, by_label):
     figure.savefig(path, dpi=90)
 
 
-def _discrepancy_figure(path, results, by_label):
+def _discrepancy_figure(path: Path, results: Results, by_label: dict[tuple[str, PointSet], Sampler]) -> None:
     figure = _figure((16.5, 6.2))
     scheme, weighted_axes, peers = figure.subplots(1, 3, sharey=True)
-    groups = {}
+    groups: dict[tuple[str, PointSet], list[dict[str, Any]]] = {}
     for row in results.discrepancy:
         groups.setdefault((row["sampler"], row["points"]), []).append(row)
     fits = {(f["sampler"], f["points"]): f for f in results.discrepancy_fits}
@@ -229,7 +240,7 @@ def _discrepancy_figure(path, results, by_label):
     figure.savefig(path, dpi=80)
 
 
-def _density_figure(path, results, sampler):
+def _density_figure(path: Path, results: Results, sampler: Sampler) -> None:
     from matplotlib.colors import LogNorm  # function-level: see _figure
 
     n = results.config.density_samples
@@ -276,13 +287,17 @@ _WARP_CAPTIONS = {
 }
 
 
-def _warp_setup(name):
+_Warp = tuple[ChiDomain, Callable[[FloatArray], FloatArray], Callable[[npt.ArrayLike], FloatArray], str]
+
+
+def _warp_setup(name: str) -> _Warp:
     """(domain, forward uv -> d, pdf, title) of a map that gets a warp picture."""
     if name in METHODS:
+        method: MapMethod = name  # narrowed by the test above, kept for the lambdas
         return (
             "triangle",
-            lambda uv: square_to_triangle(uv, name),
-            lambda p: square_to_triangle_pdf(p, name),
+            lambda uv: square_to_triangle(uv, method),
+            lambda p: square_to_triangle_pdf(p, method),
             f"{name}: unit square -> T0",
         )
     peer = PEERS[name]
@@ -299,17 +314,17 @@ def _warp_setup(name):
     raise ValueError(f"no warp picture for {name!r}")  # pragma: no cover
 
 
-def _phi_cos(d):
+def _phi_cos(d: FloatArray) -> tuple[FloatArray, FloatArray]:
     return np.arctan2(d[..., 1], d[..., 0]), np.clip(d[..., 2], -1.0, 1.0)
 
 
-def _broken(phi, cos):
+def _broken(phi: FloatArray, cos: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Insert NaN where a curve jumps across phi = +-pi, so that it is not drawn across the picture."""
     jumps = np.nonzero(np.abs(np.diff(phi)) > math.pi)[0]
     return np.insert(phi, jumps + 1, np.nan), np.insert(cos, jumps + 1, np.nan)
 
 
-def _warp_figure(path, results, name):
+def _warp_figure(path: Path, results: Results, name: str) -> None:
     from matplotlib.colors import LogNorm  # function-level: see _figure
 
     from ...bins import bin_probabilities, equal_area_bins
@@ -345,7 +360,10 @@ def _warp_figure(path, results, name):
         expected = np.where(uniform > 0.3 * full, result.expected / np.where(uniform > 0, uniform, 1), np.nan)
     phi_edges, cos_edges = equal_area_bins(domain, bins)
     norm = LogNorm(vmin=0.25, vmax=4.0)
-    clipped = lambda a: np.clip(a, 1 / 8, 8)  # noqa: E731
+
+    def clipped(a: FloatArray) -> FloatArray:
+        return np.clip(a, 1 / 8, 8)
+
     observed_axes.pcolormesh(np.degrees(phi_edges), cos_edges, clipped(observed).T, cmap="RdBu_r", norm=norm)
     mesh = expected_axes.pcolormesh(np.degrees(phi_edges), cos_edges, clipped(expected).T, cmap="RdBu_r", norm=norm)
     results.warp_chi2[name] = result.p_value

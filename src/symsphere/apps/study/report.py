@@ -10,22 +10,27 @@ from __future__ import annotations
 import html
 import math
 import os
+from collections.abc import Iterable
 
 import numba
 
 from ... import __version__
+from ..._typing import Domain
 from ...integrands import INTEGRANDS
 from ...symmetry import orbit_size
 from .._format import format_p
-from .config import BASELINE, CONFIGS, FAMILY_SIGNIFICANCE, ROUNDING_LEVEL, domains
+from .config import BASELINE, CONFIGS, FAMILY_SIGNIFICANCE, ROUNDING_LEVEL, StudyConfig, domains
 from .figures import density_samplers, warp_maps
-from .results import CHI2_COLUMNS, CONVERGENCE_COLUMNS, DISCREPANCY_COLUMNS, SUMMARY_COLUMNS, Results
-from .samplers import all_samplers, samplers
+from .results import CHI2_COLUMNS, CONVERGENCE_COLUMNS, DISCREPANCY_COLUMNS, SUMMARY_COLUMNS, Results, Row
+from .samplers import Sampler, all_samplers, samplers
 
 __all__ = ["report_html", "report_markdown"]
 
+_Label = tuple[str, str]  # (sampler name, points)
+_Comparison = tuple[_Label, _Label, str, dict[str, "float | None"]]
 
-def _g(x, digits=3):
+
+def _g(x: float | None, digits: int = 3) -> str:
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "–"
     if isinstance(x, float) and math.isinf(x):
@@ -33,7 +38,7 @@ def _g(x, digits=3):
     return f"{x:.{digits}g}"
 
 
-def _slope_text(row):
+def _slope_text(row: Row) -> str:
     if row["status"] == "exact":
         return "exact"
     if math.isnan(row["slope"]):
@@ -41,7 +46,7 @@ def _slope_text(row):
     return f"{row['slope']:.2f} ± {row['slope_se']:.2f}"
 
 
-def _efficiency_text(row):
+def _efficiency_text(row: Row) -> str:
     if row["status"] == "exact":
         return "∞ (exact)"
     if math.isinf(row["efficiency"]):
@@ -49,14 +54,22 @@ def _efficiency_text(row):
     return _g(row["relative_efficiency"])
 
 
-def _lookup(rows, **match):
+def _lookup(rows: list[Row], **match: object) -> Row | None:
     for row in rows:
         if all(row[k] == v for k, v in match.items()):
             return row
     return None
 
 
-def _mse_ratio(results, integrand, a, b):
+def _row(rows: list[Row], **match: object) -> Row:
+    """The row of *rows* that matches (the caller knows there is one)."""
+    row = _lookup(rows, **match)
+    if row is None:  # pragma: no cover - a bug, not a user error
+        raise LookupError(f"no row with {match}")
+    return row
+
+
+def _mse_ratio(results: Results, integrand: str, a: _Label, b: _Label) -> float | None:
     """MSE of b over MSE of a at the largest n (above 1: a is more accurate); None if a sampler is missing.
 
     inf if a alone is exact (rounding level), 0 if b alone is, NaN if both are.
@@ -73,7 +86,8 @@ def _mse_ratio(results, integrand, a, b):
         return math.inf
     if b_exact:
         return 0.0
-    return (rb["rmse_at_n_max"] / ra["rmse_at_n_max"]) ** 2
+    ratio: float = (rb["rmse_at_n_max"] / ra["rmse_at_n_max"]) ** 2
+    return ratio
 
 
 _COMPARISONS = (
@@ -120,11 +134,11 @@ _COMPARISONS = (
 )
 
 
-def _comparison_rows(results):
+def _comparison_rows(results: Results) -> tuple[list[_Comparison], list[str]]:
     config = results.config
-    rows = []
+    rows: list[_Comparison] = []
     for a, b, what in _COMPARISONS:
-        ratios = {}
+        ratios: dict[str, float | None] = {}
         for g in config.integrands:
             ratios[g] = _mse_ratio(results, g, a, b)
         if all(v is None for v in ratios.values()):
@@ -133,8 +147,8 @@ def _comparison_rows(results):
     return rows, [g for g in config.integrands if INTEGRANDS[g]]
 
 
-def _range_text(values):
-    values = [v for v in values if v is not None and math.isfinite(v) and v > 0]
+def _range_text(ratios: Iterable[float | None]) -> str:
+    values = [v for v in ratios if v is not None and math.isfinite(v) and v > 0]
     if not values:
         return "–"
     low, high = min(values), max(values)
@@ -144,23 +158,31 @@ def _range_text(values):
     return f"{_g(low)} to {_g(high)} (geometric mean {_g(geometric)})"
 
 
-def _findings(results):
+def _complete(ratios: dict[str, float | None]) -> dict[str, float] | None:
+    """*ratios*, or None if a sampler is missing for one of them."""
+    if any(v is None for v in ratios.values()):
+        return None
+    return {g: v for g, v in ratios.items() if v is not None}
+
+
+def _findings(results: Results) -> list[str]:
     """Sentences computed from the measurements (never assumed)."""
     config = results.config
-    by_label = {(s.name, s.points): s for s in all_samplers(config)}
-    out = []
+    by_label: dict[_Label, Sampler] = {(s.name, s.points): s for s in all_samplers(config)}
+    out: list[str] = []
     sphere = [g for g in config.integrands if INTEGRANDS[g].domain == "sphere"]
     hemisphere = [g for g in config.integrands if INTEGRANDS[g].domain == "hemisphere"]
 
-    def ratios(a, b, names):
-        return {g: _mse_ratio(results, g, a, b) for g in names}
+    def ratios(a: _Label, b: _Label, names: list[str]) -> dict[str, float] | None:
+        return _complete({g: _mse_ratio(results, g, a, b) for g in names})
 
     ea, ea_sobol = ("symsphere_equal_area", "random"), ("symsphere_equal_area", "sobol")
+    domain: Domain
     for domain, names in (("sphere", sphere), ("hemisphere", hemisphere)):
         baseline = BASELINE[domain]
         count = orbit_size(domain)
         r = ratios(ea, baseline, names)
-        if not names or any(v is None for v in r.values()):
+        if not names or r is None:
             continue
         exact = [g for g, v in r.items() if math.isinf(v)]
         finite = {g: v for g, v in r.items() if math.isfinite(v)}
@@ -187,26 +209,26 @@ def _findings(results):
         for points in ("random", "sobol"):
             names = sphere + hemisphere
             r = ratios(("symsphere_equal_area", points), (f"symsphere_{method}", points), names)
-            if names and all(v is not None for v in r.values()):
-                finite = [v for v in r.values() if math.isfinite(v)]
-                if not finite:
+            if names and r is not None:
+                finite_values = [v for v in r.values() if math.isfinite(v)]
+                if not finite_values:
                     continue
                 out.append(
                     f"**The paper's {method} map, {points} points.** Weighted by 1/pdf (unbiased), its MSE is "
-                    f"{_range_text(finite)} times that of equal_area at the largest n "
+                    f"{_range_text(finite_values)} times that of equal_area at the largest n "
                     f"({', '.join(f'{g}: {_g(v)}' for g, v in r.items())})."
                 )
     for peer in ("classic", "octahedral"):
         r = ratios(ea_sobol, (peer, "sobol"), sphere)
-        if sphere and all(v is not None for v in r.values()):
-            finite = [v for v in r.values() if math.isfinite(v)]
-            if finite:
+        if sphere and r is not None:
+            finite_values = [v for v in r.values() if math.isfinite(v)]
+            if finite_values:
                 out.append(
                     f"**QMC: orbits of scrambled Sobol' points vs Sobol' on the {peer} map.** MSE ratio "
-                    f"({peer}/equal_area) at the largest n: {_range_text(finite)} "
+                    f"({peer}/equal_area) at the largest n: {_range_text(finite_values)} "
                     f"({', '.join(f'{g}: {_g(v)}' for g, v in r.items())})."
                 )
-    slopes = []
+    slopes: list[str] = []
     for name, points in (
         ea,
         ea_sobol,
@@ -232,7 +254,7 @@ def _findings(results):
             + "."
         )
     fits = {(f["sampler"], f["points"]): f for f in results.discrepancy_fits}
-    parts = []
+    parts: list[str] = []
     for key in (
         ea,
         ea_sobol,
@@ -274,7 +296,7 @@ def _findings(results):
     return out
 
 
-def _best_randomized(results):
+def _best_randomized(results: Results) -> list[str]:
     """Per integrand: the most accurate randomized sampler at the largest n, and the most efficient one.
 
     Randomized: every sampler whose estimate is random (the deterministic Fibonacci and Lebedev rules
@@ -287,7 +309,10 @@ def _best_randomized(results):
         rows = [r for r in results.summary if r["integrand"] == g and labels[(r["sampler"], r["points"])].is_random]
         if len(rows) < 2:
             continue
-        label = lambda r: f"{r['sampler']}/{r['points']}"  # noqa: E731
+
+        def label(r: Row) -> str:
+            return f"{r['sampler']}/{r['points']}"
+
         exact = [r for r in rows if r["status"] == "exact" or not math.isfinite(r["efficiency"])]
         rest = [r for r in rows if r not in exact]
         text = f"`{g}`: " + (
@@ -307,7 +332,7 @@ def _best_randomized(results):
     return out
 
 
-def _lebedev_text(results):
+def _lebedev_text(results: Results) -> list[str]:
     """Per integrand: the deterministic Lebedev rule's error at its largest size against the best randomized
     sampler at the same budget, and the n that sampler needs to match it."""
     config = results.config
@@ -433,7 +458,7 @@ def report_markdown(results: Results) -> str:
         ]
         for sampler in samplers(config, domain):
             cells = [
-                _efficiency_text(_lookup(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
+                _efficiency_text(_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
                 for g in names
             ]
             lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
@@ -446,7 +471,7 @@ def report_markdown(results: Results) -> str:
         ]
         for sampler in samplers(config, domain):
             cells = [
-                _slope_text(_lookup(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
+                _slope_text(_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
                 for g in names
             ]
             lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
@@ -499,9 +524,7 @@ def report_markdown(results: Results) -> str:
         for row in results.summary:
             if row["integrand"] != g:
                 continue
-            last = _lookup(
-                results.convergence, integrand=g, sampler=row["sampler"], points=row["points"], n=row["n_max"]
-            )
+            last = _row(results.convergence, integrand=g, sampler=row["sampler"], points=row["points"], n=row["n_max"])
             lines.append(
                 f"| {row['sampler']} | {row['points']} | {row['n_max']} | {_g(row['relative_rmse_at_n_max'])} | "
                 f"{_g(last['mean_error'])} ± {_g(last['mean_error_se'], 2)} | {_slope_text(row)} | "
@@ -600,7 +623,7 @@ def report_markdown(results: Results) -> str:
     return "\n".join(lines)
 
 
-def _reproduce(config, seed):
+def _reproduce(config: StudyConfig, seed: int) -> str:
     base = CONFIGS.get(config.name.split(" ")[0])
     if base is not None:
         command = f"symsphere study --config {base.name} --seed {seed}"
@@ -613,17 +636,18 @@ def _reproduce(config, seed):
     return "a custom configuration: `symsphere.apps.study.run_study(config=StudyConfig(...))` with the values above."
 
 
-def _yes(flag):
+def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
 
-def _sampler_note(sampler):
+def _sampler_note(sampler: Sampler) -> str:
     if sampler.is_scheme:
         note = f"the scheme: `{sampler.method}` map onto T0, orbits of {sampler.orbit_size}, `integrate()`"
         if not sampler.uniform:
             note += " (the paper's map as printed, weighted by 1/pdf)"
         return note
     peer = sampler.peer
+    assert peer is not None  # not the scheme
     note = peer.reference.split(";")[0] + ("; *compiled*" if sampler.is_compiled else "; numpy")
     if peer.is_random and peer.orbit_size is None:  # one random choice for all rows: the rotation
         note += " (a new random rotation per repetition)"
@@ -656,7 +680,7 @@ def report_html(text: str, title: str = "report") -> str:
     """
     import markdown  # function-level: only a finished study needs it (~50 ms to import)
 
-    body = markdown.markdown(text, extensions=["tables", "fenced_code"], output_format="html")
+    body: str = markdown.markdown(text, extensions=["tables", "fenced_code"], output_format="html")
     style = (
         "body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;line-height:1.4}"
         "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}"

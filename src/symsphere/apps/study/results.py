@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import zlib
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -17,6 +17,8 @@ from .config import StudyConfig
 
 __all__ = [
     "CHI2_COLUMNS",
+    "Progress",
+    "Row",
     "CONVERGENCE_COLUMNS",
     "DISCREPANCY_COLUMNS",
     "Results",
@@ -90,6 +92,18 @@ CHI2_COLUMNS = (
 """Columns of ``chi2.csv``: one row per test."""
 
 
+Row = dict[str, Any]
+"""A row of a table: column name -> value (str, int, float, bool, or a fit for ``discrepancy_fits``)."""
+
+
+class Progress(Protocol):
+    """The study's progress bar (a ``tqdm``): the two methods the stages call."""
+
+    def set_postfix_str(self, s: str = "", refresh: bool = True) -> None: ...
+
+    def update(self, n: float = 1) -> bool | None: ...
+
+
 def key(text: str) -> int:
     """A stable non-negative integer for a name (part of a SeedSequence spawn key).
 
@@ -108,11 +122,11 @@ class Results:
 
     config: StudyConfig
     seed: int
-    convergence: list[dict[str, Any]] = field(default_factory=list)  # rows: column name -> value
-    summary: list[dict[str, Any]] = field(default_factory=list)
-    discrepancy: list[dict[str, Any]] = field(default_factory=list)
-    discrepancy_fits: list[dict[str, Any]] = field(default_factory=list)
-    chi2: list[dict[str, Any]] = field(default_factory=list)
+    convergence: list[Row] = field(default_factory=list)
+    summary: list[Row] = field(default_factory=list)
+    discrepancy: list[Row] = field(default_factory=list)
+    discrepancy_fits: list[Row] = field(default_factory=list)
+    chi2: list[Row] = field(default_factory=list)
     stage_seconds: dict[str, float] = field(default_factory=dict)
     warp_chi2: dict[str, float] = field(default_factory=dict)  # warp name -> p-value
 

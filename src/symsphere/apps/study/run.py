@@ -12,12 +12,15 @@ import math
 import os
 import time
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Literal, cast
 
 import numpy as np
 
+from ..._typing import FloatArray
 from ..._validation import check_seed
-from ...integrands import INTEGRANDS
+from ...integrands import INTEGRANDS, Integrand
 from ...io import atomic_directory
 from ...peers import PEERS
 from ...quality import LOG_FLOOR, SlopeFit, cap_discrepancy_squared, fit_slope, rmse
@@ -30,7 +33,9 @@ from .results import (
     CONVERGENCE_COLUMNS,
     DISCREPANCY_COLUMNS,
     SUMMARY_COLUMNS,
+    Progress,
     Results,
+    Row,
     key,
 )
 from .samplers import Sampler, samplers, weighted
@@ -57,7 +62,7 @@ def study_files(config: str | StudyConfig = "full") -> list[str]:
     return files
 
 
-def _replaceable():
+def _replaceable() -> set[str]:
     """Every name a study of any configuration can write: an earlier study's folder may be replaced."""
     names = {
         "report.md",
@@ -75,7 +80,7 @@ def _replaceable():
 
 
 def run_study(
-    out_dir: str | os.PathLike = "study-report",
+    out_dir: str | os.PathLike[str] = "study-report",
     *,
     config: str | StudyConfig = "full",
     seed: int = 0,
@@ -161,7 +166,7 @@ def run_study(
 # --- convergence -----------------------------------------------------------------
 
 
-def _convergence_cells(config):
+def _convergence_cells(config: StudyConfig) -> list[tuple[Integrand, Sampler]]:
     cells = []
     for g in config.integrands:
         integrand = INTEGRANDS[g]
@@ -170,12 +175,12 @@ def _convergence_cells(config):
     return cells
 
 
-def _run_convergence(results, cells, bar):
+def _run_convergence(results: Results, cells: list[tuple[Integrand, Sampler]], bar: Progress) -> None:
     """RMSE and timings.  The samplers of one integrand are interleaved (for each n and repetition, one
     estimate of every sampler in turn), so that a change of the machine's load between cells biases
     no sampler's timing against another's."""
     config = results.config
-    groups = {}
+    groups: dict[str, tuple[Integrand, list[Sampler]]] = {}
     for integrand, sampler in cells:
         groups.setdefault(integrand.name, (integrand, []))[1].append(sampler)
     step = 1.0 / config.repetitions
@@ -183,7 +188,7 @@ def _run_convergence(results, cells, bar):
         bar.set_postfix_str(f"{integrand.name}: warm-up", refresh=False)
         for sampler in group:  # numba kernels, scipy engines: not timed
             sampler.estimate(integrand.f, sampler.n_for(config.k_min), results.seed_sequence(9, key(sampler.label)))
-        rows = {sampler: [] for sampler in group}
+        rows: dict[Sampler, list[Row]] = {sampler: [] for sampler in group}
         for k in config.ks:
             estimates = {sampler: np.empty(config.repetitions) for sampler in group}
             seconds = {sampler: np.empty(config.repetitions) for sampler in group}
@@ -203,7 +208,7 @@ def _run_convergence(results, cells, bar):
     _summarise(results)
 
 
-def _convergence_row(integrand, sampler, k, estimates, seconds):
+def _convergence_row(integrand: Integrand, sampler: Sampler, k: int, estimates: FloatArray, seconds: FloatArray) -> Row:
     error = float(rmse(estimates, integrand.exact))
     repetitions = len(estimates)
     return {
@@ -224,11 +229,11 @@ def _convergence_row(integrand, sampler, k, estimates, seconds):
     }
 
 
-def _summarise(results):
-    by_cell = {}
+def _summarise(results: Results) -> None:
+    by_cell: dict[tuple[str, str, str], list[Row]] = {}
     for row in results.convergence:
         by_cell.setdefault((row["integrand"], row["sampler"], row["points"]), []).append(row)
-    summary = []
+    summary: list[Row] = []
     for (g, name, points), rows in by_cell.items():
         fit_rows = [r for r in rows if not r["rounding_level"]]
         if len(fit_rows) >= 3:
@@ -281,29 +286,30 @@ def _summarise(results):
 # --- discrepancy -------------------------------------------------------------------
 
 
-def _discrepancy_cells(config):
+def _discrepancy_cells(config: StudyConfig) -> list[tuple[Sampler, int]]:
     if "sphere" not in domains(config):
         return []
     return [(s, k) for s in samplers(config, "sphere") for k in config.discrepancy_ks]
 
 
-def _run_discrepancy(results, cells, bar):
+def _run_discrepancy(results: Results, cells: list[tuple[Sampler, int]], bar: Progress) -> None:
     config = results.config
     for sampler, k in cells:
         bar.set_postfix_str(f"discrepancy: {sampler.label}, N = {sampler.n_for(k)}", refresh=False)
         n = sampler.n_for(k)
-        plain, with_weights = [], []
+        plain_list: list[float] = []
+        weighted_list: list[float] = []
         for r in range(config.discrepancy_repetitions):
             x = sampler.sample(n, results.seed_sequence(1, key(sampler.label), k, r))
-            plain.append(max(cap_discrepancy_squared(x), 0.0))
+            plain_list.append(max(cap_discrepancy_squared(x), 0.0))
             if sampler.is_rule:  # the rule's own weights
-                with_weights.append(max(cap_discrepancy_squared(x, sampler.rule_weights(n)), 0.0))
+                weighted_list.append(max(cap_discrepancy_squared(x, sampler.rule_weights(n)), 0.0))
             elif sampler.uniform:
-                with_weights.append(plain[-1])
+                weighted_list.append(plain_list[-1])
             else:
                 w = weighted(np.ones(n), n * 4 * math.pi * sampler.pdf(x))
-                with_weights.append(max(cap_discrepancy_squared(x, w), 0.0))
-        plain, with_weights = np.array(plain), np.array(with_weights)
+                weighted_list.append(max(cap_discrepancy_squared(x, w), 0.0))
+        plain, with_weights = np.array(plain_list), np.array(weighted_list)
         results.discrepancy.append(
             {
                 "sampler": sampler.name,
@@ -319,8 +325,8 @@ def _run_discrepancy(results, cells, bar):
             }
         )
         bar.update(1)
-    fits = []
-    groups = {}
+    fits: list[Row] = []
+    groups: dict[tuple[str, str], list[Row]] = {}
     for row in results.discrepancy:
         groups.setdefault((row["sampler"], row["points"]), []).append(row)
     for (name, points), rows in groups.items():
@@ -347,7 +353,7 @@ def chi2_tests(config: StudyConfig) -> list[tuple[Sampler, str]]:
     Samplers whose rows are never independent (``orbit_size`` None) are not tested; the non-uniform
     ones are tested against their own density too.
     """
-    tests = []
+    tests: list[tuple[Sampler, str]] = []
     for domain in domains(config):
         for sampler in samplers(config, domain):
             if sampler.points != "random" or sampler.orbit_size is None:
@@ -358,20 +364,22 @@ def chi2_tests(config: StudyConfig) -> list[tuple[Sampler, str]]:
     return tests
 
 
-def _run_chi2(results, tests, bar):
+def _run_chi2(results: Results, tests: list[tuple[Sampler, str]], bar: Progress) -> None:
     from ...stats import chi2_test, one_per_orbit, uniform_pdf  # function-level: scipy.stats takes ~1 s
 
     config = results.config
-    samples = {}
+    samples: dict[Sampler, FloatArray] = {}
     for sampler, reference in tests:
         bar.set_postfix_str(f"chi2: {sampler.label} ({sampler.domain}) vs {reference}", refresh=False)
         if sampler not in samples:
             size = sampler.orbit_size
+            assert size is not None  # chi2_tests leaves out the samplers whose rows are never independent
             d = sampler.sample(
                 config.chi2_samples * size, results.seed_sequence(2, key(sampler.label), key(sampler.domain))
             )
             if size > 1:
-                d = one_per_orbit(d, size, results.seed_sequence(3, key(sampler.label), key(sampler.domain)))
+                orbit = cast(Literal[48, 24], size)  # the scheme's orbits (a peer's rows are independent: 1)
+                d = one_per_orbit(d, orbit, results.seed_sequence(3, key(sampler.label), key(sampler.domain)))
             samples[sampler] = d
         pdf = uniform_pdf(sampler.domain) if reference == "uniform" else sampler.pdf
         result = chi2_test(
@@ -397,7 +405,7 @@ def _run_chi2(results, tests, bar):
 # --- CSV ------------------------------------------------------------------------------
 
 
-def _csv_value(value):
+def _csv_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
@@ -409,7 +417,7 @@ def _csv_value(value):
     return str(value)
 
 
-def _write_csv(path, rows, columns):
+def _write_csv(path: Path, rows: list[Row], columns: Sequence[str]) -> None:
     with open(path, "w", encoding="utf-8", newline="") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(columns)

@@ -10,11 +10,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
 
 from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sphere_pdf
+from ..._typing import Domain, FloatArray, MapMethod, PointSet, RNGLike
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
 from ...warps import triangle_warp
@@ -47,20 +49,32 @@ class Sampler:
     """
 
     name: str
-    points: str
-    domain: str
-    method: str | None = None
+    points: PointSet
+    domain: Domain
+    method: MapMethod | None = None
     peer: Peer | None = None
 
     @classmethod
-    def scheme(cls, method: str, points: str, domain: str) -> Sampler:
+    def scheme(cls, method: MapMethod, points: PointSet, domain: Domain) -> Sampler:
         """The symmetric scheme with the map *method* and base *points* on *domain*."""
         return cls(f"{SCHEME_PREFIX}{method}", points, domain, method=method)
 
     @classmethod
-    def of_peer(cls, peer: Peer, points: str) -> Sampler:
+    def of_peer(cls, peer: Peer, points: PointSet) -> Sampler:
         """The peer sampler *peer* with base *points*."""
         return cls(peer.name, points, peer.domain, peer=peer)
+
+    @property
+    def _peer(self) -> Peer:
+        """The peer of a peer sampler (the scheme has none)."""
+        assert self.peer is not None, f"{self.name} is the scheme, not a peer"
+        return self.peer
+
+    @property
+    def _method(self) -> MapMethod:
+        """The map of the scheme (a peer has none)."""
+        assert self.method is not None, f"{self.name} is a peer, not the scheme"
+        return self.method
 
     @property
     def label(self) -> str:
@@ -75,32 +89,35 @@ class Sampler:
     @property
     def orbit_size(self) -> int | None:
         """Rows per orbit (1 if the rows are independent; None if they are never independent)."""
-        return orbit_size(self.domain) if self.is_scheme else self.peer.orbit_size
+        return orbit_size(self.domain) if self.is_scheme else self._peer.orbit_size
 
     @property
     def multiple(self) -> int:
         """n must be a multiple of this."""
-        return orbit_size(self.domain) if self.is_scheme else self.peer.multiple
+        return orbit_size(self.domain) if self.is_scheme else self._peer.multiple
 
     @property
     def uniform(self) -> bool:
         """Whether the density is uniform on the domain."""
-        return triangle_warp(self.method).uniform if self.is_scheme else self.peer.uniform
+        return triangle_warp(self._method).uniform if self.is_scheme else self._peer.uniform
 
     @property
     def is_rule(self) -> bool:
         """Whether this is a quadrature rule with unequal weights (the Lebedev peers)."""
-        return not self.is_scheme and self.peer.rule_weights is not None
+        return not self.is_scheme and self._peer.rule_weights is not None
 
     @property
     def is_random(self) -> bool:
         """Whether the estimate is random (False only for the deterministic peers: Fibonacci, Lebedev)."""
-        return self.is_scheme or self.peer.is_random
+        return self.is_scheme or self._peer.is_random
 
-    def rule_weights(self, n: int) -> np.ndarray:
+    def rule_weights(self, n: int) -> FloatArray:
         """The weights of a rule's n directions, normalised to add up to 1 (for the discrepancy)."""
-        w = self.peer.rule_weights(n)
-        return w / w.sum()
+        weights = self._peer.rule_weights
+        assert weights is not None, f"{self.name} is not a rule"
+        w = weights(n)
+        normalised: FloatArray = w / w.sum()
+        return normalised
 
     def n_for(self, k: int) -> int:
         """Evaluations actually used for the size 48 * 2**k (the stratified scheme rounds; a Lebedev rule
@@ -110,9 +127,9 @@ class Sampler:
             count = orbit_size(self.domain)
             side = max(1, round(math.sqrt(n // count)))
             return count * side * side
-        return n if self.is_scheme else self.peer.largest_n(n)
+        return n if self.is_scheme else self._peer.largest_n(n)
 
-    def estimate(self, f: Callable[[np.ndarray], np.ndarray], n: int, rng) -> float:
+    def estimate(self, f: Callable[[FloatArray], FloatArray], n: int, rng: RNGLike) -> float:
         """One estimate of the integral of f from n evaluations.
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
@@ -123,40 +140,41 @@ class Sampler:
         if self.is_scheme:
             replicates = None if self.points == "random" else 1
             result = integrate(
-                f, domain=self.domain, n=n, method=self.method, points=self.points, rng=rng, replicates=replicates
+                f, domain=self.domain, n=n, method=self._method, points=self.points, rng=rng, replicates=replicates
             )
             return float(result.integral)
-        if self.peer.name not in COMPILED_PEERS:
-            return self.peer.estimate(f, n, rng=rng, points=self.points)
-        d = compiled_sample(self.peer, n, rng, self.points)
-        if self.is_rule:
-            return float(np.sum(self.peer.rule_weights(n) * f(d)))
+        peer = self._peer
+        if peer.name not in COMPILED_PEERS:
+            return peer.estimate(f, n, rng=rng, points=self.points)
+        d = compiled_sample(peer, n, rng, self.points)
+        if peer.rule_weights is not None:  # self.is_rule
+            return float(np.sum(peer.rule_weights(n) * f(d)))
         # These peers are uniform on the sphere (tested in tests/apps/test_study_compiled.py): weight 4 pi, as
         # the scheme's estimator, which evaluates no pdf for a uniform map either.
         return float(4 * np.pi * np.mean(f(d)))
 
-    def sample(self, n: int, rng) -> np.ndarray:
+    def sample(self, n: int, rng: RNGLike) -> FloatArray:
         """n directions (for the scheme: n/48 or n/24 whole orbits)."""
         if self.is_scheme:
             sample = sample_sphere if self.domain == "sphere" else sample_hemisphere
-            return sample(n, method=self.method, points=self.points, rng=rng)
-        if self.peer.name in COMPILED_PEERS:
-            return compiled_sample(self.peer, n, rng, self.points)
-        return self.peer.sample(n, rng=rng, points=self.points)
+            return sample(n, method=self._method, points=self.points, rng=rng)
+        if self._peer.name in COMPILED_PEERS:
+            return compiled_sample(self._peer, n, rng, self.points)
+        return self._peer.sample(n, rng=rng, points=self.points)
 
     @property
     def is_compiled(self) -> bool:
         """Whether the directions come from a compiled kernel (the scheme, and the peers of COMPILED_PEERS)."""
-        return self.is_scheme or self.peer.name in COMPILED_PEERS
+        return self.is_scheme or self._peer.name in COMPILED_PEERS
 
-    def pdf(self, d: npt.ArrayLike) -> np.ndarray:
+    def pdf(self, d: npt.ArrayLike) -> FloatArray:
         """The density of the directions *d* with respect to solid angle."""
         if self.is_scheme:
-            return sphere_pdf(d, self.method) if self.domain == "sphere" else hemisphere_pdf(d, self.method)
-        return self.peer.pdf(d)
+            return sphere_pdf(d, self._method) if self.domain == "sphere" else hemisphere_pdf(d, self._method)
+        return self._peer.pdf(d)
 
 
-def weighted(values: npt.ArrayLike, pdf: npt.ArrayLike) -> np.ndarray:
+def weighted(values: npt.ArrayLike, pdf: npt.ArrayLike) -> FloatArray:
     """values / pdf, and 0 where the pdf is 0 or infinite.
 
     Samplers put directions there with probability 0 (the paper maps' density is infinite on the
@@ -176,13 +194,16 @@ def weighted(values: npt.ArrayLike, pdf: npt.ArrayLike) -> np.ndarray:
     return out
 
 
-def samplers(config: StudyConfig, domain: str) -> list[Sampler]:
+def samplers(config: StudyConfig, domain: Domain) -> list[Sampler]:
     """The samplers of *config* on *domain*: the scheme (every map x point set), then the peers."""
+    # StudyConfig checked its names against METHODS and POINT_SETS
     scheme = [
-        Sampler.scheme(method, points, domain) for method in config.scheme_methods for points in config.scheme_points
+        Sampler.scheme(cast(MapMethod, method), cast(PointSet, points), domain)
+        for method in config.scheme_methods
+        for points in config.scheme_points
     ]
     peers = config.sphere_peers if domain == "sphere" else config.hemisphere_peers
-    return scheme + [Sampler.of_peer(PEERS[peer], points) for peer, points in peers]
+    return scheme + [Sampler.of_peer(PEERS[peer], cast(PointSet, points)) for peer, points in peers]
 
 
 def all_samplers(config: StudyConfig) -> list[Sampler]:
