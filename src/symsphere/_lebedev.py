@@ -19,7 +19,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ._typing import DTypeLike, Float64Array, FloatArray, RNGLike
-from ._validation import check_count, check_dtype, check_rng
+from ._validation import check_bool, check_count, check_dtype, check_rng
 
 __all__ = ["LEBEDEV_ORDERS", "LEBEDEV_SIZES", "lebedev_size", "lebedev_weights", "sample_lebedev"]
 
@@ -119,7 +119,7 @@ def lebedev_size(n: int, *, randomize: bool = False) -> int:
     (974, 5810, 17430)
     """
     n = check_count(n, "n")
-    randomize = _check_randomize(randomize)
+    randomize = check_bool(randomize, "randomize")
     if n < LEBEDEV_SIZES[0]:
         raise ValueError(f"'n' must be at least {LEBEDEV_SIZES[0]} (the smallest Lebedev rule), got {n}")
     if randomize and n >= 2 * LEBEDEV_SIZES[-1]:
@@ -170,7 +170,7 @@ def sample_lebedev(
     n = check_count(n, "n")
     dtype = check_dtype(dtype)
     rng = check_rng(rng)
-    copies, size = _layout(n, _check_randomize(randomize))
+    copies, size = _layout(n, check_bool(randomize, "randomize"))
     nodes, _ = _rule(size)
     if not randomize:
         out: FloatArray = nodes.astype(dtype)
@@ -202,15 +202,9 @@ def lebedev_weights(n: int, *, randomize: bool = False) -> Float64Array:
     >>> bool(np.allclose(w, 4 * np.pi / 6))
     True
     """
-    copies, size = _layout(check_count(n, "n"), _check_randomize(randomize))
+    copies, size = _layout(check_count(n, "n"), check_bool(randomize, "randomize"))
     _, weights = _rule(size)
     return np.tile(weights / copies, copies)
-
-
-def _check_randomize(randomize: object) -> bool:
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise TypeError(f"'randomize' must be a bool, got {type(randomize).__name__}")
-    return bool(randomize)
 
 
 def _layout(n: int, randomize: bool) -> tuple[int, int]:

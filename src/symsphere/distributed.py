@@ -27,14 +27,35 @@ import copy
 import dataclasses
 import os
 import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from ._blocks import fill_range, prepare
-from ._integration import block_partials, finish, plan, to_tolerance
+from ._integration import Integrand, IntegrationResult, Partial, Plan, block_partials, finish, plan, to_tolerance
 from ._threads import start_threads
-from ._validation import MAX_TASKS, check_count, check_positive_real, short_repr
-from .points import BLOCK
+from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
+from ._validation import (
+    check_bool,
+    check_client,
+    check_count,
+    check_normal,
+    check_positive_real,
+    check_tasks,
+    short_repr,
+)
+from .points import BLOCK, BasePoints
+
+if TYPE_CHECKING:  # not at import: dask and the renderer load only when used
+    import dask.array as da
+    from distributed import Client, Future
+
+    from .render.renderer import RenderPlan, RenderResult
+    from .render.scene import Scene
+
+_T = TypeVar("_T")
 
 __all__ = ["sample_sphere", "sample_hemisphere", "integrate", "render", "connect", "local_client", "close_client"]
 
@@ -43,8 +64,14 @@ DEFAULT_CHUNK_BLOCKS = 16
 
 
 def sample_sphere(
-    n, *, chunks=48 * BLOCK * DEFAULT_CHUNK_BLOCKS, method="equal_area", points="random", rng=None, dtype=np.float64
-):
+    n: int,
+    *,
+    chunks: int = 48 * BLOCK * DEFAULT_CHUNK_BLOCKS,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+) -> da.Array:
     """A dask array of the directions of :func:`symsphere.sample_sphere`.
 
     Parameters
@@ -75,15 +102,15 @@ def sample_sphere(
 
 
 def sample_hemisphere(
-    n,
+    n: int,
     *,
-    chunks=24 * BLOCK * DEFAULT_CHUNK_BLOCKS,
-    normal=None,
-    method="equal_area",
-    points="random",
-    rng=None,
-    dtype=np.float64,
-):
+    chunks: int = 24 * BLOCK * DEFAULT_CHUNK_BLOCKS,
+    normal: npt.ArrayLike | None = None,
+    method: MapMethod = "equal_area",
+    points: PointsLike = "random",
+    rng: RNGLike = None,
+    dtype: DTypeLike = np.float64,
+) -> da.Array:
     """A dask array of the directions of :func:`symsphere.sample_hemisphere` (see :func:`sample_sphere`).
 
     Parameters
@@ -113,12 +140,17 @@ def sample_hemisphere(
     >>> bool(np.array_equal(d.compute(scheduler="threads"), local))
     True
     """
-    from ._validation import check_normal
-
     return _dask_directions(n, chunks, 24, check_normal(normal), method, points, rng, dtype)
 
 
-def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=False, **kwargs):
+def integrate(
+    f: Integrand,
+    *,
+    client: Client | None = None,
+    chunk_blocks: int = DEFAULT_CHUNK_BLOCKS,
+    progress: bool = False,
+    **kwargs: Any,
+) -> IntegrationResult:
     """:func:`symsphere.integrate` on a Dask cluster, with the identical result.
 
     Parameters
@@ -173,44 +205,51 @@ def integrate(f, *, client=None, chunk_blocks=DEFAULT_CHUNK_BLOCKS, progress=Fal
         tolerance = {k: arguments.pop(k, None) for k in ("atol", "rtol", "n_max")}
         n = arguments.pop("n", None)
         with contextlib.ExitStack() as stack:
-            clients = []  # opened at the first stage, after the arguments are checked
+            clients: list[Client] = []  # opened at the first stage, after the arguments are checked
 
-            def compute(work, requests):
+            def compute(work: Plan, requests: Sequence[tuple[int, int, int]]) -> list[list[Partial]]:
                 if not clients:
-                    _check_client(client)
+                    check_client(client)
                     clients.append(stack.enter_context(_client_or_local(client)))
                 return _compute_on(clients[0], work, requests, chunk_blocks, progress, as_completed)
 
             return to_tolerance(f, n=n, **arguments, **tolerance, compute=compute)
     work = plan(f, **arguments)
     requests = [(replicate, 0, work.blocks_per_replicate) for replicate in range(work.replicates)]
-    _check_tasks(
+    check_tasks(
         work.replicates * -(-work.blocks_per_replicate // chunk_blocks),
         "chunk_blocks",
         f"{work.replicates} replicates of {work.blocks_per_replicate} blocks in tasks of {chunk_blocks}",
     )
-    _check_progress(progress)
-    _check_client(client)  # after the arguments of the run, before any work
+    check_bool(progress, "progress")
+    check_client(client)  # after the arguments of the run, before any work
     with _client_or_local(client) as active:
         partials = _compute_on(active, work, requests, chunk_blocks, progress, as_completed)
     return finish(work, partials)
 
 
-def _compute_on(active, work, requests, chunk_blocks, progress, as_completed):
+def _compute_on(
+    active: Client,
+    work: Plan,
+    requests: Sequence[tuple[int, int, int]],
+    chunk_blocks: int,
+    progress: bool,
+    as_completed: Callable[[list[Future[Any]]], Iterable[Future[Any]]],
+) -> list[list[Partial]]:
     """The partials of each (replicate, first, stop) request, as tasks of at most chunk_blocks blocks."""
     tasks = [
         (index, replicate, first, min(first + chunk_blocks, stop))
         for index, (replicate, start, stop) in enumerate(requests)
         for first in range(start, stop, chunk_blocks)
     ]
-    _check_tasks(len(tasks), "chunk_blocks", f"{len(requests)} replicates' blocks in tasks of {chunk_blocks}")
-    partials = [[] for _ in requests]
+    check_tasks(len(tasks), "chunk_blocks", f"{len(requests)} replicates' blocks in tasks of {chunk_blocks}")
+    partials: list[list[Partial]] = [[] for _ in requests]
     if not tasks:
         return partials
     plan_future = active.scatter(work, broadcast=True, hash=False)  # a fresh key: no clash with a release in flight
     futures = [active.submit(_partials_task, plan_future, *task[1:], pure=False) for task in tasks]
     index_of = {future.key: index for index, future in enumerate(futures)}
-    results = {}
+    results: dict[int, list[Partial]] = {}
     for future in _progress(as_completed(futures), len(futures), progress, "integrating"):
         results[index_of[future.key]] = future.result()
     for number, task in enumerate(tasks):  # in task order: block order within each request
@@ -219,20 +258,20 @@ def _compute_on(active, work, requests, chunk_blocks, progress, as_completed):
 
 
 def render(
-    scene="cornell",
+    scene: Scene | str | os.PathLike[str] = "cornell",
     *,
-    client=None,
-    passes_per_task=1,
-    progress=False,
-    width=256,
-    height=192,
-    spp=96,
-    sampler="symmetric_sobol",
-    method=None,
-    pixel_filter="box",
-    seed=None,
-    integrator="path",
-):
+    client: Client | None = None,
+    passes_per_task: int = 1,
+    progress: bool = False,
+    width: int = 256,
+    height: int = 192,
+    spp: int = 96,
+    sampler: str = "symmetric_sobol",
+    method: str | None = None,
+    pixel_filter: str = "box",
+    seed: int | None = None,
+    integrator: Literal["path", "bsdf"] = "path",
+) -> RenderResult:
     """:func:`symsphere.render.render` with its sample passes on a Dask cluster, the identical image.
 
     The renderer sums every pass of samples from zero and adds the passes in order;
@@ -272,16 +311,16 @@ def render(
 
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
     passes_per_task = check_count(passes_per_task, "passes_per_task")
-    _check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
-    _check_progress(progress)
-    _check_client(client)
+    check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
+    check_bool(progress, "progress")
+    check_client(client)
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
     with _client_or_local(client) as active:
         start = time.perf_counter()
         plan_future = active.scatter(plan, broadcast=True, hash=False)
         futures = [active.submit(_render_task, plan_future, *task, pure=False) for task in tasks]
         index_of = {future.key: index for index, future in enumerate(futures)}
-        results = {}
+        results: dict[int, list[Float64Array]] = {}
         for future in _progress(as_completed(futures), len(futures), progress, f"rendering {plan.scene.name}"):
             results[index_of[future.key]] = future.result()
         workers = len(active.scheduler_info()["workers"])
@@ -292,7 +331,7 @@ def render(
     return plan.result(accum, time.perf_counter() - start, 0.0, workers)
 
 
-def connect(address, *, timeout=10):
+def connect(address: str, *, timeout: float = 10) -> Client:
     """A ``distributed.Client`` for the scheduler at *address*, or a clear error within *timeout* seconds.
 
     Parameters
@@ -345,7 +384,7 @@ def connect(address, *, timeout=10):
         ) from exc
 
 
-def local_client(workers=None):
+def local_client(workers: int | None = None) -> Client:
     """A ``LocalCluster`` client: *workers* single-threaded worker processes (default: one per core).
 
     Parameters
@@ -376,7 +415,7 @@ def local_client(workers=None):
     return Client(cluster)
 
 
-def close_client(client):
+def close_client(client: Client) -> None:
     """Close *client*, and its cluster too if it runs one of its own (as :func:`local_client`'s does).
 
     A client of a remote scheduler (:func:`connect`) is closed and its cluster left running.
@@ -394,7 +433,7 @@ def close_client(client):
     >>> client.status, cluster.status.name
     ('closed', 'closed')
     """
-    if _check_client(client) is None:
+    if check_client(client) is None:
         raise TypeError("'client' must be a distributed.Client, got None")
     cluster = getattr(client, "cluster", None)  # None for a client of a remote scheduler
     client.close()
@@ -405,7 +444,7 @@ def close_client(client):
 # --- private ---------------------------------------------------------------------
 
 
-def _integrate_arguments(kwargs):
+def _integrate_arguments(kwargs: dict[str, Any]) -> dict[str, Any]:
     allowed = {
         "domain",
         "n",
@@ -422,7 +461,9 @@ def _integrate_arguments(kwargs):
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise TypeError(f"integrate() got unexpected keyword arguments {unknown}; allowed: {sorted(allowed)}")
-    defaults = dict(domain="sphere", method="equal_area", points="random", normal=None, rng=None, replicates=None)
+    defaults: dict[str, Any] = dict(
+        domain="sphere", method="equal_area", points="random", normal=None, rng=None, replicates=None
+    )
     defaults["confidence_level"] = 0.95
     tolerance = {k: v for k, v in kwargs.items() if k in ("atol", "rtol", "n_max") and v is not None}
     kwargs = {k: v for k, v in kwargs.items() if k not in ("atol", "rtol", "n_max")}
@@ -433,28 +474,36 @@ def _integrate_arguments(kwargs):
     return {**defaults, **kwargs, **tolerance}
 
 
-def _partials_task(work, replicate, first, stop):
+def _partials_task(work: Plan, replicate: int, first: int, stop: int) -> list[Partial]:
     _single_threaded_kernels()
     # A private copy of the point sources: QMC engines are stateful, and tasks may share a process.
     work = dataclasses.replace(work, sources=tuple(copy.deepcopy(source) for source in work.sources))
     return block_partials(work, replicate, first, stop)  # a compiled f: one fused kernel call
 
 
-def _render_task(plan, first_pass, stop_pass):
+def _render_task(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[Float64Array]:
     from .render.renderer import render_passes
 
     _single_threaded_kernels()
     return render_passes(plan, first_pass, stop_pass)
 
 
-def _directions_task(source, method, count, basis, dtype, start, stop):
+def _directions_task(
+    source: BasePoints,
+    method: MapMethod,
+    count: int,
+    basis: Float64Array | None,
+    dtype: np.dtype[np.floating[Any]],
+    start: int,
+    stop: int,
+) -> FloatArray:
     _single_threaded_kernels()
     source = copy.deepcopy(source)  # QMC engines are stateful, and tasks may share a process
     out = np.empty(((stop - start) * count, 3), dtype=dtype)
     return fill_range(source, start, stop, method, count, basis, out)
 
 
-def _single_threaded_kernels():
+def _single_threaded_kernels() -> None:
     # Workers are one per core: numba's own threads would oversubscribe the cores.
     from distributed import get_worker
 
@@ -466,51 +515,38 @@ def _single_threaded_kernels():
         numba.set_num_threads(1)
 
 
-def _dask_directions(n, chunks, count, normal, method, points, rng, dtype):
-    import dask
+def _dask_directions(
+    n: int,
+    chunks: int,
+    count: int,
+    normal: Float64Array | None,
+    method: MapMethod,
+    points: PointsLike,
+    rng: RNGLike,
+    dtype: DTypeLike,
+) -> da.Array:
     import dask.array as da
+    from dask.delayed import delayed
 
     n, dtype, method, source, basis = prepare(n, count, normal, method, points, rng, dtype)
     chunks = check_count(chunks, "chunks", multiple=count * BLOCK)
     per_chunk = chunks // count
     total = n // count
-    _check_tasks(-(-total // per_chunk), "chunks", f"'n'={n} in chunks of {chunks}")
+    check_tasks(-(-total // per_chunk), "chunks", f"'n'={n} in chunks of {chunks}")
     pieces = []
     for start in range(0, total, per_chunk):
         stop = min(start + per_chunk, total)
-        task = dask.delayed(_directions_task, pure=True)(source, method, count, basis, dtype, start, stop)
+        task = delayed(_directions_task, pure=True)(source, method, count, basis, dtype, start, stop)
         pieces.append(da.from_delayed(task, shape=((stop - start) * count, 3), dtype=dtype))
-    return da.concatenate(pieces, axis=0)
-
-
-def _check_tasks(tasks, name, what):
-    if tasks > MAX_TASKS:
-        raise ValueError(
-            f"{what} make {tasks} Dask tasks, more than the {MAX_TASKS} a graph may have: "
-            f"raise '{name}', or split the run"
-        )
-
-
-def _check_progress(progress):
-    if not isinstance(progress, (bool, np.bool_)):
-        raise TypeError(f"'progress' must be True or False, got {type(progress).__name__}")
-
-
-def _check_client(client):
-    """A distributed.Client, or None for a local cluster; TypeError naming 'client' otherwise."""
-    if client is None:
-        return None
-    from distributed import Client
-
-    if not isinstance(client, Client):
-        raise TypeError(f"'client' must be a distributed.Client or None, got {type(client).__name__}")
-    return client
+    directions: da.Array = da.concatenate(pieces, axis=0)
+    return directions
 
 
 @contextlib.contextmanager
-def _client_or_local(client):
-    if _check_client(client) is not None:
-        yield client
+def _client_or_local(client: Client | None) -> Iterator[Client]:
+    given: Client | None = check_client(client)
+    if given is not None:
+        yield given
         return
     owned = local_client()
     try:
@@ -519,9 +555,10 @@ def _client_or_local(client):
         close_client(owned)
 
 
-def _progress(iterable, total, enabled, description):
+def _progress(iterable: Iterable[_T], total: int, enabled: bool, description: str) -> Iterable[_T]:
     if not enabled:
         return iterable
     from tqdm.auto import tqdm
 
-    return tqdm(iterable, total=total, desc=description, unit="task")
+    bar: Iterable[_T] = tqdm(iterable, total=total, desc=description, unit="task")
+    return bar

@@ -49,8 +49,11 @@ from ._validation import (
     check_callable,
     check_count,
     check_dtype,
+    check_file_names,
+    check_file_suffix,
     check_output_path,
     check_path,
+    check_paths,
     check_unit_directions,
     file_kind,
     short_repr,
@@ -166,9 +169,7 @@ def atomic_paths(paths: Iterable[str | os.PathLike[str]]) -> Iterator[list[Path]
     >>> open(targets[0]).read(), sorted(os.listdir(folder))        # nothing changed, nothing left over
     ('first', ['a.txt', 'b.txt'])
     """
-    if isinstance(paths, (str, bytes, os.PathLike)) or not hasattr(paths, "__iter__"):
-        raise TypeError(f"'paths' must be an iterable of file names; got {type(paths).__name__} {short_repr(paths)}")
-    with _atomic_paths([check_path(path, "paths") for path in paths], "paths") as temporaries:
+    with _atomic_paths(check_paths(paths), "paths") as temporaries:
         yield temporaries
 
 
@@ -424,7 +425,7 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
     FileExistsError: ... holds files this program did not write (report.md); refusing to replace it: ...
     """
     target = check_path(path, "path")
-    allowed = _names(replaceable)
+    allowed = check_file_names(replaceable, "replaceable")
     _check_replaceable(target, allowed)
     temporary = _temporary_name(target, "tmp")
     temporary.mkdir()
@@ -441,23 +442,6 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
     except BaseException:
         shutil.rmtree(temporary, ignore_errors=True)
         raise
-
-
-def _names(replaceable: object) -> set[str]:
-    """*replaceable* (None or a collection of str) as a set; TypeError naming 'replaceable' otherwise."""
-    if replaceable is None:
-        return set()
-    try:
-        if isinstance(replaceable, (str, bytes)):
-            raise TypeError
-        names = list(replaceable)  # type: ignore[call-overload]
-    except TypeError:
-        names = [None]
-    if not all(isinstance(entry, str) for entry in names):
-        raise TypeError(
-            f"'replaceable' must be None or a collection of file names (str); got {short_repr(replaceable)}"
-        )
-    return set(names)
 
 
 def _check_replaceable(target: Path, allowed: set[str]) -> None:
@@ -551,11 +535,7 @@ def check_suffix(path: str | os.PathLike[str], name: str = "path") -> str:
     """
     if not isinstance(name, str):
         raise TypeError(f"'name' must be a str; got {type(name).__name__} {short_repr(name)}")
-    suffix = check_path(path, name).suffix.lower()
-    if suffix not in DIRECTION_SUFFIXES:
-        allowed = ", ".join(DIRECTION_SUFFIXES)
-        raise ValueError(f"'{name}' must end in one of {allowed}, got {str(path)!r}")
-    return suffix
+    return check_file_suffix(path, DIRECTION_SUFFIXES, name)
 
 
 def stream_directions(

@@ -60,7 +60,7 @@ from scipy.spatial.transform import Rotation
 
 from ._lebedev import LEBEDEV_ORDERS, LEBEDEV_SIZES, lebedev_size, lebedev_weights, sample_lebedev
 from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
-from ._validation import check_count, check_dtype, check_rng, short_repr
+from ._validation import check_bool, check_count, check_dtype, check_rng, short_repr
 from .points import POINT_SETS, check_points, unit_square_points
 from .symmetry import orbit
 from .warps import WARPS, Warp, square_to_arvo_triangle, square_to_uniform_sphere_pdf
@@ -467,8 +467,7 @@ def sample_fibonacci(
     n = check_count(n, "n")
     dtype = check_dtype(dtype)
     rng = check_rng(rng)
-    if not isinstance(randomize, (bool, np.bool_)):
-        raise TypeError(f"'randomize' must be a bool, got {type(randomize).__name__}")
+    randomize = check_bool(randomize, "randomize")
     d = _fibonacci(n)
     if randomize:
         d = Rotation.random(rng=rng).apply(d)

@@ -29,7 +29,6 @@ distributed code cut their work.
 
 from __future__ import annotations
 
-import math
 import warnings
 from typing import TYPE_CHECKING, Any
 
@@ -39,7 +38,16 @@ from numba import njit, prange
 
 from ._threads import start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
-from ._validation import MAX_COUNT, as_float_array, check_choice, check_count, check_rng, check_size, check_sobol_size
+from ._validation import (
+    MAX_COUNT,
+    as_float_array,
+    check_count,
+    check_point_set,
+    check_rng,
+    check_size,
+    check_sobol_size,
+    check_square_count,
+)
 
 if TYPE_CHECKING:
     from scipy.stats.qmc import QMCEngine
@@ -137,7 +145,7 @@ or scipy.stats.qmc.QMCEngine
         entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
         self.root_entropy = tuple(int(e) for e in entropy)
         if self._kind == "stratified":
-            self._side = _square_side(self.total, per_point, n)
+            self._side = check_square_count(self.total, per_point, n)
         elif self._kind in ("sobol", "halton") or self._kind in _INTERLACED:
             from scipy.stats import qmc  # imported when needed: scipy.stats costs 0.3 s at start-up
 
@@ -328,35 +336,4 @@ def check_points(points: object) -> QMCEngine | None:
     ValueError: 'grid' is not a valid points; use one of {'random', 'stratified', 'sobol', 'halton', \
 'sobol_interlaced2', 'sobol_interlaced3'}
     """
-    if isinstance(points, str):
-        check_choice(points, "points", POINT_SETS)
-        return None
-    from scipy.stats import qmc  # not at import: scipy.stats costs 0.3 s at start-up
-
-    if isinstance(points, qmc.QMCEngine):
-        if points.d != 2:
-            raise ValueError(f"'points' engine must have d=2 (points of the unit square), got d={points.d}")
-        return points
-    raise TypeError(
-        f"'points' must be one of {set(POINT_SETS)} or a scipy.stats.qmc.QMCEngine, got {type(points).__name__}"
-    )
-
-
-def _square_side(m: int, per_point: int, n: int | None) -> int:
-    side = math.isqrt(m)
-    if side * side != m:
-        options = [c for c in (side * side, (side + 1) ** 2) if c > 0]
-        if per_point > 1:
-            sizes = " or ".join(f"n={per_point * c}" for c in options)
-            n = per_point * m if n is None else n
-            got = f"n={n} gives {m} ({_per(n, per_point)})"
-        else:
-            sizes = " or ".join(str(c) for c in options)
-            got = f"got {m}"
-        raise ValueError(f"points='stratified' needs a square number of base points; {got}; use {sizes}")
-    return side
-
-
-def _per(n: int, per_point: int) -> str:
-    """How *n* gives its number of base points, as the messages say it: ``n/48`` or ``ceil(n/48)``."""
-    return f"n/{per_point}" if n % per_point == 0 else f"ceil(n/{per_point})"
+    return check_point_set(points, POINT_SETS)

@@ -1,6 +1,8 @@
 """symsphere.render.renderer: ``render``, its arguments and results, determinism, passes and the ``render`` verb."""
 
+import dataclasses
 import math
+import pickle
 
 import numba
 import numpy as np
@@ -8,7 +10,16 @@ import pytest
 
 from symsphere._testing import render_integrator as K
 from symsphere.apps.cli import main
-from symsphere.render import INTEGRATORS, SAMPLERS, cornell, load_pfm, plan_passes, render, render_passes
+from symsphere.render import (
+    INTEGRATORS,
+    SAMPLERS,
+    RenderSettings,
+    cornell,
+    load_pfm,
+    plan_passes,
+    render,
+    render_passes,
+)
 
 GOOD_TOML = """
 [camera]
@@ -89,6 +100,23 @@ def test_render_result_fields():
     assert render("furnace", width=4, height=4, spp=1, sampler="cosine", seed=1).method is None
     tent = render("cornell", width=8, height=6, spp=4, pixel_filter="tent", seed=1)
     assert tent.pixel_filter == "tent" and np.all(np.isfinite(tent.image))
+
+
+def test_the_plan_and_the_result_share_one_record_of_settings():
+    plan = plan_passes("furnace", 4, 3, 5, "symmetric", "paper1", "tent", 11, "bsdf")
+    result = render("furnace", width=4, height=3, spp=5, sampler="symmetric", method="paper1", pixel_filter="tent",
+                    seed=11, integrator="bsdf")  # fmt: skip
+    expected = RenderSettings(width=4, height=3, spp=5, sampler="symmetric", method="paper1", pixel_filter="tent",
+                              seed=11, integrator="bsdf")  # fmt: skip
+    assert plan.settings() == result.settings() == expected
+    assert isinstance(plan, RenderSettings) and isinstance(result, RenderSettings)
+    names = [f.name for f in dataclasses.fields(RenderSettings)]
+    assert names == ["width", "height", "spp", "sampler", "method", "pixel_filter", "seed", "integrator"]
+    assert [getattr(result, name) for name in names] == [4, 3, 5, "symmetric", "paper1", "tent", 11, "bsdf"]
+    assert result.scene == plan.scene.name and result.paths == 4 * 3 * 5
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.spp = 6  # type: ignore[misc]
+    assert pickle.loads(pickle.dumps(plan)).settings() == expected  # Dask ships plans to workers
 
 
 @pytest.mark.parametrize(

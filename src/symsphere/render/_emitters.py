@@ -27,8 +27,8 @@ any other parallelogram by area.  Area densities are converted to solid
 angle, ``p_w = d^2 / (|cos_l| A)``.  :func:`emitter_pdf` makes the same case
 analysis for a hit found by BSDF sampling.
 
-The local frame (:func:`to_world`, :func:`rows_to_world`; the frame is
-:func:`symsphere.frames.frame_rows`) and :data:`INV_2PI` are shared with the
+The local frame (:func:`rows_to_world`, the scalar twin of :func:`symsphere.frames.to_world`, in
+the frame of :func:`symsphere.frames.frame_rows`) and :data:`INV_2PI` are shared with the
 integrator, which imports them from here.
 """
 
@@ -53,7 +53,6 @@ __all__ = [
     "rows_to_world",
     "sample_emitter",
     "spherical_rectangle",
-    "to_world",
 ]
 
 INV_2PI = 0.5 / math.pi
@@ -73,15 +72,9 @@ _TWO_M31 = 2.0**-31
 
 
 @register_jitable
-def to_world(lx, ly, lz, nx, ny, nz):
-    """Local (x, y, z) about the unit normal n (z along n) to world coordinates."""
-    t, b = frame_rows(nx, ny, nz)
-    return rows_to_world(lx, ly, lz, t, b, nx, ny, nz)
-
-
-@register_jitable
 def rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
-    """:func:`to_world` with the frame's rows t, b (``frames.frame_rows(n)``) already at hand."""
+    """Local (x, y, z) to world coordinates in the frame (t, b, n) of the unit normal n (z along n), the
+    scalar twin of :func:`symsphere.frames.to_world`: t, b are ``frames.frame_rows(nx, ny, nz)``."""
     return (
         lx * t[0] + ly * b[0] + lz * nx,
         lx * t[1] + ly * b[1] + lz * ny,
@@ -237,7 +230,9 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
                 w = u * one_minus_cos_max  # 1 - cos theta
                 scale = math.sqrt(max(0.0, one_minus_cos_max * (2.0 - w)))  # sin theta / sqrt(u)
                 inv = 1.0 / math.sqrt(d2)
-                wx, wy, wz = to_world(x * scale, y * scale, 1.0 - w, ex * inv, ey * inv, ez * inv)
+                ax, ay, az = ex * inv, ey * inv, ez * inv  # the cone's axis
+                t_row, b_row = frame_rows(ax, ay, az)
+                wx, wy, wz = rows_to_world(x * scale, y * scale, 1.0 - w, t_row, b_row, ax, ay, az)
                 # the distance to the sphere along w: the nearer root of |p + t w - c|^2 = r^2
                 b = ex * wx + ey * wy + ez * wz
                 dist = b - math.sqrt(max(0.0, b * b - (d2 - spheres[4, obj])))

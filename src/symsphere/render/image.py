@@ -15,14 +15,24 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 from __future__ import annotations
 
 import io
-import math
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
-from .._validation import check_finite_array, check_path, read_regular_file, real_number, short_repr
+from .._typing import Float64Array, FloatArray
+from .._validation import (
+    check_exposure,
+    check_file_suffix,
+    check_finite_array,
+    check_float32_range,
+    check_image,
+    check_path,
+    check_paths,
+    read_regular_file,
+)
 from ..io import atomic_paths
 
 __all__ = [
@@ -43,28 +53,7 @@ IMAGE_SUFFIXES = (".png", ".pfm", ".npy")
 """The suffixes (lower case; matched case-insensitively) :func:`save_image` and :func:`save_image_set` write."""
 
 
-def _check_image(image, name="image") -> np.ndarray:
-    try:
-        image = np.asarray(image)
-    except (TypeError, ValueError):
-        raise TypeError(f"'{name}' must be an array of shape (height, width, 3)") from None
-    if image.ndim != 3 or image.shape[2] != 3 or image.shape[0] < 1 or image.shape[1] < 1:
-        raise ValueError(f"'{name}' must have shape (height, width, 3), got {image.shape}")
-    if not np.issubdtype(image.dtype, np.floating):
-        raise TypeError(f"'{name}' must be a floating-point array, got dtype {image.dtype}")
-    return image
-
-
-def _check_suffix(path: str | os.PathLike, allowed: tuple[str, ...], name: str = "path") -> str:
-    if isinstance(path, (bytes, bytearray)) or not isinstance(path, (str, os.PathLike)):
-        raise TypeError(f"'{name}' must be a str or os.PathLike, got {type(path).__name__}")
-    suffix = Path(path).suffix.lower()
-    if suffix not in allowed:
-        raise ValueError(f"'{name}' must end in {' or '.join(allowed)}, got {str(path)!r}")
-    return suffix
-
-
-def _encode(suffix: str, image: np.ndarray, exposure: float) -> bytes:
+def _encode(suffix: str, image: FloatArray, exposure: float) -> bytes:
     """The bytes of *image* (checked) in the format of *suffix*: made before any temporary file exists."""
     buffer = io.BytesIO()
     if suffix == ".png":
@@ -80,27 +69,7 @@ def _encode(suffix: str, image: np.ndarray, exposure: float) -> bytes:
     return buffer.getvalue()
 
 
-def _check_float32_range(image: np.ndarray) -> None:
-    """A PFM holds float32: finite values beyond its range would turn into inf (NaN and inf are kept)."""
-    finite = image[np.isfinite(image)]
-    largest = float(np.max(np.abs(finite))) if finite.size else 0.0
-    limit = float(np.finfo(np.float32).max)
-    if largest > limit:
-        raise ValueError(
-            f"'image' has values up to {largest:.3g}, beyond float32's {limit:.3g}, which a PFM cannot hold"
-        )
-
-
-def _check_exposure(exposure: object) -> float:
-    value = real_number(exposure)
-    if value is None:
-        raise TypeError(f"'exposure' must be a positive number, got {type(exposure).__name__}")
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"'exposure' must be a positive finite number, got {short_repr(exposure)}")
-    return value
-
-
-def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
+def linear_to_srgb(c: npt.ArrayLike) -> Float64Array:
     """The sRGB transfer function (IEC 61966-2-1) of linear values, elementwise, as float64.
 
     Parameters
@@ -131,12 +100,12 @@ def linear_to_srgb(c: npt.ArrayLike) -> np.ndarray:
     return _srgb(check_finite_array(c, "c").astype(np.float64))
 
 
-def _srgb(c: np.ndarray) -> np.ndarray:
+def _srgb(c: Float64Array) -> Float64Array:
     with np.errstate(over="ignore"):  # finite input: c ** (1/2.4) cannot overflow
         return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0.0031308), 1 / 2.4) - 0.055)
 
 
-def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
+def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> npt.NDArray[np.uint8]:
     """8-bit sRGB of a linear HDR image: ``round(255 * srgb(clip(exposure * image, 0, 1)))``.
 
     NaN (never produced by the renderer) maps to 0.
@@ -148,14 +117,14 @@ def tonemap(image: npt.ArrayLike, exposure: float = 1.0) -> np.ndarray:
     >>> tonemap(np.full((1, 2, 3), 0.5))[0, 0]
     array([188, 188, 188], dtype=uint8)
     """
-    image = _check_image(image)
-    exposure = _check_exposure(exposure)
+    image = check_image(image)
+    exposure = check_exposure(exposure)
     with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are handled next
         scaled = np.nan_to_num(image.astype(np.float64) * exposure, nan=0.0, posinf=1.0, neginf=0.0)
     return np.rint(255.0 * _srgb(np.clip(scaled, 0.0, 1.0))).astype(np.uint8)
 
 
-def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
+def save_png(path: str | os.PathLike[str], image: npt.ArrayLike, exposure: float = 1.0) -> Path:
     r"""Write the tone-mapped *image* (see :func:`tonemap`) as a PNG file, atomically.
 
     *path* must end in ``.png`` (a PNG under another name would mislead every reader).
@@ -168,11 +137,11 @@ def save_png(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.
     ...     save_png(pathlib.Path(folder) / "x.png", np.zeros((2, 3, 3))).read_bytes()[:4]
     b'\x89PNG'
     """
-    _check_suffix(path, (".png",))
+    check_file_suffix(path, (".png",))
     return save_image_set([path], image, exposure)[0]
 
 
-def save_pfm(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
+def save_pfm(path: str | os.PathLike[str], image: npt.ArrayLike) -> Path:
     r"""Write *image* as a little-endian RGB PFM (float32, bottom row first), atomically.
 
     *path* must end in ``.pfm``.
@@ -185,11 +154,11 @@ def save_pfm(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
     ...     save_pfm(pathlib.Path(folder) / "x.pfm", np.zeros((2, 3, 3))).read_bytes()[:12]
     b'PF\n3 2\n-1.0\n'
     """
-    _check_suffix(path, (".pfm",))
+    check_file_suffix(path, (".pfm",))
     return save_image_set([path], image)[0]
 
 
-def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposure: float = 1.0) -> list[Path]:
+def save_image_set(paths: Iterable[str | os.PathLike[str]], image: npt.ArrayLike, exposure: float = 1.0) -> list[Path]:
     """Write *image* to every file of *paths*, each in the format of its suffix, all or none.
 
     Parameters
@@ -222,26 +191,24 @@ def save_image_set(paths: list[str | os.PathLike], image: npt.ArrayLike, exposur
     ...     sorted(p.name for p in pathlib.Path(folder).iterdir())
     ['x.pfm', 'x.png']
     """
-    if isinstance(paths, (str, bytes, os.PathLike)) or not hasattr(paths, "__iter__"):
-        raise TypeError(f"'paths' must be a list of file names, got {type(paths).__name__}")
-    paths = list(paths)
-    suffixes = [_check_suffix(path, IMAGE_SUFFIXES, "paths") for path in paths]
-    image = _check_image(image)
-    exposure = _check_exposure(exposure)
+    targets = check_paths(paths)  # a str or a non-iterable: TypeError; an iterator: read once
+    suffixes = [check_file_suffix(path, IMAGE_SUFFIXES, "paths") for path in targets]
+    image = check_image(image)
+    exposure = check_exposure(exposure)
     if ".pfm" in suffixes:
-        _check_float32_range(image)
+        check_float32_range(image)
     # Encoded first (tone mapping, PNG compression): the temporaries exist only while the bytes are written.
     encoded = [_encode(suffix, image, exposure) for suffix in suffixes]
-    with atomic_paths(paths) as temporaries:
-        for data, temporary, path in zip(encoded, temporaries, paths, strict=False):
+    with atomic_paths(targets) as temporaries:
+        for data, temporary, path in zip(encoded, temporaries, targets, strict=False):
             try:
                 temporary.write_bytes(data)
             except OSError as exc:  # name the user's file, not the temporary next to it
                 raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
-    return [Path(path) for path in paths]
+    return targets
 
 
-def load_pfm(path: str | os.PathLike) -> np.ndarray:
+def load_pfm(path: str | os.PathLike[str]) -> npt.NDArray[np.float32]:
     """Read a PFM file (``PF`` colour or ``Pf`` grey, either endianness) as (height, width, 3 or 1) float32.
 
     Examples
@@ -253,7 +220,8 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
     (2, 3, 3)
     """
     raw = read_regular_file(check_path(path, "path"), f"'path' {str(path)!r}")  # never blocks on a FIFO
-    tokens, position = [], 0
+    tokens: list[str] = []
+    position = 0
     while len(tokens) < 4:  # magic, width, height, scale; then exactly one whitespace byte
         while position < len(raw) and raw[position : position + 1].isspace():
             position += 1
@@ -265,11 +233,11 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
         tokens.append(raw[position:end].decode("ascii", "replace"))
         position = end
     position += 1
-    magic, width, height, scale = tokens
+    magic = tokens[0]
     if magic not in ("PF", "Pf"):
         raise ValueError(f"{str(path)!r} is not a PFM file (magic {magic!r})")
     try:
-        width, height, scale = int(width), int(height), float(scale)
+        width, height, scale = int(tokens[1]), int(tokens[2]), float(tokens[3])
     except ValueError:
         raise ValueError(f"{str(path)!r} is not a PFM file (bad size or scale: {tokens[1:]})") from None
     if width < 1 or height < 1 or scale == 0:
@@ -278,11 +246,12 @@ def load_pfm(path: str | os.PathLike) -> np.ndarray:
     count = width * height * channels
     if len(raw) - position < 4 * count:
         raise ValueError(f"{str(path)!r} is truncated: expected {count} floats")
-    data = np.frombuffer(raw, dtype="<f4" if scale < 0 else ">f4", count=count, offset=position)
-    return data.astype(np.float32).reshape(height, width, channels)[::-1].copy()
+    data = np.frombuffer(raw, dtype=np.dtype("<f4" if scale < 0 else ">f4"), count=count, offset=position)
+    image: npt.NDArray[np.float32] = data.astype(np.float32).reshape(height, width, channels)[::-1].copy()
+    return image
 
 
-def save_npy(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
+def save_npy(path: str | os.PathLike[str], image: npt.ArrayLike) -> Path:
     """Write *image* with ``numpy.save``, atomically; *path* must end in ``.npy``.
 
     Examples
@@ -293,11 +262,11 @@ def save_npy(path: str | os.PathLike, image: npt.ArrayLike) -> Path:
     ...     np.load(save_npy(pathlib.Path(folder) / "x.npy", np.ones((1, 1, 3)))).tolist()
     [[[1.0, 1.0, 1.0]]]
     """
-    _check_suffix(path, (".npy",))
+    check_file_suffix(path, (".npy",))
     return save_image_set([path], image)[0]
 
 
-def save_image(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 1.0) -> Path:
+def save_image(path: str | os.PathLike[str], image: npt.ArrayLike, exposure: float = 1.0) -> Path:
     """Write *image* in the format of the suffix of *path*: .png (tone-mapped), .pfm or .npy.
 
     Examples
@@ -308,5 +277,5 @@ def save_image(path: str | os.PathLike, image: npt.ArrayLike, exposure: float = 
     ...     save_image(pathlib.Path(folder) / "x.npy", np.zeros((1, 1, 3))).suffix
     '.npy'
     """
-    _check_suffix(path, IMAGE_SUFFIXES)
+    check_file_suffix(path, IMAGE_SUFFIXES)
     return save_image_set([path], image, exposure)[0]

@@ -5,17 +5,29 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal, cast
 
 import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._validation import MAX_PATHS, MAX_PIXELS, check_count, check_index, check_seed, check_size, short_repr
+from .._typing import Float64Array
+from .._validation import (
+    MAX_PATHS,
+    MAX_PIXELS,
+    check_bool,
+    check_count,
+    check_file_suffix,
+    check_index,
+    check_seed,
+    check_size,
+    short_repr,
+)
 from . import _integrator as _k
-from .image import save_image_set
+from .image import IMAGE_SUFFIXES, save_image_set
 from .scene import Scene
 from .scenes import get_scene
 
@@ -26,6 +38,7 @@ __all__ = [
     "SYMMETRIC_SAMPLERS",
     "RenderPlan",
     "RenderResult",
+    "RenderSettings",
     "plan_passes",
     "render",
     "render_passes",
@@ -98,19 +111,57 @@ _SAMPLER_CODES = {
     "symmetric_cosine_sobol_interlaced3": _k.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
 }
 _INTEGRATOR_CODES = {"path": _k.PATH, "bsdf": _k.BSDF}
+# The numba kernels' module is typed by numba, not mypy (pyproject.toml): its one entry point, typed here.
+_render_pass: Callable[..., None] = _k.render_pass
 _PATHS_PER_PASS = 200_000  # progress granularity: a kernel call per ~0.1 s
 
 
-@dataclass(frozen=True)
-class RenderResult:
+@dataclass(frozen=True, kw_only=True)
+class RenderSettings:
+    """What a render was asked for, checked: the fields :class:`RenderPlan` and :class:`RenderResult` share.
+
+    Attributes
+    ----------
+    width, height, spp, sampler, method, pixel_filter, seed, integrator
+        The arguments of :func:`render` (``method`` None for samplers without one; ``seed`` the one
+        used, drawn from fresh entropy if none was given).
+
+    Examples
+    --------
+    >>> from symsphere.render import RenderSettings, plan_passes
+    >>> plan = plan_passes("furnace", 4, 4, 3, "cosine", None, "box", 7)
+    >>> plan.settings() == RenderSettings(width=4, height=4, spp=3, sampler="cosine", method=None,
+    ...                                   pixel_filter="box", seed=7, integrator="path")
+    True
+    """
+
+    width: int
+    height: int
+    spp: int
+    sampler: str
+    method: str | None
+    pixel_filter: str
+    seed: int
+    integrator: str = "path"
+
+    def settings(self) -> RenderSettings:
+        """These settings alone, as a :class:`RenderSettings` (from a plan or a result: equal for the same render)."""
+        return RenderSettings(**{f.name: getattr(self, f.name) for f in fields(RenderSettings)})
+
+
+@dataclass(frozen=True, kw_only=True)
+class RenderResult(RenderSettings):
     """A rendered image and how it was made.
 
     Attributes
     ----------
     image : ndarray, shape (height, width, 3)
         float64, mean linear radiance per pixel (unclamped).
-    scene, width, height, spp, sampler, method, pixel_filter, seed, integrator
-        The arguments of :func:`render` (``method`` None for samplers without one).
+    scene : str
+        The scene's name.
+    width, height, spp, sampler, method, pixel_filter, seed, integrator
+        The arguments of :func:`render`: the fields of :class:`RenderSettings`
+        (``method`` None for samplers without one); ``result.settings()`` gives them alone.
     seconds : float
         Wall time of the path tracing (after compilation / cache load).
     startup_seconds : float
@@ -128,20 +179,12 @@ class RenderResult:
     ((6, 8, 3), 384, 'path')
     """
 
-    image: np.ndarray = field(repr=False)
+    image: Float64Array = field(repr=False)
     scene: str
-    width: int
-    height: int
-    spp: int
-    sampler: str
-    method: str | None
-    pixel_filter: str
-    seed: int
     seconds: float
     startup_seconds: float
     paths: int
     threads: int
-    integrator: str = "path"
 
     @property
     def paths_per_second(self) -> float:
@@ -162,7 +205,7 @@ class RenderResult:
 
 
 def render(
-    scene: Scene | str | os.PathLike = "cornell",
+    scene: Scene | str | os.PathLike[str] = "cornell",
     *,
     width: int = 256,
     height: int = 192,
@@ -225,12 +268,12 @@ def render(
     'bsdf'
     """
     plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
-    if not isinstance(progress, (bool, np.bool_)):
-        raise TypeError(f"'progress' must be True or False; got {short_repr(progress)}")
+    progress = check_bool(progress, "progress")
     if threads is not None:
         threads = check_count(threads, "threads")
-        if threads > numba.config.NUMBA_NUM_THREADS:
-            raise ValueError(f"'threads' must be at most {numba.config.NUMBA_NUM_THREADS}, got {threads}")
+        most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # set at import by numba
+        if threads > most:
+            raise ValueError(f"'threads' must be at most {most}, got {threads}")
 
     accum = np.zeros((plan.height, plan.width, 3))
     _k.prepare_kernels()  # before numba starts its threads: passive OpenMP waiting, a fresh cache
@@ -260,8 +303,8 @@ def render(
     return plan.result(accum, seconds, startup, used_threads)
 
 
-@dataclass(frozen=True)
-class RenderPlan:
+@dataclass(frozen=True, kw_only=True)
+class RenderPlan(RenderSettings):
     """A validated render: everything a pass needs (picklable, for Dask workers).
 
     Made by :func:`plan_passes`; rendered pass by pass with :func:`render_passes`.
@@ -274,17 +317,9 @@ class RenderPlan:
     (1, (0, 10))
     """
 
-    scene: object
-    width: int
-    height: int
-    spp: int
-    sampler: str
-    method: str | None
-    pixel_filter: str
-    seed: int
-    arguments: tuple = field(repr=False)  # the kernel's scene and sampler arguments
+    scene: Scene
+    arguments: tuple[Any, ...] = field(repr=False)  # the kernel's scene and sampler arguments: arrays and codes
     per_pass: int
-    integrator: str = "path"
 
     @property
     def passes(self) -> int:
@@ -296,28 +331,21 @@ class RenderPlan:
         first = index * self.per_pass
         return first, min(self.per_pass, self.spp - first)
 
-    def result(self, accum: np.ndarray, seconds: float, startup: float, threads: int) -> RenderResult:
+    def result(self, accum: Float64Array, seconds: float, startup: float, threads: int) -> RenderResult:
         """The :class:`RenderResult` of the summed image *accum* (all passes)."""
         return RenderResult(
+            **vars(self.settings()),
             image=accum / self.spp,
             scene=self.scene.name,
-            width=self.width,
-            height=self.height,
-            spp=self.spp,
-            sampler=self.sampler,
-            method=self.method,
-            pixel_filter=self.pixel_filter,
-            seed=self.seed,
             seconds=seconds,
             startup_seconds=startup,
             paths=self.width * self.height * self.spp,
             threads=threads,
-            integrator=self.integrator,
         )
 
 
 def plan_passes(
-    scene: Scene | str | os.PathLike,
+    scene: Scene | str | os.PathLike[str],
     width: int,
     height: int,
     spp: int,
@@ -363,11 +391,11 @@ def plan_passes(
             raise ValueError(f"'method' must be one of {', '.join(METHOD_CODES)}; got {short_repr(method)}")
         code = METHOD_CODES[method]
     else:
-        code = METHOD_CODES.get(sampler, 0)
+        code = METHOD_CODES[sampler] if sampler in METHOD_CODES else 0  # the i.i.d. orbit samplers: their map
     if not isinstance(pixel_filter, str) or pixel_filter not in FILTERS:
         raise ValueError(f"'pixel_filter' must be one of {', '.join(FILTERS)}; got {short_repr(pixel_filter)}")
     if seed is None:
-        seed = int(np.random.SeedSequence().entropy)
+        seed = int(cast(int, np.random.SeedSequence().entropy))  # fresh entropy is an int
     seed = check_seed(seed)
     a = scene.arrays(width, height)
     key = np.random.SeedSequence(seed).generate_state(1, dtype=np.uint64)[0]
@@ -391,7 +419,7 @@ def plan_passes(
     )
 
 
-def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.ndarray]:
+def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[Float64Array]:
     """The images (sums, not means) of passes ``first_pass`` to ``stop_pass - 1``, each summed from zero.
 
     Examples
@@ -413,14 +441,14 @@ def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[np.
     return images
 
 
-def _render_pass_into(plan, first, count, image):
+def _render_pass_into(plan: RenderPlan, first: int, count: int, image: Float64Array) -> None:
     _k.prepare_kernels()
     rows = np.arange(plan.height, dtype=np.int64)
     with numba.parallel_chunksize(1):  # rows differ in cost: hand them out one at a time
-        _k.render_pass(*plan.arguments, first, count, rows, image)
+        _render_pass(*plan.arguments, first, count, rows, image)
 
 
-def write_outputs(result: RenderResult, out: str | os.PathLike, exposure: float = 1.0) -> list[Path]:
+def write_outputs(result: RenderResult, out: str | os.PathLike[str], exposure: float = 1.0) -> list[Path]:
     """Write ``out`` (.png, tone-mapped) and, next to it, the HDR image as ``.pfm`` and ``.npy``.
 
     *out* may end in .png, .pfm or .npy; all three files are written with the
@@ -439,10 +467,7 @@ def write_outputs(result: RenderResult, out: str | os.PathLike, exposure: float 
     """
     if not isinstance(result, RenderResult):
         raise TypeError(f"'result' must be a RenderResult (from render()), got {type(result).__name__}")
-    if isinstance(out, bytes) or not isinstance(out, (str, os.PathLike)):
-        raise TypeError(f"'out' must be a str or os.PathLike, got {type(out).__name__}")
+    check_file_suffix(out, IMAGE_SUFFIXES, "out")
     out = Path(out)
-    if out.suffix.lower() not in (".png", ".pfm", ".npy"):
-        raise ValueError(f"'out' must end in .png, .pfm or .npy, got {str(out)!r}")
     # One set: all three files appear together or none does (symsphere.io.atomic_paths).
     return save_image_set([out.with_suffix(s) for s in (".png", ".pfm", ".npy")], result.image, exposure)

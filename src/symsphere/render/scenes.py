@@ -11,9 +11,7 @@ import math
 import os
 from pathlib import Path
 
-import numpy as np
-
-from .._validation import check_real, short_repr
+from .._validation import check_bool, check_real
 from ._scene_checks import BLACK, MAX_MAGNITUDE
 from .scene import Camera, HalfSpace, Material, Quad, Scene, Sphere, dielectric, diffuse, mirror, translucent
 from .scene_files import load_scene
@@ -104,8 +102,7 @@ def furnace(albedo: float = 0.5, emission: float = 1.0, translucent: bool = Fals
     emission = check_real(emission, "emission")
     if not 0 <= emission <= MAX_MAGNITUDE:
         raise ValueError(f"'emission' must be in [0, {MAX_MAGNITUDE:g}], got {emission!r}")
-    if not isinstance(translucent, (bool, np.bool_)):
-        raise TypeError(f"'translucent' must be True or False, got {short_repr(translucent)}")
+    translucent = check_bool(translucent, "translucent")
     radiance = emission / (1 - rho)
     camera = Camera((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 90.0)
     if translucent:
