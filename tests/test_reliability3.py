@@ -222,6 +222,24 @@ def test_late_sigint_in_process_has_one_outcome(tmp_path, monkeypatch, capsys, w
         np.testing.assert_array_equal(np.load(out), symsphere.sample_sphere(N_LATE, rng=1))
 
 
+def test_sigint_just_after_the_temporary_is_created_leaves_nothing(tmp_path, monkeypatch):
+    # The window between the temporary's creation (os.open) and its entry in the list of files to
+    # remove: a SIGINT there (found by test_late_sigint_at_many_times on a loaded machine) is deferred
+    # until the file is listed, so the rollback removes it.
+    import fcntl
+
+    from symsphere.io import atomic_path
+
+    out = tmp_path / "d.npy"
+    out.write_bytes(b"old")
+    _inject_sigint(monkeypatch, fcntl, "flock", 1)  # right after the temporary's os.open
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_path(out) as tmp:
+            tmp.write_bytes(b"new")
+    monkeypatch.undo()
+    assert _listing(tmp_path) == ["d.npy"] and out.read_bytes() == b"old"
+
+
 def test_sigint_during_the_renames_of_a_set_is_delivered_after_them(tmp_path, monkeypatch):
     from symsphere.render import save_image_set
 

@@ -185,12 +185,15 @@ def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
     try:
         for path, target in zip(paths, targets, strict=False):
             remove_stale_temporaries(target)
-            try:
-                temporary, lock = _create_temporary(target)
-            except OSError as exc:  # name the user's file, not the temporary
-                raise OSError(exc.errno, exc.strerror, str(path)) from None
-            temporaries.append(temporary)
-            locks.append(lock)
+            # A SIGINT between the file's creation and its entry in the list would leave it behind:
+            # the signals wait until it is listed (and then removed with the others below).
+            with _signals_deferred():
+                try:
+                    temporary, lock = _create_temporary(target)
+                except OSError as exc:  # name the user's file, not the temporary
+                    raise OSError(exc.errno, exc.strerror, str(path)) from None
+                temporaries.append(temporary)
+                locks.append(lock)
         yield list(temporaries)
         for path, temporary in zip(paths, temporaries, strict=False):
             try:
