@@ -58,11 +58,15 @@ def test_dependencies_are_derived_from_the_kernel_modules_imports():
     # Independent reference: the files whose functions or tables the sampling kernels inline, by reading the code.
     from pathlib import Path
 
+    import symsphere
     from symsphere._testing import kernels, numba_cache
 
-    names = {Path(p).name for p in numba_cache.kernel_dependencies(kernels.fill_orbits)}
+    paths = {Path(p).resolve() for p in numba_cache.kernel_dependencies(kernels.fill_orbits)}
+    names = {p.name for p in paths}
     assert {"_kernels.py", "_triangle.py", "symmetry.py"} <= names  # _triangle.py: the maps onto T0
-    assert "sampling.py" not in names and "__init__.py" not in names  # consumers are not dependencies
+    # consumers are not dependencies: the sampling module, the package's own __init__ (warps/__init__.py,
+    # which the kernels import the maps through, is one)
+    assert "sampling.py" not in names and Path(symsphere.__file__).resolve() not in paths
 
 
 def test_importing_the_kernels_touches_no_cache(tmp_path):

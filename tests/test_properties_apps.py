@@ -494,6 +494,7 @@ EXCLUDED = {
     "symsphere.integrands.Integrand": "a registry record (INTEGRANDS, suite)",
     "symsphere.points.BasePoints": "a point source the samplers build from 'points' (tested through them)",
     "symsphere.render.RenderResult": "a result record (render returns it; write_outputs is tested with one)",
+    "symsphere.render.RenderSettings": "the settings record that RenderPlan and RenderResult share (test_renderer)",
     "symsphere.render.RenderPlan": "built by plan_passes (tested); render_passes gets one",
     "symsphere.render.SceneError": "the exception type itself",
 }
