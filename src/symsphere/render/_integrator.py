@@ -630,7 +630,8 @@ def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
     before typing, and numba's cache keys each case by their values, so a render compiles (or
     loads) only its own case; a symmetric sampler's base-point source (random, Sobol',
     interlaced) is a runtime argument, so that the eight symmetric samplers share two kernels
-    per estimator (measured: a first case ~14 CPU-s on an empty cache, each further one ~7 s).
+    per estimator (measured, empty cache: ~36 CPU-s for a first case since the hot table functions are
+    inlined again; docs/benchmarks.md).
     """
 
     @njit(**_PASS_KERNEL_OPTIONS)  # scratch comes from the caller
