@@ -237,6 +237,11 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
         into T0: ``1/(4 pi)`` for ``'equal_area'``.  The paper's maps diverge
         (``inf``) at the six images of the vertex (0, 0, 1): the axes.
 
+    See Also
+    --------
+    symsphere.warps.square_to_sphere_pdf : the same function (one implementation) under the
+        warp's name: the sampler's orbits have the warp's density.
+
     Examples
     --------
     >>> from symsphere import sphere_pdf
@@ -266,6 +271,11 @@ def hemisphere_pdf(
         ``square_to_triangle_pdf(base, method) / 24`` on the closed hemisphere about *normal*,
         0 below it.  Directions within 16 ulps (of *d*'s dtype) of the plane count as on
         it, so that every direction :func:`sample_hemisphere` returns has a positive density.
+
+    See Also
+    --------
+    symsphere.warps.square_to_hemisphere_pdf : the same density about the pole (0, 0, 1), of the
+        warp; this adds the sampler's *normal* and argument checks.
 
     Examples
     --------
