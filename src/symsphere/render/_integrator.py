@@ -77,7 +77,6 @@ member, base point).
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import Any
 
@@ -128,8 +127,8 @@ _ONE = np.uint64(1)
 
 @register_jitable
 def fixed_sampler(sampler):
-    """*sampler* if it is UNIFORM, COSINE or ORBIT, else -1: a symmetric sampler, whose base-point source
-    (random, Sobol', interlaced) stays a runtime choice inside one specialised kernel."""
+    """*sampler* if it is UNIFORM, COSINE or ORBIT, else -1: a symmetric sampler (its base-point source,
+    random, Sobol' or interlaced, is then read from *sampler* itself)."""
     if sampler == UNIFORM or sampler == COSINE or sampler == ORBIT:
         return sampler
     return -1
@@ -144,7 +143,7 @@ def is_cosine(sampler):
     )  # fmt: skip
 
 
-@njit(inline="always")  # numba-IR inlining: a specialised kernel's constants prune the other samplers
+@njit(inline="always")  # numba-IR inlining: a probe kernel's constant arguments prune the other samplers
 def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
 
@@ -153,9 +152,8 @@ def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     sampler, code : int
         Sampler code and map code (``METHOD_CODES``; used by the orbit samplers).
     fixed, cosine : int, bool
-        ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``: constants of a specialised kernel
-        (like *code*), which prune the other samplers' code; *sampler* itself then only chooses
-        the symmetric samplers' base-point source.
+        ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``, computed once per kernel call: the
+        sampler family; *sampler* itself then only chooses the symmetric samplers' base-point source.
     full : bool
         Sample the whole sphere (Lambertian transmission) rather than the
         upper hemisphere.
@@ -620,48 +618,36 @@ def radiance(
     return lr, lg, lb
 
 
-@functools.cache
-def _pass_kernel(integrator, fixed, cosine, code, pixel_filter):
-    """The serial kernel of one (integrator, sampler family, map, pixel filter): it renders the rows it is given.
-
-    The family is ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``: UNIFORM, COSINE, ORBIT,
-    the symmetric samplers, the symmetric cosine samplers.  These codes are closure cells,
-    constants to numba: the other estimator's, families', maps' and filter's branches are pruned
-    before typing, and numba's cache keys each case by their values, so a render compiles (or
-    loads) only its own case; a symmetric sampler's base-point source (random, Sobol',
-    interlaced) is a runtime argument, so that the eight symmetric samplers share two kernels
-    per estimator (measured, empty cache: ~36 CPU-s for a first case since the hot table functions are
-    inlined again; docs/benchmarks.md).
-    """
-
-    @njit(**_PASS_KERNEL_OPTIONS)  # scratch comes from the caller
-    def render_rows(
-        spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-        rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows, accum, scratch,
-    ):  # fmt: skip  # pragma: no cover - compiled by numba
-        height = accum.shape[0]
-        width = accum.shape[1]
-        plain = plain_spheres(spheres)
-        for i in range(rows.shape[0]):
-            row = rows[i]
-            for col in range(width):
-                key = pixel_key(seed, row * width + col)
-                sr, sg, sb = 0.0, 0.0, 0.0
-                for s in range(sample_start, sample_start + sample_count):
-                    lr, lg, lb = radiance(
-                        spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
-                        background, eps, rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter,
-                        key, s,
-                        row, col, width, height, scratch, plain,
-                    )  # fmt: skip
-                    sr += lr
-                    sg += lg
-                    sb += lb
-                accum[row, col, 0] += sr
-                accum[row, col, 1] += sg
-                accum[row, col, 2] += sb
-
-    return render_rows
+@njit(**_PASS_KERNEL_OPTIONS)  # scratch comes from the caller
+def _render_rows(
+    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
+    rr_depth, max_depth, integrator, sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
+    scratch,
+):  # fmt: skip  # pragma: no cover - compiled by numba
+    """The serial kernel: it renders the rows it is given (every estimator, sampler, map and filter)."""
+    height = accum.shape[0]
+    width = accum.shape[1]
+    plain = plain_spheres(spheres)
+    fixed = fixed_sampler(sampler)
+    cosine = is_cosine(sampler)
+    for i in range(rows.shape[0]):
+        row = rows[i]
+        for col in range(width):
+            key = pixel_key(seed, row * width + col)
+            sr, sg, sb = 0.0, 0.0, 0.0
+            for s in range(sample_start, sample_start + sample_count):
+                lr, lg, lb = radiance(
+                    spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
+                    background, eps, rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter,
+                    key, s,
+                    row, col, width, height, scratch, plain,
+                )  # fmt: skip
+                sr += lr
+                sg += lg
+                sb += lb
+            accum[row, col, 0] += sr
+            accum[row, col, 1] += sg
+            accum[row, col, 2] += sb
 
 
 def render_pass(
@@ -675,17 +661,14 @@ def render_pass(
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
-    kernel = _pass_kernel(
-        int(integrator), int(fixed_sampler(sampler)), bool(is_cosine(sampler)), int(code), int(pixel_filter)
-    )
     parts = max(1, min(get_num_threads(), len(rows)))
 
     def part(index):
         lo, hi = len(rows) * index // parts, len(rows) * (index + 1) // parts
-        kernel(
+        _render_rows(
             spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
-            rr_depth, max_depth, sampler, seed, sample_start, sample_count, rows[lo:hi], accum,
-            np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
+            rr_depth, max_depth, int(integrator), int(sampler), int(code), int(pixel_filter), seed, sample_start,
+            sample_count, rows[lo:hi], accum, np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
         )  # fmt: skip
 
     run_parts(part, parts)
@@ -703,8 +686,6 @@ def prepare_kernels() -> None:
     """
     global _ready
     if not _ready:
-        invalidate_if_changed(
-            _pass_kernel(PATH, COSINE, True, 0, BOX)
-        )  # the module's cache directory: every case's entries
+        invalidate_if_changed(_render_rows)  # the module's cache directory
         start_threads()
         _ready = True

@@ -444,8 +444,7 @@ def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[Flo
 def _render_pass_into(plan: RenderPlan, first: int, count: int, image: Float64Array) -> None:
     _k.prepare_kernels()
     rows = np.arange(plan.height, dtype=np.int64)
-    with numba.parallel_chunksize(1):  # rows differ in cost: hand them out one at a time
-        _render_pass(*plan.arguments, first, count, rows, image)
+    _render_pass(*plan.arguments, first, count, rows, image)
 
 
 def write_outputs(result: RenderResult, out: str | os.PathLike[str], exposure: float = 1.0) -> list[Path]:
