@@ -1,11 +1,17 @@
 """symsphere._threads: numba's threads wait passively; importing and sampling leave os.environ alone."""
 
 import os
+import signal
 import subprocess
 import sys
+import threading
+from pathlib import Path
 
 import numba
+import numpy as np
 import pytest
+
+import symsphere
 
 PROBE = """
 import os, json
@@ -35,3 +41,121 @@ def test_threads_wait_passively_unless_the_user_says_otherwise_and_environ_is_un
     assert policy == preset
     if numba.config.THREADING_LAYER in ("default", "omp") and "OPENMP DISPLAY ENVIRONMENT" in result.stderr:
         assert f"OMP_WAIT_POLICY = '{(preset or 'passive').upper()}'" in result.stderr
+
+
+COMPILE_THREADS = """
+import json, threading
+from numba.core import event
+import symsphere
+
+threads = set()
+
+
+class Listener(event.Listener):
+    def on_start(self, e):
+        threads.add(threading.current_thread() is threading.main_thread())
+
+    def on_end(self, e):
+        pass
+
+
+with event.install_listener("numba:compile", Listener()):
+    symsphere.sample_sphere(48 * 4096, rng=1)  # the parts run on two threads
+    symsphere.sample_hemisphere(24 * 4096, normal=[0, 1, 0], dtype="float32", rng=1)
+print(json.dumps(sorted(threads)))
+"""
+
+
+def test_kernels_compile_in_the_calling_thread_never_on_the_pool(tmp_path):
+    # A Ctrl-C during a first run's compile raises KeyboardInterrupt in the main thread only: had a pool
+    # thread been compiling the same kernel, it could be left with a half-built library (seen as "no
+    # compiled object yet" errors and a hung process).  So run_kernel compiles before the parts start,
+    # and the library's kernels go through it (the two tests below); here, end to end, every compile of
+    # a first sampling run (empty cache, two parts) is reported by numba in the main thread.
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), NUMBA_NUM_THREADS="2")
+    result = subprocess.run(
+        [sys.executable, "-c", COMPILE_THREADS], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert result.returncode == 0, result.stderr
+    import json
+
+    assert json.loads(result.stdout.splitlines()[-1]) == [True]  # compiles happened, all in the main thread
+
+
+class _ProbeKernel:
+    """A dispatcher stand-in: records where it is compiled, and refuses a call before it is."""
+
+    def __init__(self):
+        self.compiled_in = []
+        self.calls = []
+
+    def compile(self, signature):
+        self.compiled_in.append((threading.current_thread() is threading.main_thread(), signature))
+
+    def __call__(self, *args):
+        assert self.compiled_in, "a part ran before the kernel was compiled"
+        self.calls.append(args)
+
+
+def test_run_kernel_compiles_in_the_calling_thread_before_any_part():
+    from numba import types
+
+    from symsphere._testing import threads
+
+    kernel = _ProbeKernel()
+    values = np.zeros(4)
+    threads.run_kernel(kernel, lambda index: (values, index), 3)
+    assert kernel.compiled_in == [(True, (types.float64[::1], types.int64))]
+    assert sorted(index for _, index in kernel.calls) == [0, 1, 2]
+
+
+def test_the_library_runs_its_kernels_through_run_kernel():
+    # run_parts with a kernel inside the task would let a pool thread compile it
+    source = Path(symsphere.__file__).parent
+    callers = [p.relative_to(source) for p in source.rglob("*.py") if "run_parts(" in p.read_text(encoding="utf-8")]
+    assert callers == [Path("_threads.py")], callers
+
+
+def test_run_kernel_compiles_once_for_the_parts_signature():
+    from numba import njit
+
+    from symsphere._testing import threads
+
+    @njit(nogil=True)
+    def add_one(values, lo, hi):  # pragma: no cover - compiled by numba
+        for i in range(lo, hi):
+            values[i] += 1.0
+
+    values = np.zeros(10)
+    threads.run_kernel(add_one, lambda index: (values, 5 * index, 5 * index + 5), 2)
+    assert np.array_equal(values, np.ones(10))
+    assert len(add_one.signatures) == 1  # the signature run_kernel compiled is the one the parts call
+
+
+class _SwallowingKernel(_ProbeKernel):
+    """Compiles as numba did when a SIGINT came during one of its LLVM callbacks: the interrupt is lost
+    inside the callback (C code swallows Python exceptions) and the compile fails afterwards."""
+
+    def __init__(self, fail):
+        super().__init__()
+        self.fail = fail
+
+    def compile(self, signature):
+        try:
+            signal.raise_signal(signal.SIGINT)  # KeyboardInterrupt, raised inside the "callback" ...
+        except KeyboardInterrupt:
+            pass  # ... and lost there
+        if self.fail:
+            raise RuntimeError("no compiled object yet for <Library 'fill'>")
+        super().compile(signature)
+
+
+@pytest.mark.parametrize("fail", [True, False], ids=["compile-failed", "compile-finished"])
+def test_a_sigint_lost_inside_the_compile_still_interrupts(fail):
+    from symsphere._testing import threads
+
+    kernel = _SwallowingKernel(fail)
+    with pytest.raises(KeyboardInterrupt):
+        threads.run_kernel(kernel, lambda index: (np.zeros(2), index), 2)
+    assert kernel.calls == []  # no part ran
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handler is back

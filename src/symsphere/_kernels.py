@@ -35,7 +35,7 @@ from numba import get_num_threads, njit, types
 from numba.extending import intrinsic, register_jitable
 
 from ._numba_cache import invalidate_if_changed
-from ._threads import run_parts, start_threads
+from ._threads import run_kernel, start_threads
 from ._typing import Float64Array, FloatArray
 from .symmetry import SIGNS, SOURCES
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
@@ -438,11 +438,11 @@ def _run(source, method, count, basis, out, m, parts, part_input, offset):
     kernel = _fill_kernel(source, METHOD_CODES[method], kind)
     parts = part_count(m, parts or _default_parts(m))
 
-    def part(index):
+    def arguments(index):
         lo, hi = part_range(m, parts, index)
-        kernel(part_input(lo), lo, hi, weights, rows, tail, offset)
+        return part_input(lo), lo, hi, weights, rows, tail, offset
 
-    run_parts(part, parts)
+    run_kernel(kernel, arguments, parts)
 
 
 def fill_orbits(

@@ -16,6 +16,9 @@ def _leftovers(directory):
 
 DEMO_N = 48 * 2**11
 
+# One xdist worker runs this module (Makefile: --dist loadgroup), so that the module's demo run is made once.
+pytestmark = pytest.mark.xdist_group("demo")
+
 
 @pytest.fixture(scope="module")
 def demo_dir(tmp_path_factory):

@@ -127,6 +127,15 @@ def test_orbit_member_and_fold_equal_numpy(jit_variant):
     ref = np.einsum("ni,nij->nj", p, SPHERE_MAPS[k])
     x, y, z = sm.orbit_member(mi.Float(p[:, 0]), mi.Float(p[:, 1]), mi.Float(p[:, 2]), mi.UInt32(k.astype(np.uint32)))
     assert np.array_equal(_np(mi.Vector3f(x, y, z)), ref)  # signed permutations: exact
+    for members in (8, 24):  # k known to be below members: fewer selects, the same images
+        km = k % members
+        ref = np.einsum("ni,nij->nj", p, SPHERE_MAPS[km])
+        got = sm.orbit_member(*(mi.Float(p[:, c]) for c in range(3)), mi.UInt32(km.astype(np.uint32)), members=members)
+        assert np.array_equal(_np(mi.Vector3f(*got)), ref), members
+    with pytest.raises(ValueError, match="'members' must be 8, 24 or 48"):
+        sm.orbit_member(mi.Float(1.0), mi.Float(0.0), mi.Float(0.0), 0, members=12)
+    with pytest.raises(ValueError, match="'k' must be in 0..7"):
+        sm.orbit_member(mi.Float(1.0), mi.Float(0.0), mi.Float(0.0), 8, members=8)
     got_k, got_base = sm.fold(_vec3(mi, p))
     ref_k, ref_base = fold(p)
     assert np.array_equal(np.array(got_k), ref_k)  # the lowest-k rule on boundaries too

@@ -236,11 +236,11 @@ class _PathMethods:
             fu, fv = _random.owen_sobol2(group, vertex_key)
             u, v = _random.fraction(fu), _random.fraction(fv)
         if self.strategy == "symmetric_cosine":
-            x, y, z = orbit_member(*cosine_wedge_point(u, v), member)
+            x, y, z = orbit_member(*cosine_wedge_point(u, v), member, members=8)
             return mi.Vector3f(x, y, z), z * _INV_PI
         bx, by, bz = triangle_point(u, v, self.method)
         density = triangle_density(bx, by, bz, self.method)
-        x, y, z = orbit_member(bx, by, bz, member)
+        x, y, z = orbit_member(bx, by, bz, member, members=24)
         return mi.Vector3f(x, y, z), density / n
 
     def _density(self, wo: Any, wi_z: Any) -> Any:

@@ -183,18 +183,34 @@ def _chain(index: Any, values: list[Any]) -> Any:
     return result
 
 
-def orbit_member(x: Any, y: Any, z: Any, k: Any) -> tuple[Any, Any, Any]:
-    """Image k (0..47) of (x, y, z): ``(x, y, z) @ SPHERE_MAPS[k]`` (:func:`symsphere.orbit`, one member)."""
+def orbit_member(x: Any, y: Any, z: Any, k: Any, members: int = 48) -> tuple[Any, Any, Any]:
+    """Image k (0..47) of (x, y, z): ``(x, y, z) @ SPHERE_MAPS[k]`` (:func:`symsphere.orbit`, one member).
+
+    *members*: k is known to be below it (8: the z-keeping images, 24: the hemisphere's, 48: all), so
+    that the selects of the images k cannot reach are not traced.
+    """
+    if members not in (8, 24, 48):
+        raise ValueError(f"'members' must be 8, 24 or 48; got {members!r}")
+    if isinstance(k, (int, np.integer)):
+        if not 0 <= k < members:
+            raise ValueError(f"'k' must be in 0..{members - 1}; got {k}")
+        members = 48
     half = k >= 24
-    rest = dr.select(half, k - 24, k) if not isinstance(k, (int, np.integer)) else (k - 24 if k >= 24 else k)
+    if members == 48:
+        rest = dr.select(half, k - 24, k) if not isinstance(k, (int, np.integer)) else (k - 24 if k >= 24 else k)
+    else:
+        rest = k
     row = rest // 4
     column = rest % 4
     base = (x, y, z)
-    out = [_chain(row, [base[_ROW_SOURCES[i][c]] for i in range(6)]) for c in range(3)]
+    rows = 6 if members >= 24 else members // 4
+    out = [_chain(row, [base[_ROW_SOURCES[i][c]] for i in range(rows)]) for c in range(3)]
     sx = _chain(column, [s[0] for s in _COLUMN_SIGNS])
     sy = _chain(column, [s[1] for s in _COLUMN_SIGNS])
-    sz = dr.select(half, float(SIGNS[24, 2]), float(SIGNS[0, 2]))
-    return sx * out[0], sy * out[1], sz * out[2]
+    if members == 48:
+        sz = dr.select(half, float(SIGNS[24, 2]), float(SIGNS[0, 2]))
+        return sx * out[0], sy * out[1], sz * out[2]
+    return sx * out[0], sy * out[1], float(SIGNS[0, 2]) * out[2]
 
 
 def _sign(value: Any) -> Any:

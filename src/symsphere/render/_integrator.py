@@ -87,7 +87,7 @@ from numba.extending import register_jitable
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from .._splitmix import GOLDEN, ODD, mix64
-from .._threads import run_parts, start_threads
+from .._threads import run_kernel, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
 from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
@@ -656,22 +656,23 @@ def render_pass(
 ):  # fmt: skip
     """Add samples sample_start .. sample_start + sample_count - 1 of every pixel into *accum* (H, W, 3).
 
-    Rows are split into one stretch of *rows* per thread (``symsphere._threads.run_parts``);
+    Rows are split into one stretch of *rows* per thread (``symsphere._threads.run_kernel``);
     every pixel is done by one thread and its random numbers depend only on (seed, pixel,
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
     parts = max(1, min(get_num_threads(), len(rows)))
 
-    def part(index):
+    def arguments(index):
         lo, hi = len(rows) * index // parts, len(rows) * (index + 1) // parts
-        _render_rows(
+        return (
             spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
             rr_depth, max_depth, int(integrator), int(sampler), int(code), int(pixel_filter), seed, sample_start,
-            sample_count, rows[lo:hi], accum, np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
+            sample_count, rows[lo:hi], accum,
+            np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
         )  # fmt: skip
 
-    run_parts(part, parts)
+    run_kernel(_render_rows, arguments, parts)
 
 
 _ready = False
