@@ -306,13 +306,20 @@ class _PathMethods:
                 lambertian = active_next & (dr.gather(mi.UInt32, table, _bsdf_ids(bsdf), active_next) != 0)
                 local, pdf_local = self._local_direction(sample_2, key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
-                value_local = bsdf.eval(ctx, si, local, lambertian)
+                # A Lambertian BSDF's own (cosine) sample has weight f cos / pdf = its reflectance R at si,
+                # whatever the direction (0 where wi is below a one-sided surface, and in the measure-zero
+                # event that its own direction has pdf 0), so f cos at `local` is R |z| / pi: no second
+                # BSDF evaluation (texture lookup, virtual call) per vertex.
+                if dr.hint(self.strategy in ("cosine", "symmetric_cosine"), mode="scalar"):
+                    weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
+                else:
+                    weight_local = dr.select(
+                        pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * _INV_PI / pdf_local), 0.0
+                    )
                 bsdf_pdf = dr.select(lambertian, self._density(wo, si.wi.z), bsdf_pdf)
                 bsdf_sample.wo = dr.select(lambertian, local, bsdf_sample.wo)
                 bsdf_sample.pdf = dr.select(lambertian, pdf_local, bsdf_sample.pdf)
-                bsdf_weight = dr.select(
-                    lambertian, dr.select(pdf_local > 0.0, value_local / pdf_local, 0.0), bsdf_weight
-                )
+                bsdf_weight = dr.select(lambertian, weight_local, bsdf_weight)
 
             mis_em = dr.select(ds.delta, 1.0, _mis_weight(ds.pdf, bsdf_pdf))
             result[active_em] = dr.fma(throughput, bsdf_val * em_weight * mis_em, result)
