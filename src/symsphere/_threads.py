@@ -1,13 +1,14 @@
 """The library's threads: the parts of a sampling kernel on a pool of Python threads, and how
 numba's own (OpenMP) worker threads wait: passively, unless the user chose otherwise.
 
-:func:`run_kernel` compiles a kernel in the calling thread and then runs the parts of its call
-with :func:`run_parts`: the first in the calling thread and the others on a pool of ``numba.config.NUMBA_NUM_THREADS - 1`` threads, made at the first call
-with more than one part (nothing at import) and made again in a forked child.  The kernels
-are serial numba functions that release the GIL (``nogil=True``), so the parts run at once;
-a serial kernel compiles in well under half the time of the same loop in a numba ``prange``
-(docs/benchmarks.md).  The number of parts of a call is ``numba.get_num_threads()`` (so
-``numba.set_num_threads`` and ``NUMBA_NUM_THREADS`` apply); results never depend on it.
+:func:`run_kernel` compiles a kernel in the calling thread and then runs the parts of its call with
+:func:`run_parts`: the first in the calling thread and the others on a pool of
+``numba.config.NUMBA_NUM_THREADS - 1`` threads, made at the first call with more than one part
+(nothing at import) and made again in a forked child.  The kernels are serial numba functions that
+release the GIL (``nogil=True``), so the parts run at once; a serial kernel compiles in well under
+half the time of the same loop in a numba ``prange`` (docs/benchmarks.md).  The number of parts of a
+call is ``numba.get_num_threads()`` (so ``numba.set_num_threads`` and ``NUMBA_NUM_THREADS`` apply);
+results never depend on it.
 
 numba's OpenMP threads (GNU libgomp) busy-wait for a while after each parallel
 kernel.  With as many threads as cores, they then hold the cores that numpy's

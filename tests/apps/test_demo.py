@@ -16,11 +16,13 @@ def _leftovers(directory):
 
 DEMO_N = 48 * 2**11
 
-# One xdist worker runs this module (Makefile: --dist loadgroup), so that the module's demo run is made once.
+# One xdist worker runs this module (Makefile: --dist loadgroup) and the demo run is a session fixture, so
+# that it is made once: a worker may run other modules' tests between this module's (which ends a module
+# fixture), and the two demo runs were the suite's two slowest set-ups.
 pytestmark = pytest.mark.xdist_group("demo")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def demo_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo") / "symsphere-demo"
     assert main(["demo", "--out", str(out), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
