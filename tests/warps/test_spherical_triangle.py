@@ -48,6 +48,29 @@ def test_corners():
     np.testing.assert_allclose(square_to_spherical_triangle([[0.3, 0], [0, 1], [1, 1]], A, B, C), [B, A, C], atol=1e-15)
 
 
+def test_vertices_are_normalised_to_1_ulp_on_every_machine():
+    # The vertices are normalised IEEE-only (correctly rounded squares, an exactly rounded sum, sqrt, the
+    # division), not with numpy's norm, whose BLAS dot product differs by CPU (with and without FMA).
+    # The reference is exact (mpmath, 50 digits); bound: four roundings of <= 0.5 ulp each, <= 2 ulps of
+    # the vertex's largest component (1.5 eps relative to it).  The image of v = 0 is B as normalised.
+    mpmath = pytest.importorskip("mpmath")
+    mpmath.mp.dps = 50
+    rng = np.random.default_rng(11)
+    A, _, C = T0_VERTICES
+    vectors = [v for v in rng.normal(size=(300, 3)) if abs(v @ np.cross(A, C)) > 0.1]  # not on the arc AC
+    vectors += [np.array([1e-160, 3e-161, 2e-160]), np.array([1e200, 3e199, 5e199])]  # scaled before squaring
+    for b in vectors:
+        norm = mpmath.sqrt(mpmath.fsum(mpmath.mpf(float(x)) ** 2 for x in b))
+        exact = np.array([float(mpmath.mpf(float(x)) / norm) for x in b])
+        got = square_to_spherical_triangle([0.3, 0.0], A, b, C)
+        np.testing.assert_allclose(got, exact, rtol=0, atol=1.5 * np.finfo(np.float64).eps * np.max(np.abs(exact)))
+    # T0's vertices are unit to rounding (3**-0.5 (1, 1, 1)'s norm rounds to 1): normalised, they stay as they are,
+    # which is why the next test can ask for the same bits.
+    A, B, C = T0_VERTICES
+    for a, b, c in ((B, A, C), (A, B, C), (A, C, B)):
+        np.testing.assert_array_equal(square_to_spherical_triangle([0.3, 0.0], a, b, c), b)
+
+
 def test_arvo_triangle_is_the_general_map_on_t0():
     uv = np.concatenate([_interior_uv(10_000, seed=1), EDGE_UV])
     np.testing.assert_array_equal(square_to_arvo_triangle(uv), square_to_spherical_triangle(uv, *T0_VERTICES))

@@ -233,14 +233,16 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
         raise ValueError(f"'{name}' must be a 3-vector, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)) or not np.any(arr):
         raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {arr.tolist()}")
+    # IEEE-only, so the same bits on every machine: squares and the division correctly rounded, the sum
+    # exactly rounded (math.fsum), sqrt correctly rounded.  np.linalg.norm's dot product comes from
+    # BLAS, whose kernels differ by CPU (OpenBLAS's AVX-512 one uses FMA): 3**-0.5 * (1, 1, 1) was left
+    # as it is on an AMD AVX2 machine and changed by 1 ulp on an Intel AVX-512 one.
     largest = float(np.max(np.abs(arr)))
-    if 1e-150 < largest < 1e150:  # the squares neither overflow nor underflow: the plain norm (as before)
-        plain: Float64Array = arr / np.linalg.norm(arr)
-        return plain
-    # Scale by the largest component first: the norm of [1e200, 0, 0] or [1e-170, 0, 0] would
-    # overflow or underflow, but the direction is well defined.
-    scaled = arr / largest
-    unit: Float64Array = scaled / math.sqrt(float(scaled @ scaled))
+    if (
+        not 1e-150 < largest < 1e150
+    ):  # scale first: the squares of [1e200, 0, 0] or [1e-170, 0, 0] overflow or underflow
+        arr = arr / largest
+    unit: Float64Array = arr / math.sqrt(math.fsum((arr * arr).tolist()))
     return unit
 
 
