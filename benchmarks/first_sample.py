@@ -15,8 +15,8 @@ The breakdown runs the same child with ``time.perf_counter`` around
 ``--cold-start`` measures instead what a new install pays (docs/benchmarks.md, "Cold start"):
 with an empty numba cache, in one new process, the first ``sample_sphere`` and then each
 further variant (dtype, point set, domain, frame, map), the first ``integrate`` with a numpy
-f; in new processes the first ``symsphere render --scene cornell`` and ``symsphere demo``;
-and every kernel numba compiled on the way, with its compile time (numba's
+f, the first ``render`` (its kernel, with the functions LLVM inlines into it); in new processes
+the first ``symsphere render --scene cornell`` and ``symsphere demo``; and every kernel numba compiled on the way, with its compile time (numba's
 ``"numba:compile"`` events).  Each is run ``--cold`` times; medians are reported, with the
 CPU seconds beside the wall seconds (on a shared machine wall time includes waiting).
 
@@ -148,6 +148,7 @@ with event.install_recorder("numba:compile") as recorder:
     step("+ method='paper1'", lambda: ss.sample_sphere(48000, rng=1, method="paper1"))
     a = np.array([0.3, 0.2, 0.1])
     step("+ first integrate, numpy f", lambda: ss.integrate(lambda w: np.exp(w @ a), n=48 * 4096, rng=1))
+    step("+ first render('cornell', 64 x 48, 48 spp)", lambda: ss.render.render("cornell", width=64, height=48, spp=48, seed=1))
 kernels = {}
 starts = {}
 for timestamp, ev in recorder.buffer:

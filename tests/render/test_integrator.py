@@ -671,3 +671,19 @@ def test_the_disk_cache_guard_covers_every_module_the_kernel_inlines():
     assert {"_uniform.py", "_concentric.py", "_wedge.py", "_triangle.py"} <= names
     assert "_probes.py" not in names
     assert {"_probes.py", "_integrator.py", "_emitters.py"} <= {Path(p).name for p in kernel_dependencies(P.first_hits)}
+
+
+def test_the_disk_cache_guard_also_covers_the_emitters_cached_functions(tmp_path):
+    # The kernel calls cached numba functions of _emitters.py, which LLVM inlines into it: numba keys
+    # their cache on _emitters.py alone, so the guard must also drop theirs when _random.py or frames.py
+    # change. The guard leaves its digest next to each module's cache entries: in a new process with an
+    # empty cache directory, preparing the kernels writes both.
+    import os
+    import subprocess
+    import sys
+
+    code = "from symsphere._testing import render_integrator as K; K.prepare_kernels()"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=120)
+    stamps = {p.name for p in tmp_path.rglob("*.deps-sha256")}
+    assert {"_integrator.deps-sha256", "_emitters.deps-sha256"} <= stamps

@@ -5,14 +5,14 @@ Scalar numba functions, called by the path-tracing kernel of
 :func:`emitter_pdf` and :func:`power_heuristic`.  Speed against compile time, measured
 (docs/benchmarks.md, "Cold start"): the functions of the hot path that take the scene's
 tables (these three, and the integrator's ``intersect``, NEE's light sample and the specular
-directions) are inlined into the kernel by numba (``inline="always"``).  Called as functions
-of their own, each call passes every array as its nine fields and, with numba's reference
-counting, increments and decrements the array's counter atomically: 0.53-0.77x the paths/s,
-for a first compilation of 20 instead of 36 CPU-seconds; without the reference counting
-0.8-0.9x.  The kernel itself is compiled without reference counting (``_nrt=False``: it
-allocates nothing), so nothing inlined into it counts references; the helpers that stay
-functions of their own (the rectangle's and the cone's set-up) are ``TABLE_FUNCTION``s,
-compiled once each without it.
+directions) are numba functions of their own, typed and compiled once each (``INLINED``:
+cached, no reference counting, ``forceinline``), which LLVM then inlines into the kernel.  As
+plain calls, each call passes every array as its nine fields and, with numba's reference
+counting, increments and decrements the array's counter atomically: 0.53-0.77x the paths/s;
+inlined in numba's IR instead (``inline="always"``), the kernel kept its speed but typed every
+inlined copy again: 21 instead of 8 CPU-seconds for a first render's kernel.  The kernel itself
+is compiled without reference counting (``_nrt=False``: it allocates nothing); the helpers that
+LLVM may or may not inline (the rectangle's and the cone's set-up) are ``TABLE_FUNCTION``s.
 The tables are those of :meth:`symsphere.render.Scene.arrays`, column-wise:
 spheres and quads, their rows as listed at ``SPHERE_COLUMNS`` and
 ``QUAD_COLUMNS`` in :mod:`symsphere.render._integrator`.
@@ -45,6 +45,7 @@ from ..frames import frame_rows
 from ._random import next_u64, u01
 
 __all__ = [
+    "INLINED",
     "INV_2PI",
     "choose_light",
     "disk_point",
@@ -60,6 +61,9 @@ INV_2PI = 0.5 / math.pi
 # compiled once each, cached, no reference counting of their array arguments (they allocate nothing),
 # and the kernels' error model (a division by zero gives inf or NaN, as in numpy, not an exception).
 TABLE_FUNCTION: dict[str, Any] = dict(_nrt=False, cache=True, error_model="numpy", nogil=True)
+# ... and those of the hot path: the same, marked for LLVM to inline into the caller (its alwaysinline
+# attribute; numba types and compiles each once, unlike numba-IR inlining, which types every copy again)
+INLINED: dict[str, Any] = dict(TABLE_FUNCTION, forceinline=True)
 _PI = math.pi
 _MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
 _ONE_MINUS_EPSILON = 1.0 - 2.0**-53
@@ -186,7 +190,7 @@ def disk_point(state):
             return x, y, r2, state
 
 
-@register_jitable(inline="always")
+@njit(**INLINED)
 def sample_emitter(px, py, pz, obj, state, spheres, quads):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
@@ -312,7 +316,7 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     return dx, dy, dz, dist, dist2 / (cos_l * area), True, state
 
 
-@register_jitable(inline="always")
+@njit(**INLINED)
 def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
@@ -339,7 +343,7 @@ def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
     return t * t / (cos_l * area)
 
 
-@register_jitable(inline="always")
+@njit(**INLINED)
 def choose_light(lights, u):
     """Index (into the rows of *lights*) of the emitter whose cumulative probability interval holds u."""
     last = lights.shape[1] - 1

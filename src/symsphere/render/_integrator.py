@@ -3,8 +3,9 @@
 The renderer's numba code is here, except the emitters
 (:mod:`symsphere.render._emitters`: sampling, densities, selection, the power
 heuristic), the random-number plumbing (:mod:`symsphere.render._random`) and
-the small kernels for the tests (:mod:`symsphere.render._probes`), all
-inlined into :func:`render_pass`.  Direction sampling at diffuse
+the small kernels for the tests (:mod:`symsphere.render._probes`).  The
+functions of the hot path are numba functions of their own (``INLINED``: typed and compiled
+once each, cached), which LLVM inlines into the one kernel that :func:`render_pass` runs.  Direction sampling at diffuse
 vertices goes through scalar library functions -- the maps and the orbit
 (``triangle_point``, ``triangle_density``, ``orbit_member`` of
 :mod:`symsphere._kernels`), the classic uniform and cosine maps
@@ -90,7 +91,7 @@ from .._splitmix import GOLDEN, ODD, mix64
 from .._threads import run_kernel, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
-from ._emitters import INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
+from ._emitters import INLINED, INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
 from ._random import below, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
 
 UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
@@ -143,7 +144,7 @@ def is_cosine(sampler):
     )  # fmt: skip
 
 
-@njit(inline="always")  # numba-IR inlining: a probe kernel's constant arguments prune the other samplers
+@njit(**INLINED)
 def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
 
@@ -261,7 +262,7 @@ def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     return x, y, z, weight, density / n, state
 
 
-@njit(inline="always")
+@njit(**INLINED)
 def bsdf_pdf(fixed, cosine, code, full, x, y, z):
     """The solid-angle density with which *sampler* draws the local unit direction (x, y, z).
 
@@ -295,7 +296,7 @@ def _tent(bits):
     return 1.0 - math.sqrt(2.0 - r)
 
 
-@njit(inline="always")
+@njit(**INLINED)
 def _film_offset(pixel_filter, state):
     """Position of a sample inside its pixel: box: uniform in [0, 1); tent: smallpt's, in [-0.25, 1.25]."""
     state, b1 = next_u64(state)
@@ -311,7 +312,7 @@ def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     """smallpt's quadratic for the ray o + t d and the sphere (centre c, radius^2 r2): (det, near, far).
 
     b = (c - o) . d, det = b^2 - |c - o|^2 + r^2, roots b -+ sqrt(max(det, 0)) (valid if det >= 0).
-    Scalar, inlined into both sphere loops of :func:`intersect` (numba IR): no call, the loops still vectorise.
+    Scalar, inlined into both sphere loops of :func:`intersect` (by LLVM): no call, the loops still vectorise.
     """
     px = cx - ox
     py = cy - oy
@@ -322,7 +323,7 @@ def _sphere_roots(cx, cy, cz, r2, ox, oy, oz, dx, dy, dz):
     return det, b - root, b + root
 
 
-@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
+@njit(**INLINED)  # speed vs compile time: see render/_emitters.py
 def intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max):
     """Nearest hit with eps < t < t_max: (t, index); index < #spheres a sphere, else #spheres + quad index; -1 none.
 
@@ -400,7 +401,7 @@ def plain_spheres(spheres):
     return n
 
 
-@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
+@njit(**INLINED)  # speed vs compile time: see render/_emitters.py
 def _light_sample(
     px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material, quad_material,
     spheres, quads, state,
@@ -411,7 +412,7 @@ def _light_sample(
     local direction (lx, ly, lz) in the frame (t_row, b_row, n), distance, solid-angle pdf
     times the selection probability, the vertex's reflectance (or transmittance) towards w,
     the emitter's material, state).  ok is False when w is on the wrong side or the BSDF
-    is black there.  Inlined by numba (see :mod:`symsphere.render._emitters` for why).
+    is black there.  Inlined by LLVM (see :mod:`symsphere.render._emitters` for why).
     """
     choice = 0
     if lights.shape[1] > 1:
@@ -437,7 +438,7 @@ def _light_sample(
     return ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state
 
 
-@register_jitable(inline="always")  # speed vs compile time: see render/_emitters.py
+@njit(**INLINED)  # speed vs compile time: see render/_emitters.py
 def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, state):
     """The direction after a mirror or a smooth dielectric (exact unpolarised Fresnel), and the state.
 
@@ -465,7 +466,7 @@ def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, sta
     return eta * dx + k * nx, eta * dy + k * ny, eta * dz + k * nz, state
 
 
-@njit(inline="always")  # numba-IR inlining: no call, no reference counting; a kernel's constants prune branches
+@njit(**INLINED)  # inlined by LLVM into the kernel: no call, no reference counting
 def radiance(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
     rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter, key, s, row, col, width, height, scratch,
@@ -496,16 +497,17 @@ def radiance(
     specular = True  # the previous vertex (the camera counts) was specular: emission gets weight 1
     pdf_bsdf = 0.0  # solid-angle pdf of the direction sampled at the previous diffuse vertex
     # One intersect() site traces the path rays and the shadow rays in turn (a second inlined copy
-    # doubles the compile time): after a vertex with a shadow ray pending, the next trip through the
-    # loop traces it (only up to the sampled emitter point: t_max), adds its contribution if it hits
-    # nothing, and then resumes the path (or ends it) from the saved direction.
+    # doubled the compile time when numba inlined it; LLVM would inline it twice): after a vertex with a
+    # shadow ray pending, the next trip through the loop traces it (only up to the sampled emitter
+    # point: t_max), adds its contribution if it hits nothing, and then resumes the path (or ends it)
+    # from the saved direction.
     shadow = False
     alive = True
     t_max = np.inf  # the path's rays: any hit; a shadow ray: hits before the sampled point
     cr, cg, cb = 0.0, 0.0, 0.0  # the pending shadow ray's contribution if unoccluded
     ndx, ndy, ndz = 0.0, 0.0, 0.0  # the path's next direction while the shadow ray is traced
     px, py, pz = ox, oy, oz
-    depth = 0
+    depth = np.int64(0)  # not a literal: sample_local is typed (and compiled) once
     while True:
         t, hit = intersect(ox, oy, oz, dx, dy, dz, spheres, plain, quads, eps, scratch, t_max)
         if shadow:
@@ -688,5 +690,6 @@ def prepare_kernels() -> None:
     global _ready
     if not _ready:
         invalidate_if_changed(_render_rows)  # the module's cache directory
+        invalidate_if_changed(sample_emitter)  # the emitters' own cached functions (they inline _random, frames)
         start_threads()
         _ready = True

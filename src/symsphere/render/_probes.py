@@ -1,6 +1,6 @@
 """Small kernels for the tests and the documentation: the integrator's scalar functions over arrays.
 
-Each runs one inlined function of the path tracer -- the samplers
+Each runs one function of the path tracer (as the kernel, which LLVM inlines it into) -- the samplers
 (:func:`~symsphere.render._integrator.sample_local`,
 :func:`~symsphere.render._integrator.bsdf_pdf`), the intersection
 (:func:`~symsphere.render._integrator.intersect`), the emitters
