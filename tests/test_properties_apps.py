@@ -384,7 +384,7 @@ def client():
     pytest.importorskip("distributed")
     from distributed import Client, LocalCluster
 
-    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0")
     dask_client = Client(cluster)
     yield dask_client
     dask_client.close()

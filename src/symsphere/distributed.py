@@ -359,7 +359,7 @@ def connect(address: str, *, timeout: float = 10) -> Client:
 
     >>> from distributed import LocalCluster
     >>> from symsphere.distributed import close_client, connect
-    >>> cluster = LocalCluster(n_workers=1, processes=False, dashboard_address=None)
+    >>> cluster = LocalCluster(n_workers=1, processes=False, dashboard_address=":0")  # any free port
     >>> client = connect(cluster.scheduler_address)
     >>> len(client.scheduler_info()["workers"])
     1
@@ -411,7 +411,8 @@ def local_client(workers: int | None = None) -> Client:
     from distributed import Client, LocalCluster
 
     workers = (os.cpu_count() or 1) if workers is None else check_count(workers, "workers")
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    # the scheduler's HTTP server on a free port (None would still take 8787, and warn if it is taken)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
     return Client(cluster)
 
 

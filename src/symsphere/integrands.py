@@ -40,7 +40,6 @@ from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
-from scipy import integrate, special
 
 from ._integrand_kernels import CAP, EXP, PHONG, POLYGON_LIGHT, POLYNOMIAL, SPHERE_LIGHT, Z, integrand_kernel
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
@@ -372,6 +371,8 @@ def _phong_hemisphere_integral(r: Float64Array, n: int) -> float:
         k = min(1.0, tau * cot_b / math.sqrt(1.0 - tau * tau))
         return tau**n * 2.0 * math.acos(k)
 
+    from scipy import integrate  # function-level: scipy.integrate costs ~0.3 s to import (every CLI start)
+
     value, _ = integrate.quad(below, 0.0, sin_b, epsabs=0.0, epsrel=1e-13, limit=200)
     return float(1.0 - (n + 1) / (2.0 * math.pi) * value)
 
@@ -381,6 +382,8 @@ def _exp_hemisphere_integral(a: Float64Array) -> float:
 
     The phi integral of exp(rho s cos(phi - phi0)) is 2 pi I0(rho s) (s = sin theta).
     """
+    from scipy import integrate, special  # function-level: see _phong_hemisphere_integral
+
     rho = math.hypot(a[0], a[1])
     value, _ = integrate.quad(
         lambda z: math.exp(a[2] * z) * special.i0(rho * math.sqrt(max(0.0, 1.0 - z * z))),
