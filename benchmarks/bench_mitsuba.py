@@ -25,8 +25,10 @@ quality
     stratified, orthogonal and ldsampler round it further to their sizes; the seconds actually taken
     are reported).  Metrics: relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01),
     as bench_render.py, and FLIP (flip-evaluator, LDR, on the tone-mapped images), each the mean over
-    --seeds seeds.  Cases: symsphere_path with every strategy (random and Sobol' base points) and
-    Mitsuba's path with independent, stratified, multijitter, orthogonal and ldsampler.
+    --seeds seeds.  Cases: symsphere_path with every strategy (random and Sobol' base points), its
+    symmetric_cosine with Sobol' points and the scene's sampler set to multijitter or ldsampler (which
+    then supplies every other dimension of the path), and Mitsuba's path with independent, stratified,
+    multijitter, orthogonal and ldsampler.
 """
 
 from __future__ import annotations
@@ -53,6 +55,9 @@ OURS = [
     ("symmetric_cosine", "sobol"),
 ]
 MITSUBA_SAMPLERS = ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"]
+# quality: the scheme with one of Mitsuba's QMC samplers for every other dimension of the path (pixel
+# position, light sample, the BSDF samples at other vertices, roulette): the scene's sampler supplies them
+OURS_WITH_QMC = [("symmetric_cosine", "sobol", "multijitter"), ("symmetric_cosine", "sobol", "ldsampler")]
 MAX_DEPTH, RR_DEPTH = 8, 5  # the shipped scenes' integrator
 
 
@@ -62,6 +67,8 @@ class Case:
         self.strategy, self.points, self.sampler = strategy, points, sampler
         if kind == "ours":
             self.label = f"symsphere_path {strategy}" + (f" · {points}" if strategy.startswith("symmetric") else "")
+            if sampler != "independent":
+                self.label += f" + {sampler}"
             self.integrator = mi.load_dict({"type": "symsphere_path", "strategy": strategy, "points": points,
                                             "max_depth": MAX_DEPTH, "rr_depth": RR_DEPTH})  # fmt: skip
         else:
@@ -80,11 +87,18 @@ class Case:
 
     def render(self, width, height, spp, seed):
         scene = self.scene(width, height)
+        if self.kind == "ours" and self.sampler != "independent":  # the sampler's rounding must keep whole groups
+            group = {"symmetric": 24, "symmetric_cosine": 8}.get(self.strategy, 1)
+            while self.mi.load_dict({"type": self.sampler, "sample_count": spp}).sample_count() % group:
+                spp += group
         start = time.perf_counter()
         image = self.mi.render(scene, integrator=self.integrator, spp=spp, seed=seed)
         image = np.array(image, dtype=np.float64)[..., :3]  # np.array waits for the kernel
         seconds = time.perf_counter() - start
-        actual = scene.sensors()[0].sampler().sample_count() if self.kind == "mitsuba" else spp
+        if self.kind == "mitsuba":
+            actual = scene.sensors()[0].sampler().sample_count()
+        else:  # symsphere_path renders with a clone of the scene's sampler, rounded as it rounds
+            actual = self.mi.load_dict({"type": self.sampler, "sample_count": spp}).sample_count()
         return image, seconds, actual
 
 
@@ -152,9 +166,11 @@ def quality(args, mi):
         own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
         ref_ldr = _ldr(ref)
         strip = [ref]  # --images: the reference, then every case at the last budget, side by side
-        cases = [Case(mi, name, "ours", s, p) for s, p in OURS] + [
-            Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS
-        ]
+        cases = (
+            [Case(mi, name, "ours", s, p) for s, p in OURS]
+            + [Case(mi, name, "ours", s, p, sampler) for s, p, sampler in OURS_WITH_QMC]
+            + [Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS]
+        )
         for case in cases:
             case.render(args.width, args.height, args.equal_spp, 0)  # compile
             results = {"equal_spp": []}
