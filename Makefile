@@ -9,7 +9,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: demo test mitsuba-setup bench docs clean
+.PHONY: demo test mitsuba-setup libllvm bench docs clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -27,35 +27,31 @@ test: $(STAMP) mitsuba-setup
 	$(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
 
 # The Mitsuba 3 tests (tests/mitsuba) need the extra "mitsuba" and, for the LLVM variants, libLLVM >= 16
-# (Debian: libllvm19; installed here as root with apt).  Without them the tests skip with the reason;
-# .ci/run sets SYMSPHERE_REQUIRE_MITSUBA=1, which makes a missing Mitsuba an error.
-mitsuba-setup: $(STAMP)
+# (the target libllvm).  Without them the tests skip with the reason; .ci/run sets SYMSPHERE_REQUIRE_MITSUBA=1,
+# which makes a missing Mitsuba an error.
+mitsuba-setup: $(STAMP) libllvm
 	@$(BIN)/python -c "import mitsuba, drjit" 2>/dev/null || $(BIN)/python -m pip install --quiet -e ".[mitsuba]" \
 		|| echo "test: could not install the extra 'mitsuba'; tests/mitsuba will be skipped"
+
+# libLLVM >= 16 for Mitsuba's LLVM variants (drjit finds it, or DRJIT_LIBLLVM_PATH names it): Debian's
+# libllvm19, installed here as root with apt; elsewhere one line says how.  Without it tests/mitsuba skip
+# and bench_sample.py skips its Mitsuba cases.
+libllvm: $(STAMP)
 	@if $(BIN)/python benchmarks/bench_sample.py --find-llvm >/dev/null; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-		echo "test: installing libllvm19 for Mitsuba's LLVM backend (apt-get)"; \
+		echo "installing libllvm19 for Mitsuba's LLVM backend (apt-get)"; \
 		(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19) \
-			|| echo "test: apt-get install libllvm19 failed; tests/mitsuba will be skipped"; \
+			|| echo "apt-get install libllvm19 failed; Mitsuba's LLVM variants cannot run"; \
 	else \
-		echo "test: for tests/mitsuba run 'sudo apt-get install libllvm19' (or set DRJIT_LIBLLVM_PATH to a libLLVM >= 16)"; \
+		echo "for Mitsuba's LLVM variants run 'sudo apt-get install libllvm19' (or set DRJIT_LIBLLVM_PATH to a libLLVM >= 16)"; \
 	fi
 
 # make bench: the speed benchmarks (docs/benchmarks.md).  Mitsuba 3 (the optional extra "bench") is
-# a peer in the comparison; drjit 1.5 needs LLVM >= 16 (Debian: libllvm19).  Both are optional: if
-# either cannot be installed, bench_sample.py says why and skips the Mitsuba cases.
-bench: $(STAMP)
+# a peer in the comparison; its LLVM backend needs libLLVM >= 16 (the target libllvm).  Both are optional:
+# if either cannot be installed, bench_sample.py says why and skips the Mitsuba cases.
+bench: $(STAMP) libllvm
 	$(BIN)/python -c "import mitsuba" 2>/dev/null || $(BIN)/python -m pip install --quiet -e ".[bench]" \
 		|| echo "bench: could not install mitsuba (the extra 'bench'); the Mitsuba cases will be skipped"
-	@if $(BIN)/python benchmarks/bench_sample.py --find-llvm; then :; \
-	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-		echo "bench: installing libllvm19 for Mitsuba's LLVM backend (apt-get)"; \
-		(apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libllvm19) \
-			|| echo "bench: apt-get install libllvm19 failed; the Mitsuba cases will be skipped"; \
-	else \
-		echo "bench: for the Mitsuba cases run 'sudo apt-get install libllvm19'"; \
-		echo "       (or install LLVM >= 16 otherwise and set DRJIT_LIBLLVM_PATH to its libLLVM)"; \
-	fi
 	$(BIN)/python benchmarks/bench_sample.py
 	$(BIN)/python benchmarks/first_sample.py
 	$(BIN)/python benchmarks/bench_render.py equal-time
