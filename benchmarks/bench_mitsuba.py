@@ -87,18 +87,17 @@ class Case:
 
     def render(self, width, height, spp, seed):
         scene = self.scene(width, height)
-        if self.kind == "ours" and self.sampler != "independent":  # the sampler's rounding must keep whole groups
-            group = {"symmetric": 24, "symmetric_cosine": 8}.get(self.strategy, 1)
-            while self.mi.load_dict({"type": self.sampler, "sample_count": spp}).sample_count() % group:
-                spp += group
+        if self.kind == "ours":  # symsphere_path renders with a clone of the scene's sampler, rounded as it rounds
+            import symsphere.mitsuba as sm
+
+            group = sm.GROUP_SIZES[self.strategy]
+            while (rounded := self.mi.load_dict({"type": self.sampler, "sample_count": spp}).sample_count()) % group:
+                spp += group  # the sampler's rounding must keep whole groups
         start = time.perf_counter()
         image = self.mi.render(scene, integrator=self.integrator, spp=spp, seed=seed)
         image = np.array(image, dtype=np.float64)[..., :3]  # np.array waits for the kernel
         seconds = time.perf_counter() - start
-        if self.kind == "mitsuba":
-            actual = scene.sensors()[0].sampler().sample_count()
-        else:  # symsphere_path renders with a clone of the scene's sampler, rounded as it rounds
-            actual = self.mi.load_dict({"type": self.sampler, "sample_count": spp}).sample_count()
+        actual = scene.sensors()[0].sampler().sample_count() if self.kind == "mitsuba" else rounded
         return image, seconds, actual
 
 

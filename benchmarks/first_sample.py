@@ -16,7 +16,8 @@ The breakdown runs the same child with ``time.perf_counter`` around
 with an empty numba cache, in one new process, the first ``sample_sphere`` and then each
 further variant (dtype, point set, domain, frame, map), the first ``integrate`` with a numpy
 f, the first ``render`` (its kernel, with the functions LLVM inlines into it); in new processes
-the first ``symsphere render --scene cornell`` and ``symsphere demo``; and every kernel numba compiled on the way, with its compile time (numba's
+the first ``symsphere render --scene cornell`` and ``symsphere demo``; and every kernel numba
+compiled on the way, with its compile time (numba's
 ``"numba:compile"`` events).  Each is run ``--cold`` times; medians are reported, with the
 CPU seconds beside the wall seconds (on a shared machine wall time includes waiting).
 

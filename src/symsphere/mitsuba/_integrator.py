@@ -62,8 +62,9 @@ __all__ = [
 STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
 POINTS = ("random", "sobol")
 GROUP_SIZES = {"bsdf": 1, "cosine": 1, "symmetric": 24, "symmetric_cosine": 8}
-_COSINE_STRATEGIES = ("cosine", "symmetric_cosine")  # density |cos| / pi
-_SYMMETRIC_STRATEGIES = ("symmetric", "symmetric_cosine")  # the strategies that replace the BSDF's sample
+# the strategies that replace the BSDF's sample at Lambertian vertices: those with groups (bsdf and cosine
+# take the BSDF's own sample, which for cosine is the same direction: see the module docstring)
+_SYMMETRIC_STRATEGIES = tuple(strategy for strategy, size in GROUP_SIZES.items() if size > 1)
 _BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
 _BASE_V = 0x5851F42D4C957F2D
 _INV_PI = 1.0 / math.pi
@@ -248,7 +249,7 @@ class _PathMethods:
     def _density(self, wo: Any, wi_z: Any) -> Any:
         """The strategy's density of the local direction *wo* (on the side of wi), for MIS."""
         same_side = wo.z * wi_z > 0
-        if self.strategy in _COSINE_STRATEGIES:
+        if self.strategy == "symmetric_cosine":  # density |cos| / pi
             return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
         if self.method == "equal_area":
             return dr.select(same_side, 1.0 / (2.0 * math.pi), 0.0)
@@ -312,7 +313,7 @@ class _PathMethods:
                 # whatever the direction (0 where wi is below a one-sided surface, and in the measure-zero
                 # event that its own direction has pdf 0), so f cos at `local` is R |z| / pi: no second
                 # BSDF evaluation (texture lookup, virtual call) per vertex.
-                if dr.hint(self.strategy in _COSINE_STRATEGIES, mode="scalar"):
+                if dr.hint(self.strategy == "symmetric_cosine", mode="scalar"):
                     weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
                 else:
                     weight_local = dr.select(
