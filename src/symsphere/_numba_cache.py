@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import functools
 import hashlib
 from collections.abc import Iterable
 from pathlib import Path
@@ -35,8 +36,15 @@ def _package_root(path: Path) -> Path:
     return root
 
 
-def _imported_files(path: Path, root: Path) -> set[Path]:
+def _imported_files(path: Path, root: Path) -> frozenset[Path]:
     """Files of the package under *root* that the module at *path* imports (relative or absolute)."""
+    stat = path.stat()  # the parse is remembered while the file is unchanged (every render re-checks)
+    return _parsed_imports(path, root, stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=256)
+def _parsed_imports(path: Path, root: Path, mtime_ns: int, size: int) -> frozenset[Path]:
+    """:func:`_imported_files` of one version of the file (*mtime_ns*, *size*: the cache key only)."""
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     package = path.parent
     found: set[Path] = set()
@@ -69,7 +77,7 @@ def _imported_files(path: Path, root: Path) -> set[Path]:
             for alias in node.names:
                 if alias.name.split(".")[0] == root.name:
                     add(root.parent, alias.name)
-    return {f for f in found if root == f.parent or root in f.parents}
+    return frozenset(f for f in found if root == f.parent or root in f.parents)
 
 
 def kernel_dependencies(dispatcher: Any) -> list[Path]:

@@ -13,6 +13,7 @@ import importlib
 from types import ModuleType
 
 from . import _blocks as blocks
+from . import _compile_ahead as compile_ahead
 from . import _fused as fused
 from . import _integrand_kernels as integrand_kernels
 from . import _kernels as kernels
@@ -27,6 +28,7 @@ from .warps import _triangle as warps_triangle
 
 __all__ = [
     "blocks",
+    "compile_ahead",
     "fused",
     "integrand_kernels",
     "kernels",

@@ -36,7 +36,7 @@ from typing import Any, cast
 
 import numba
 
-__all__ = ["WAIT_POLICY", "start_threads", "run_parts", "run_kernel"]
+__all__ = ["WAIT_POLICY", "start_threads", "run_parts", "run_kernel", "compile_interruptibly"]
 
 _typeof = cast(Callable[[Any], Any], numba.typeof)  # the type numba dispatches a value on (numba: untyped)
 
@@ -113,11 +113,11 @@ def run_kernel(kernel: Any, arguments: Callable[[int], tuple[Any, ...]], count: 
     compiled object yet" errors and a hung process).
     """
     first = arguments(0)
-    _compile(kernel, tuple(_typeof(value) for value in first))
+    compile_interruptibly(kernel, tuple(_typeof(value) for value in first))
     run_parts(lambda index: kernel(*(first if index == 0 else arguments(index))), count)
 
 
-def _compile(kernel: Any, signature: tuple[Any, ...]) -> None:
+def compile_interruptibly(kernel: Any, signature: tuple[Any, ...]) -> None:
     """``kernel.compile(signature)``, with a SIGINT during it always ending as KeyboardInterrupt.
 
     numba runs some of its compile steps as callbacks from LLVM's C code, which swallow Python

@@ -47,7 +47,11 @@ Unbiasedness against the other integrator
     against ``bsdf``/``cosine``.
 """
 
+import json
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -68,6 +72,7 @@ from symsphere.render import (
     Quad,
     Scene,
     Sphere,
+    cornell,
     diffuse,
     furnace,
     render,
@@ -687,3 +692,35 @@ def test_the_disk_cache_guard_also_covers_the_emitters_cached_functions(tmp_path
     subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=120)
     stamps = {p.name for p in tmp_path.rglob("*.deps-sha256")}
     assert {"_integrator.deps-sha256", "_emitters.deps-sha256"} <= stamps
+
+
+COLD_RENDER = """
+import json
+from symsphere.render import cornell, render
+from symsphere._testing import render_integrator as K
+image = render(cornell(), width=8, height=6, spp=48, seed=5).image
+parts = K.kernel_parts()
+print(json.dumps({
+    "image": image.tobytes().hex(),
+    "signatures": {name: [str(s) for s in d.signatures] for name, (d, _) in parts.items()},
+    "expected": {name: str(tuple(t)) for name, (_, t) in parts.items()},
+    "loaded": {name: sum(d.stats.cache_hits.values()) for name, (d, _) in parts.items()},
+}))
+"""
+
+
+def test_a_cold_render_compiles_the_parts_kernel_parts_names_and_gives_the_warm_image(tmp_path):
+    # On a cold cache symsphere._compile_ahead compiles kernel_parts() for the types listed there, some in
+    # a second process (two CPUs or more).  A cold render must compile (or load) each part for exactly
+    # those types and no others: a part compiled here for other types would show a second signature, one
+    # the second process compiled for other types would not be loaded from the cache.  Its image is the
+    # one this process renders from its own (warm) kernels, to the bit.
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    result = subprocess.run([sys.executable, "-c", COLD_RENDER], env=env, capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    cold = json.loads(result.stdout.splitlines()[-1])
+    assert cold["signatures"] == {name: [types] for name, types in cold["expected"].items()}
+    if len(os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else range(os.cpu_count() or 1)) >= 2:
+        assert {name for name, hits in cold["loaded"].items() if hits} == set(K.COMPILE_THERE)
+    warm = render(cornell(), width=8, height=6, spp=48, seed=5).image
+    assert cold["image"] == warm.tobytes().hex()

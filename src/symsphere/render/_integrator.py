@@ -82,9 +82,10 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import get_num_threads, njit
+from numba import get_num_threads, njit, types
 from numba.extending import register_jitable
 
+from .._compile_ahead import compile_ahead
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from .._splitmix import GOLDEN, ODD, mix64
@@ -663,6 +664,7 @@ def render_pass(
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
+    compile_ahead(_render_rows, __name__, COMPILE_HERE, COMPILE_THERE)  # a cold cache: in two processes
     parts = max(1, min(get_num_threads(), len(rows)))
 
     def arguments(index):
@@ -675,6 +677,32 @@ def render_pass(
         )  # fmt: skip
 
     run_kernel(_render_rows, arguments, parts)
+
+
+# The kernel's parts that numba compiles on their own, split in two groups of about equal compile
+# time (measured: docs/benchmarks.md, cold start) for symsphere._compile_ahead
+COMPILE_HERE = ("_light_sample", "intersect", "emitter_pdf", "_film_offset")
+COMPILE_THERE = ("sample_local", "bsdf_pdf", "_specular_direction")
+
+
+def kernel_parts() -> dict[str, tuple[Any, tuple[Any, ...]]]:
+    """The kernel's cached parts, each with the argument types :func:`_render_rows` calls it with.
+
+    What :func:`symsphere._compile_ahead.compile_ahead` compiles in two processes on a cold cache
+    (tested: a cold render compiles each part for exactly these types, and only them).
+    """
+    f, i, u, b = types.float64, types.int64, types.uint64, types.boolean
+    f1, f2, i1 = types.Array(f, 1, "C"), types.Array(f, 2, "C"), types.Array(i, 1, "C")
+    row = types.UniTuple(f, 3)
+    return {
+        "_light_sample": (_light_sample, (f, f, f, f, f, f, row, row, b, i, f2, f1, f2, i1, i1, f2, f2, u)),
+        "intersect": (intersect, (f, f, f, f, f, f, f2, i, f2, f, f1, f)),
+        "emitter_pdf": (emitter_pdf, (f, f, f, i, f, f, f2, f2)),
+        "_film_offset": (_film_offset, (i, u)),
+        "sample_local": (sample_local, (i, i, b, i, b, u, i, i, u)),
+        "bsdf_pdf": (bsdf_pdf, (i, b, i, b, f, f, f)),
+        "_specular_direction": (_specular_direction, (i, f, f, f, f, f, f, f, b, f, u)),
+    }
 
 
 _ready = False

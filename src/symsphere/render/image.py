@@ -9,7 +9,8 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 - ``.npy``: the array as is (``numpy.save``), float64 unless given otherwise.
 - PNG: ``exposure * radiance`` clamped to [0, 1], then the sRGB transfer
   function (``12.92 c`` below 0.0031308, else ``1.055 c^(1/2.4) - 0.055``),
-  rounded to 8 bits; written with ``matplotlib.image.imsave``.
+  rounded to 8 bits; written as 8-bit RGB with Pillow (matplotlib's own PNG writer, without
+  matplotlib's ~0.7 s import and set-up on every render).
 """
 
 from __future__ import annotations
@@ -57,9 +58,9 @@ def _encode(suffix: str, image: FloatArray, exposure: float) -> bytes:
     """The bytes of *image* (checked) in the format of *suffix*: made before any temporary file exists."""
     buffer = io.BytesIO()
     if suffix == ".png":
-        from matplotlib.image import imsave
+        from PIL import Image  # function-level: only PNG output needs it
 
-        imsave(buffer, tonemap(image, exposure), format="png")
+        Image.fromarray(tonemap(image, exposure), mode="RGB").save(buffer, format="png")
     elif suffix == ".pfm":
         height, width = image.shape[:2]
         buffer.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))

@@ -1,0 +1,111 @@
+"""Compile a kernel's parts in two processes when numba's disk cache is cold.
+
+numba compiles in one thread.  A kernel built from cached numba functions that LLVM
+inlines into it (the renderer's: ``symsphere.render._emitters.INLINED``) compiles those
+parts one after another on its first run.  :func:`compile_ahead` compiles one group of
+parts in a second Python process, into the disk cache, while this process compiles the
+other group; numba looks in the cache before it compiles a function, so the kernel's own
+compile then loads the second group from there.  What is loaded is what this process
+would have compiled (numba caches a function's machine code with its LLVM bitcode, which
+is what LLVM inlines), so the kernel is the same; the tests compare images bit for bit.
+
+Nothing happens when the kernel is in the cache already (every run after the first), on
+one core, or with caching off.  The second process is only a speed-up: if it fails, is
+killed or takes longer than *timeout*, this process compiles what is missing itself.
+Nothing happens at import.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import subprocess
+import sys
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ._threads import compile_interruptibly
+
+__all__ = ["compile_ahead", "is_cached"]
+
+Parts = Mapping[str, tuple[Any, tuple[Any, ...]]]
+"""name -> (numba dispatcher with ``cache=True``, its argument types)."""
+
+
+def is_cached(dispatcher: Any) -> bool:
+    """Whether numba's disk cache holds an entry of *dispatcher* for its current source (any signature).
+
+    False if it is not cached at all (``cache=False``, or no writable cache location).
+    """
+    cache = getattr(dispatcher, "_cache", None)
+    index = getattr(cache, "_cache_file", None)
+    if index is None:
+        return False
+    try:
+        return bool(index._load_index())  # {} when missing, or stale (another source stamp)
+    except (OSError, EOFError, ValueError):
+        return False
+
+
+def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence[str], timeout: float = 300.0) -> None:
+    """Before *kernel*'s first compile on a cold cache: its parts *there* in a second process, *here* in this one.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        The kernel that calls the parts; nothing is done if it is cached already.
+    module : str
+        The module whose ``kernel_parts()`` returns the parts (:data:`Parts`); the second
+        process imports it.
+    here, there : sequence of str
+        Names of the parts compiled in this process and in the second one.
+    timeout : float
+        Seconds to wait for the second process after this one's parts are done.
+    """
+    if len(there) == 0 or is_cached(kernel) or _cpus() < 2:
+        return
+    package = Path(__file__).resolve().parents[1]  # the second process imports this very package
+    environment = dict(os.environ)
+    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(package), environment.get("PYTHONPATH")]))
+    command = [sys.executable, "-m", __name__, module, *there]
+    try:
+        helper = subprocess.Popen(
+            command, env=environment, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
+    except OSError:
+        return  # no second process: this one compiles everything, as without this module
+    try:
+        _compile_parts(module, here, compile_interruptibly)
+        helper.wait(timeout)
+    except subprocess.TimeoutExpired:
+        pass  # the kernel's compile loads what is cached and compiles the rest
+    finally:
+        if helper.poll() is None:
+            helper.kill()
+            helper.wait()
+
+
+def _cpus() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _compile_parts(module: str, names: Sequence[str], compile: Callable[[Any, tuple[Any, ...]], None]) -> None:
+    parts: Parts = importlib.import_module(module).kernel_parts()
+    for name in names:
+        dispatcher, signature = parts[name]
+        compile(dispatcher, signature)
+
+
+def _main(argv: Sequence[str]) -> int:
+    """``python -m symsphere._compile_ahead MODULE NAME...``: compile those parts into the disk cache."""
+    module, *names = argv
+    _compile_parts(module, names, lambda dispatcher, signature: dispatcher.compile(signature))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_main(sys.argv[1:]))
