@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_mitsuba.py speed            # paths/s ratios (interleaved rounds)
     .venv/bin/python benchmarks/bench_mitsuba.py quality          # relMSE and FLIP at equal spp and equal time
+    .venv/bin/python benchmarks/bench_mitsuba.py lengths          # mean vertices per camera path
     .venv/bin/python benchmarks/bench_mitsuba.py all --json results/mitsuba.json
 
 Scenes: the shipped Mitsuba scene files (symsphere.mitsuba.SCENES), at --width x --height (256 x 256),
@@ -12,7 +13,13 @@ speed
     warm-up render (the JIT compile, reported separately as the first render's excess over the
     median); reported: the median seconds and paths/s, and the ratio of the medians to Mitsuba's
     ``path`` with the ``independent`` sampler, measured in the same rounds (targets: >= 0.95 for
-    strategies bsdf and cosine, >= 0.9 for the symmetric ones).
+    strategies bsdf and cosine, >= 0.9 for the symmetric ones).  ``--max-depth 3`` (two bounces, before
+    the roulette starts) compares the cost per vertex: paths of nearly the same length in every case.
+lengths
+    Mean vertices per camera path of every strategy (surface hits, the camera's included), from an
+    instrumented copy of ``symsphere_path`` whose ``_trace`` returns the path's depth instead of its
+    radiance (written to a temporary module; the estimator is otherwise the shipped one): a strategy
+    whose directions make longer paths does more work per path, which paths/s counts against it.
 report
     Markdown tables of a quality run's --json file: relMSE and FLIP at equal spp and relMSE·spp (equal
     work: Mitsuba's samplers round the spp up), and the efficiency 1/(relMSE·seconds) at the last budget
@@ -62,18 +69,19 @@ MAX_DEPTH, RR_DEPTH = 8, 5  # the shipped scenes' integrator
 
 
 class Case:
-    def __init__(self, mi, name, kind, strategy=None, points=None, sampler="independent"):
+    def __init__(self, mi, name, kind, strategy=None, points=None, sampler="independent", max_depth=MAX_DEPTH,
+                 integrator="symsphere_path"):  # fmt: skip
         self.mi, self.scene_name, self.kind = mi, name, kind
         self.strategy, self.points, self.sampler = strategy, points, sampler
         if kind == "ours":
             self.label = f"symsphere_path {strategy}" + (f" · {points}" if strategy.startswith("symmetric") else "")
             if sampler != "independent":
                 self.label += f" + {sampler}"
-            self.integrator = mi.load_dict({"type": "symsphere_path", "strategy": strategy, "points": points,
-                                            "max_depth": MAX_DEPTH, "rr_depth": RR_DEPTH})  # fmt: skip
+            self.integrator = mi.load_dict({"type": integrator, "strategy": strategy, "points": points,
+                                            "max_depth": max_depth, "rr_depth": RR_DEPTH})  # fmt: skip
         else:
             self.label = f"Mitsuba path · {sampler}"
-            self.integrator = mi.load_dict({"type": "path", "max_depth": MAX_DEPTH, "rr_depth": RR_DEPTH})
+            self.integrator = mi.load_dict({"type": "path", "max_depth": max_depth, "rr_depth": RR_DEPTH})
         self.scenes = {}
 
     def scene(self, width, height):
@@ -115,7 +123,10 @@ def speed(args, mi):
 
     rows = []
     for name in args.scenes:
-        cases = [Case(mi, name, "mitsuba")] + [Case(mi, name, "ours", s, p) for s, p in OURS]
+        depth = args.max_depth
+        cases = [Case(mi, name, "mitsuba", max_depth=depth)] + [
+            Case(mi, name, "ours", s, p, max_depth=depth) for s, p in OURS
+        ]
         first = {}
         for case in cases:
             first[case.label] = case.render(args.width, args.height, args.spp, 0)[1]
@@ -134,11 +145,59 @@ def speed(args, mi):
                          "ratio_to_path": base / median, "compile_s": max(first[case.label] - median, 0.0),
                          "others_cpu_share": None if load is None else load["share_of_all_cpus"]})  # fmt: skip
         share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
-        print(f"{name}: others' CPU share {share}", flush=True)
+        print(f"{name} (max_depth {depth}): others' CPU share {share}", flush=True)
         for row in rows[-len(cases) :]:
             print(f"  {row['case']:<40} {row['median_s']:.3f} s  {row['paths_per_s'] / 1e6:.2f} Mpaths/s  "
                   f"x{row['ratio_to_path']:.3f}  compile +{row['compile_s']:.1f} s", flush=True)  # fmt: skip
     assert set(args.scenes) <= set(sm.SCENES)
+    return rows
+
+
+_DEPTH_RETURN = (
+    "return dr.select(valid_ray, result, 0.0), valid_ray",
+    "return mi.Spectrum(mi.Float(depth)), mi.Bool(True)",
+)
+
+
+def _depth_integrator(mi, folder):
+    """Register ``symsphere_path_depth``: symsphere_path whose image is each path's vertex count (see lengths)."""
+    import importlib
+    import inspect
+
+    import symsphere.mitsuba as sm
+
+    source = Path(inspect.getsourcefile(sm.integrator_class())).read_text(encoding="utf-8")
+    for old, new in (
+        _DEPTH_RETURN,
+        ('mi.register_integrator("symsphere_path"', 'mi.register_integrator("symsphere_path_depth"'),
+        ("from ..", "from symsphere."),
+        ("from . import", "from symsphere.mitsuba import"),
+        ("from ._", "from symsphere.mitsuba._"),
+    ):
+        if old not in source:
+            raise RuntimeError(f"symsphere_path's source changed: {old!r} not found; update _depth_integrator")
+        source = source.replace(old, new)
+    (Path(folder) / "symsphere_path_depth.py").write_text(source, encoding="utf-8")
+    sys.path.insert(0, str(folder))
+    importlib.import_module("symsphere_path_depth").register()
+
+
+def lengths(args, mi):
+    import tempfile
+
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        _depth_integrator(mi, folder)
+        for name in args.scenes:
+            for s, p in OURS:
+                case = Case(mi, name, "ours", s, p, max_depth=args.max_depth, integrator="symsphere_path_depth")
+                image = case.render(args.width, args.height, args.spp, 1)[0]
+                rows.append({"scene": name, "case": case.label, "vertices_per_path": float(image[..., 0].mean())})
+            base = rows[-len(OURS)]["vertices_per_path"]
+            print(f"{name} (max_depth {args.max_depth}): mean vertices per camera path", flush=True)
+            for row in rows[-len(OURS) :]:
+                row["ratio_to_bsdf"] = row["vertices_per_path"] / base
+                print(f"  {row['case']:<40} {row['vertices_per_path']:.4f}  x{row['ratio_to_bsdf']:.4f}", flush=True)
     return rows
 
 
@@ -251,13 +310,18 @@ def main(argv=None):
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "what", choices=("speed", "quality", "all", "report"), help="report: print the markdown tables of --json FILE"
+        "what",
+        choices=("speed", "quality", "lengths", "all", "report"),
+        help="report: print the markdown tables of --json FILE",
     )
     parser.add_argument("--scenes", nargs="+", default=list(sm.SCENES), choices=sm.SCENES)
     parser.add_argument("--width", type=int, default=256)
     parser.add_argument("--height", type=int, default=256)
     parser.add_argument(
         "--spp", type=int, default=48, help="speed: spp per render, a multiple of 24 (default %(default)s)"
+    )
+    parser.add_argument(
+        "--max-depth", type=int, default=MAX_DEPTH, help="speed, lengths: max_depth of every integrator (default 8)"
     )
     parser.add_argument("--rounds", type=int, default=5, help="speed: interleaved rounds (default %(default)s)")
     parser.add_argument("--ref-spp", type=int, default=2048, help="quality: reference spp (default %(default)s)")
@@ -286,6 +350,8 @@ def main(argv=None):
         record["speed"] = speed(args, mi)
     if args.what in ("quality", "all"):
         record["quality"] = quality(args, mi)
+    if args.what in ("lengths", "all"):
+        record["lengths"] = lengths(args, mi)
     if args.json:
         Path(args.json).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
 
