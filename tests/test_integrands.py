@@ -8,9 +8,12 @@ region (the cap or the light cone is the whole region), and for the polygon
 light a Gauss-Legendre rule on the polygon itself.
 """
 
+import math
+
 import numpy as np
 import pytest
 from references import cap_rule
+from scipy import integrate, special
 
 import symsphere as ss
 from symsphere import harmonics as H
@@ -170,6 +173,59 @@ def test_sphere_light_closed_form():
     assert p["cos_alpha"] == pytest.approx(np.sqrt(1 - sin_alpha**2), rel=1e-15)
     # a light straight overhead: E = pi L sin^2(alpha)
     assert I.sphere_light_irradiance([0, 0, 2], 4.0, 1.0, radiance=2.0) == pytest.approx(np.pi * 2 / 16, rel=1e-15)
+
+
+def _phong_hemisphere_integral(r, n):
+    """Integral over z >= 0 of the normalised Phong lobe (n+1)/(2 pi) max(0, w.r)^n.
+
+    About r, w = cos t r + sin t (cos psi e1 + sin psi e2) with e1 the unit
+    vector towards the pole in the plane of r and z, so
+    w_z = cos t cos(beta) + sin t sin(beta) cos psi (beta = angle of r from the
+    pole).  For t > pi/2 - beta the part cos(psi) < -cot t cot(beta) lies below
+    the horizon, a psi-measure of 2 acos(cot t cot(beta)).  With tau = cos t:
+    integral = 1 - (n+1)/(2 pi) int_0^{sin beta} tau^n 2 acos(tau cot(beta)/sqrt(1 - tau^2)) dtau.
+    """
+    cos_b = float(r[2])
+    sin_b = math.sqrt(max(0.0, 1.0 - cos_b * cos_b))
+    if sin_b == 0:
+        return 1.0
+    cot_b = cos_b / sin_b
+
+    def below(tau: float) -> float:
+        k = min(1.0, tau * cot_b / math.sqrt(1.0 - tau * tau))
+        return tau**n * 2.0 * math.acos(k)
+
+    value, _ = integrate.quad(below, 0.0, sin_b, epsabs=0.0, epsrel=1e-13, limit=200)
+    return float(1.0 - (n + 1) / (2.0 * math.pi) * value)
+
+
+def _exp_hemisphere_integral(a):
+    """Integral over z >= 0 of exp(w . a) = 2 pi int_0^1 exp(a_z z) I0(rho sqrt(1 - z^2)) dz.
+
+    The phi integral of exp(rho s cos(phi - phi0)) is 2 pi I0(rho s) (s = sin theta).
+    """
+    rho = math.hypot(a[0], a[1])
+    value, _ = integrate.quad(
+        lambda z: math.exp(a[2] * z) * special.i0(rho * math.sqrt(max(0.0, 1.0 - z * z))),
+        0.0,
+        1.0,
+        epsabs=0.0,
+        epsrel=1e-13,
+        limit=200,
+    )
+    return float(2.0 * math.pi * value)
+
+
+def test_tabulated_hemisphere_integrals_are_the_quadratures():
+    """The two tabulated exact values (no closed form) against scipy's adaptive 1D quadrature.
+
+    Bound: quad's relative tolerance 1e-13 plus a few ulps of libm's acos/exp/I0 (which may differ between
+    machines) in each of ~10^3 integrand values: 2e-13 relative.
+    """
+    phong, expo = I.INTEGRANDS["phong_hemisphere"], I.INTEGRANDS["exp_hemisphere"]
+    assert phong.params["exponent"] == 20
+    assert phong.exact == pytest.approx(_phong_hemisphere_integral(phong.params["direction"], 20), rel=2e-13, abs=0)
+    assert expo.exact == pytest.approx(_exp_hemisphere_integral(expo.params["a"]), rel=2e-13, abs=0)
 
 
 def test_phong_hemisphere_value():

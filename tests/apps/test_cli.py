@@ -229,3 +229,14 @@ def test_unreachable_scheduler_is_a_clear_error(capsys):
     args = ["integrate", "--integrand", "exp", "--n", "48", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"]
     assert main(args) == 1
     assert "could not reach the Dask scheduler" in capsys.readouterr().err
+
+
+def test_cli_start_imports_no_heavy_scipy():
+    """Starting the command line imports what ``import symsphere`` does of scipy, not scipy.integrate,
+    scipy.special or scipy.spatial (~0.5 s of every start; docs/benchmarks.md, "No scipy at command-line start")."""
+    code = (
+        "import sys, symsphere.apps.cli\n"
+        "print(sorted(m for m in ('scipy.integrate', 'scipy.special', 'scipy.spatial') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+    assert done.stdout.strip() == "[]", done.stdout

@@ -16,7 +16,6 @@ from typing import Literal, TypedDict
 
 import numpy as np
 from numba import njit, prange
-from scipy.spatial.transform import Rotation
 
 from ..._threads import start_threads
 from ..._typing import Float64Array, FloatArray, PointSet, RNGLike
@@ -100,6 +99,8 @@ def compiled_sample(peer: Peer, n: int, rng: RNGLike, points: PointSet = "random
     ...                  rtol=0, atol=1e-15))
     True
     """
+    from scipy.spatial.transform import Rotation  # function-level: scipy.spatial adds ~0.3 s to every CLI start
+
     start_threads()  # numba's threads wait passively, as the scheme's kernels' do
     out = np.empty((n, 3))
     if peer.name in ("classic", "octahedral"):
