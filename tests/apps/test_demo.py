@@ -1,5 +1,7 @@
 """The demo (symsphere.apps.demo): ``symsphere demo`` and ``run_demo``."""
 
+import contextlib
+import io
 import re
 
 import pytest
@@ -23,10 +25,18 @@ pytestmark = pytest.mark.xdist_group("demo")
 
 
 @pytest.fixture(scope="session")
-def demo_dir(tmp_path_factory):
+def demo_run(tmp_path_factory):
+    """(the output folder, what the run printed on stdout) of one demo run, made once for the session."""
     out = tmp_path_factory.mktemp("demo") / "symsphere-demo"
-    assert main(["demo", "--out", str(out), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
-    return out
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert main(["demo", "--out", str(out), "--n", str(DEMO_N), "--seed", "0", "--no-progress"]) == 0
+    return out, printed.getvalue()
+
+
+@pytest.fixture
+def demo_dir(demo_run):
+    return demo_run[0]
 
 
 def test_demo_writes_report_and_figure(demo_dir):
@@ -129,10 +139,9 @@ def test_figure_and_report_agree_on_the_scatter_directions_for_small_n(tmp_path,
     assert "1 whole orbit (48 directions)" in text and "render.png" in text
 
 
-def test_demo_names_all_its_files_in_help_and_closing_line(tmp_path, capsys):
+def test_demo_names_all_its_files_in_help_and_closing_line(demo_run, capsys):
     # render.png was mentioned neither in --help nor in the closing line.
     assert main(["demo", "--help"]) == 0
     assert "render.png" in capsys.readouterr().out
-    assert main(["demo", "--out", str(tmp_path / "d"), "--n", "480", "--no-progress"]) == 0
-    closing = capsys.readouterr().out
+    closing = demo_run[1].strip().splitlines()[-1]  # the session's demo run (no second run for this)
     assert all(name in closing for name in DEMO_FILES)
