@@ -20,6 +20,11 @@ lengths
     instrumented copy of ``symsphere_path`` whose ``_trace`` returns the path's depth instead of its
     radiance (written to a temporary module; the estimator is otherwise the shipped one): a strategy
     whose directions make longer paths does more work per path, which paths/s counts against it.
+speed and lengths also run ``uniform warp``: symsphere_path with strategy ``symmetric`` whose direction
+    at Lambertian vertices is Mitsuba's own ``mi.warp.square_to_uniform_hemisphere`` of an i.i.d. point
+    per sample (hashed as the random strategies' points; a rewritten copy registered here only, as for
+    lengths): uniform directions without the scheme, so that its ratio to ``symmetric`` · random tells
+    the scheme's cost from that of uniform sampling.
 report
     Markdown tables of a quality run's --json file: relMSE and FLIP at equal spp and relMSE·spp (equal
     work: Mitsuba's samplers round the spp up), and the efficiency 1/(relMSE·seconds) at the last budget
@@ -70,11 +75,13 @@ MAX_DEPTH, RR_DEPTH = 8, 5  # the shipped scenes' integrator
 
 class Case:
     def __init__(self, mi, name, kind, strategy=None, points=None, sampler="independent", max_depth=MAX_DEPTH,
-                 integrator="symsphere_path"):  # fmt: skip
+                 integrator="symsphere_path", label=None):  # fmt: skip
         self.mi, self.scene_name, self.kind = mi, name, kind
         self.strategy, self.points, self.sampler = strategy, points, sampler
         if kind == "ours":
-            self.label = f"symsphere_path {strategy}" + (f" · {points}" if strategy.startswith("symmetric") else "")
+            self.label = label or (
+                f"symsphere_path {strategy}" + (f" · {points}" if strategy.startswith("symmetric") else "")
+            )
             if sampler != "independent":
                 self.label += f" + {sampler}"
             self.integrator = mi.load_dict({"type": integrator, "strategy": strategy, "points": points,
@@ -118,15 +125,21 @@ def _setup():
     return mi
 
 
-def speed(args, mi):
+UNIFORM_WARP = "uniform warp (Mitsuba's, no scheme)"
+
+
+def speed(args, mi, folder):
     import symsphere.mitsuba as sm
 
+    _rewritten_integrator(folder, "symsphere_path_uniform", _UNIFORM_WARP)
     rows = []
     for name in args.scenes:
         depth = args.max_depth
+        uniform = Case(mi, name, "ours", "symmetric", "random", max_depth=depth, integrator="symsphere_path_uniform",
+                       label=UNIFORM_WARP)  # fmt: skip
         cases = [Case(mi, name, "mitsuba", max_depth=depth)] + [
             Case(mi, name, "ours", s, p, max_depth=depth) for s, p in OURS
-        ]
+        ] + [uniform]  # fmt: skip
         first = {}
         for case in cases:
             first[case.label] = case.render(args.width, args.height, args.spp, 0)[1]
@@ -153,51 +166,63 @@ def speed(args, mi):
     return rows
 
 
+# Edits of symsphere_path's source for the instrumented copies (each old text must occur once)
 _DEPTH_RETURN = (
-    "return dr.select(valid_ray, result, 0.0), valid_ray",
-    "return mi.Spectrum(mi.Float(depth)), mi.Bool(True)",
+    ("return dr.select(valid_ray, result, 0.0), valid_ray", "return mi.Spectrum(mi.Float(depth)), mi.Bool(True)"),
+)
+_UNIFORM_WARP = (
+    (
+        """        bx, by, bz = triangle_point(u, v, self.method)
+        density = triangle_density(bx, by, bz, self.method)
+        x, y, z = orbit_member(bx, by, bz, member, members=24)
+        return mi.Vector3f(x, y, z), density / n""",
+        """        hs = _random.mix64(h ^ ((mi.UInt64(s) + 1) * _random.GOLDEN))  # one point per sample
+        point = mi.Point2f(_random.u01(_random.mix64(hs ^ _BASE_U)), _random.u01(_random.mix64(hs ^ _BASE_V)))
+        wo = mi.warp.square_to_uniform_hemisphere(point)
+        return wo, mi.warp.square_to_uniform_hemisphere_pdf(wo)""",
+    ),
 )
 
 
-def _depth_integrator(mi, folder):
-    """Register ``symsphere_path_depth``: symsphere_path whose image is each path's vertex count (see lengths)."""
+def _rewritten_integrator(folder, name, edits):
+    """Register *name*: a copy of symsphere_path's module with *edits* (see lengths and UNIFORM_WARP)."""
     import importlib
     import inspect
 
     import symsphere.mitsuba as sm
 
     source = Path(inspect.getsourcefile(sm.integrator_class())).read_text(encoding="utf-8")
-    for old, new in (
-        _DEPTH_RETURN,
-        ('mi.register_integrator("symsphere_path"', 'mi.register_integrator("symsphere_path_depth"'),
-        ("from ..", "from symsphere."),
-        ("from . import", "from symsphere.mitsuba import"),
-        ("from ._", "from symsphere.mitsuba._"),
-    ):
-        if old not in source:
-            raise RuntimeError(f"symsphere_path's source changed: {old!r} not found; update _depth_integrator")
+    register = ('mi.register_integrator("symsphere_path"', f'mi.register_integrator("{name}"')
+    for old, new in (*edits, register):  # each exactly once
+        if source.count(old) != 1:
+            raise RuntimeError(f"symsphere_path's source changed: {old!r} not found once; update bench_mitsuba.py")
         source = source.replace(old, new)
-    (Path(folder) / "symsphere_path_depth.py").write_text(source, encoding="utf-8")
-    sys.path.insert(0, str(folder))
-    importlib.import_module("symsphere_path_depth").register()
+    for old, new in (("from ..", "from symsphere."), ("from . import", "from symsphere.mitsuba import"),
+                     ("from ._", "from symsphere.mitsuba._")):  # fmt: skip
+        source = source.replace(old, new)  # the relative imports, wherever they are
+    (Path(folder) / f"{name}.py").write_text(source, encoding="utf-8")
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+    importlib.import_module(name).register()
 
 
-def lengths(args, mi):
-    import tempfile
-
+def lengths(args, mi, folder):
     rows = []
-    with tempfile.TemporaryDirectory() as folder:
-        _depth_integrator(mi, folder)
-        for name in args.scenes:
-            for s, p in OURS:
-                case = Case(mi, name, "ours", s, p, max_depth=args.max_depth, integrator="symsphere_path_depth")
-                image = case.render(args.width, args.height, args.spp, 1)[0]
-                rows.append({"scene": name, "case": case.label, "vertices_per_path": float(image[..., 0].mean())})
-            base = rows[-len(OURS)]["vertices_per_path"]
-            print(f"{name} (max_depth {args.max_depth}): mean vertices per camera path", flush=True)
-            for row in rows[-len(OURS) :]:
-                row["ratio_to_bsdf"] = row["vertices_per_path"] / base
-                print(f"  {row['case']:<40} {row['vertices_per_path']:.4f}  x{row['ratio_to_bsdf']:.4f}", flush=True)
+    _rewritten_integrator(folder, "symsphere_path_depth", _DEPTH_RETURN)
+    _rewritten_integrator(folder, "symsphere_path_uniform_depth", _DEPTH_RETURN + _UNIFORM_WARP)
+    for name in args.scenes:
+        cases = [
+            Case(mi, name, "ours", s, p, max_depth=args.max_depth, integrator="symsphere_path_depth") for s, p in OURS
+        ] + [Case(mi, name, "ours", "symmetric", "random", max_depth=args.max_depth,
+                  integrator="symsphere_path_uniform_depth", label=UNIFORM_WARP)]  # fmt: skip
+        for case in cases:
+            image = case.render(args.width, args.height, args.spp, 1)[0]
+            rows.append({"scene": name, "case": case.label, "vertices_per_path": float(image[..., 0].mean())})
+        base = rows[-len(cases)]["vertices_per_path"]
+        print(f"{name} (max_depth {args.max_depth}): mean vertices per camera path", flush=True)
+        for row in rows[-len(cases) :]:
+            row["ratio_to_bsdf"] = row["vertices_per_path"] / base
+            print(f"  {row['case']:<40} {row['vertices_per_path']:.4f}  x{row['ratio_to_bsdf']:.4f}", flush=True)
     return rows
 
 
@@ -346,12 +371,15 @@ def main(argv=None):
         f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}",
         flush=True,
     )
-    if args.what in ("speed", "all"):
-        record["speed"] = speed(args, mi)
-    if args.what in ("quality", "all"):
-        record["quality"] = quality(args, mi)
-    if args.what in ("lengths", "all"):
-        record["lengths"] = lengths(args, mi)
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:  # the rewritten copies of symsphere_path (speed, lengths)
+        if args.what in ("speed", "all"):
+            record["speed"] = speed(args, mi, folder)
+        if args.what in ("quality", "all"):
+            record["quality"] = quality(args, mi)
+        if args.what in ("lengths", "all"):
+            record["lengths"] = lengths(args, mi, folder)
     if args.json:
         Path(args.json).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
 
