@@ -133,3 +133,19 @@ def test_hemisphere_fold_rejects_lower_half():
 def test_bad_input(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+def test_base_point_is_the_sorted_absolute_coordinates():
+    # base_point (fold's base, and the densities' preimage in T0) selects by a min/max network; the
+    # independent reference sorts. Ties, zeros, -0.0, and float32 kept as float32.
+    from symsphere.symmetry import base_point
+
+    rng = np.random.default_rng(7)
+    values = np.array([-1.0, -0.5, -0.0, 0.0, 0.5, 1.0])
+    grid = np.array(np.meshgrid(values, values, values, indexing="ij")).reshape(3, -1).T
+    for d in (rng.normal(size=(5_000, 3)), grid, rng.normal(size=(7, 4, 3)).astype(np.float32)):
+        expected = np.sort(np.abs(d), axis=-1)[..., [1, 0, 2]]
+        got = base_point(d)
+        assert got.dtype == d.dtype and got.shape == d.shape
+        np.testing.assert_array_equal(got, expected)
+        assert not np.any(np.signbit(got))

@@ -177,15 +177,16 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     """
     arr = check_directions(d, name)
     if arr.size:
-        wide = arr.astype(np.float64)
-        scale = np.max(np.abs(wide), axis=-1, keepdims=True)  # no overflow in the squares
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # an inf norm is reported below
-            norms = np.where(scale[..., 0] > 0, scale[..., 0] * np.sqrt(np.sum((wide / scale) ** 2, axis=-1)), 0.0)
-        bad = np.abs(norms - 1.0) > UNIT_TOLERANCE
+        wide = arr.astype(np.float64, copy=False)
+        with np.errstate(over="ignore", under="ignore"):  # an overflow (inf) or underflow (0) is out of range
+            squares = np.einsum("...i,...i->...", wide, wide)  # one pass; finite, as checked above
+        bad = (squares < (1.0 - UNIT_TOLERANCE) ** 2) | (squares > (1.0 + UNIT_TOLERANCE) ** 2)
         if np.any(bad):
+            first = wide[bad][0]
+            scale = float(np.max(np.abs(first)))  # the reported norm, without overflow in its squares
+            norm = scale * float(np.sqrt(np.sum((first / scale) ** 2))) if scale > 0 else 0.0
             raise ValueError(
-                f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); "
-                f"got a norm of {float(norms[bad].flat[0]):.6g}"
+                f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); got a norm of {norm:.6g}"
             )
     return arr
 

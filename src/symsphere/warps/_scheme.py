@@ -56,7 +56,7 @@ import numpy.typing as npt
 
 from .._typing import Domain, FloatArray, MapMethod
 from .._validation import check_choice, check_unit_directions, check_uv
-from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, fold
+from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, base_point, fold
 from ._triangle import METHODS, triangle_to_square, triangle_warp
 
 __all__ = [
@@ -333,7 +333,7 @@ def scheme_pdf(d: FloatArray, method: MapMethod, count: int, dtype: npt.DTypeLik
     and :func:`symsphere.hemisphere_pdf` are this, after their checks (and rotation).
     """
     warp = triangle_warp(method)
-    _, base = fold(d)
+    base = base_point(d)  # fold's base point, without the sub-domain index a density does not need
     density = warp.densities(base.astype(np.float64, copy=False)) / count
     if count == 24:
         on = d[..., 2] >= -_PLANE_ULPS * np.finfo(dtype).eps
