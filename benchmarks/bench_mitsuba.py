@@ -61,6 +61,7 @@ from _machine import cpu_name, cpu_snapshot, others_cpu
 OURS = [
     ("bsdf", "random"),
     ("cosine", "random"),
+    ("cosine", "sobol"),
     ("symmetric", "random"),
     ("symmetric", "sobol"),
     ("symmetric_cosine", "random"),
@@ -78,9 +79,13 @@ class Case:
                  integrator="symsphere_path", label=None):  # fmt: skip
         self.mi, self.scene_name, self.kind = mi, name, kind
         self.strategy, self.points, self.sampler = strategy, points, sampler
+        # --only's name of the case: strategy:points[+sampler] or mitsuba:sampler
+        self.token = (f"{strategy}:{points}" + (f"+{sampler}" if sampler != "independent" else "")
+                      if kind == "ours" else f"mitsuba:{sampler}")  # fmt: skip
         if kind == "ours":
             self.label = label or (
-                f"symsphere_path {strategy}" + (f" · {points}" if strategy.startswith("symmetric") else "")
+                f"symsphere_path {strategy}"
+                + (f" · {points}" if strategy.startswith("symmetric") or points == "sobol" else "")
             )
             if sampler != "independent":
                 self.label += f" + {sampler}"
@@ -254,6 +259,7 @@ def quality(args, mi):
             + [Case(mi, name, "ours", s, p, sampler) for s, p, sampler in OURS_WITH_QMC]
             + [Case(mi, name, "mitsuba", sampler=s) for s in MITSUBA_SAMPLERS]
         )
+        cases = [case for case in cases if not args.only or case.token in args.only]
         for case in cases:
             case.render(args.width, args.height, args.equal_spp, 0)  # compile
             results = {"equal_spp": []}
@@ -355,6 +361,9 @@ def main(argv=None):
         "--budgets", type=float, nargs="+", default=[1.0, 2.0, 4.0], help="quality: seconds (default 1 2 4)"
     )
     parser.add_argument("--seeds", type=int, default=2, help="quality: seeds per measurement (default %(default)s)")
+    parser.add_argument("--only", nargs="+", metavar="CASE", help="quality: only these cases, each "
+                        "strategy:points[+sampler] (e.g. cosine:sobol, symmetric_cosine:sobol+ldsampler) or "
+                        "mitsuba:SAMPLER (the reference is always rendered)")  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="quality: write DIR/<scene>.png, the reference and every case "
                         "at the last budget side by side (in the order of the table)")  # fmt: skip

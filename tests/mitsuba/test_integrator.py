@@ -3,10 +3,12 @@
 Statistical tests (fixed seeds): the block test compares every strategy's mean image with Mitsuba's
 own ``path`` (the independent reference) on two small scenes, K independent renders (seeds) each,
 block by block (4 x 4 pixels, the mean of R, G and B): Welch's t-test (t rather than z: K is small),
-two-sided, significance 0.01 for the whole module with a Sidak correction over all UNBIASED_TESTS
-blocks.  Its power, measured by multiplying the symmetric strategy's block means by 1.01 ... 1.05 and
-rerunning the same t-test: a uniform 5 % error is rejected on both scenes, 2 % on the textured one
-(median block standard errors 0.8 % and 0.5 %).  The furnace test is a z-test of the image mean against 1 at 0.01 / Sidak over the strategies.
+two-sided, significance 0.01 for all of them with a Sidak correction over the UNBIASED_TESTS blocks (every
+strategy, scene and variant run: llvm_ad_rgb, and cuda_ad_rgb where a CUDA device is present).  Its power,
+measured by multiplying the symmetric strategy's block means by 1.01 ... 1.05 and rerunning the same t-test
+(with one strategy case fewer, which moves the threshold by < 1 %): a uniform 5 % error is rejected on both
+scenes, 2 % on the textured one (median block standard errors 0.8 % and 0.5 %).  The furnace test is a
+z-test of the image mean against 1 at 0.01, Sidak-corrected over the strategies and variants.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from scipy import stats
 STRATEGY_CASES = [
     {"strategy": "bsdf"},
     {"strategy": "cosine"},
+    {"strategy": "cosine", "points": "sobol"},
     {"strategy": "symmetric", "points": "random"},
     {"strategy": "symmetric", "points": "sobol"},
     {"strategy": "symmetric", "points": "random", "method": "paper1"},
@@ -27,7 +30,18 @@ STRATEGY_CASES = [
 SIZE, SPP, SEEDS, BLOCK = 16, 48, 16, 4
 SCENES = ("cornell", "textured")
 BLOCKS = (SIZE // BLOCK) ** 2
-UNBIASED_TESTS = len(STRATEGY_CASES) * len(SCENES) * BLOCKS
+
+
+def _jit_variants_run():
+    """How many variants the jit_variant tests run in here: llvm_ad_rgb, and cuda_ad_rgb with a CUDA device."""
+    try:
+        import drjit as dr
+    except ImportError:
+        return 1
+    return 1 + bool(dr.has_backend(dr.JitBackend.CUDA))
+
+
+UNBIASED_TESTS = len(STRATEGY_CASES) * len(SCENES) * BLOCKS * _jit_variants_run()
 ALPHA = 0.01
 
 
@@ -69,8 +83,8 @@ def test_random_equals_the_renderers_bitwise(llvm):
 
 
 @pytest.mark.parametrize("case", [c for c in STRATEGY_CASES if c["strategy"].startswith("symmetric")], ids=_ids)
-def test_a_group_takes_every_image_of_one_base_point(llvm, case):
-    mi = llvm
+def test_a_group_takes_every_image_of_one_base_point(jit_variant, case):
+    mi = jit_variant
     import symsphere.mitsuba  # noqa: F401  (registers the plugin)
     from symsphere._testing import mitsuba_integrator
     from symsphere.mitsuba import fold
@@ -115,6 +129,7 @@ def test_a_group_takes_every_image_of_one_base_point(llvm, case):
         ({"method": "octahedral"}, "'octahedral' is not a valid method"),
         ({"max_depth": -2}, "'max_depth' must be -1"),
         ({"rr_depth": 0}, "'rr_depth' must be > 0"),
+        ({"strategy": "bsdf", "points": "sobol"}, "'points' must be 'random' for strategy='bsdf'"),
     ],
 )
 def test_bad_parameters_name_the_parameter(llvm, params, words):
@@ -127,8 +142,8 @@ def test_bad_parameters_name_the_parameter(llvm, params, words):
     assert last.startswith("ValueError: ") and words in last
 
 
-def test_spp_must_be_a_multiple_of_the_group(llvm):
-    mi = llvm
+def test_spp_must_be_a_multiple_of_the_group(jit_variant):
+    mi = jit_variant
     import symsphere.mitsuba  # noqa: F401
 
     scene = mi.load_dict(_scene_dict(mi, "cornell"))
@@ -208,21 +223,22 @@ def _blocks(images):
     return lum.mean(axis=(2, 4)).reshape(k, -1)
 
 
-_REFERENCE: dict[str, np.ndarray] = {}
+_REFERENCE: dict[tuple[str, str], np.ndarray] = {}  # (variant, scene): Mitsuba path's blocks
 
 
 @pytest.mark.statistical
 @pytest.mark.parametrize("scene_name", SCENES)
 @pytest.mark.parametrize("case", STRATEGY_CASES, ids=_ids)
-def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, case):
-    mi = llvm
+def test_mean_image_agrees_with_mitsubas_path(jit_variant, scene_name, case):
+    mi = jit_variant
     import symsphere.mitsuba  # noqa: F401
 
     scene = mi.load_dict(_scene_dict(mi, scene_name))
     depth = {"max_depth": 6, "rr_depth": 3}
-    if scene_name not in _REFERENCE:
-        _REFERENCE[scene_name] = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
-    ref = _REFERENCE[scene_name]
+    key = (mi.variant(), scene_name)
+    if key not in _REFERENCE:
+        _REFERENCE[key] = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
+    ref = _REFERENCE[key]
     ours = _blocks(_renders(mi, scene, mi.load_dict({"type": "symsphere_path", **case, **depth})))
     assert np.all(np.isfinite(ours))
     result = stats.ttest_ind(ours, ref, axis=0, equal_var=False)
@@ -232,9 +248,9 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, case):
 
 @pytest.mark.statistical
 @pytest.mark.parametrize("case", STRATEGY_CASES, ids=_ids)
-def test_white_furnace(llvm, case):
+def test_white_furnace(jit_variant, case):
     """A white (albedo 1, two-sided) sphere under a uniform sky of radiance 1 has radiance 1 everywhere."""
-    mi = llvm
+    mi = jit_variant
     import symsphere.mitsuba  # noqa: F401
 
     T = mi.ScalarTransform4f
@@ -249,15 +265,15 @@ def test_white_furnace(llvm, case):
     images = np.stack([np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=s))[..., :3] for s in range(4)])
     values = images.mean(axis=-1).ravel()  # independent pixels (and seeds)
     z = (values.mean() - 1.0) / (values.std(ddof=1) / np.sqrt(values.size))
-    assert abs(z) < stats.norm.isf(_sidak(ALPHA, len(STRATEGY_CASES)) / 2), (values.mean(), z)
+    assert abs(z) < stats.norm.isf(_sidak(ALPHA, len(STRATEGY_CASES) * _jit_variants_run()) / 2), (values.mean(), z)
 
 
 @pytest.mark.parametrize("hide_emitters", [False, True])
-def test_bsdf_strategy_reproduces_mitsubas_path_at_the_same_seed(llvm, hide_emitters):
+def test_bsdf_strategy_reproduces_mitsubas_path_at_the_same_seed(jit_variant, hide_emitters):
     """strategy='bsdf' restates path.cpp with the same sampler calls in the same order: the same image at the
     same seed, up to float32 rounding of operations the two compile differently (bound: 1e-4 of the image's
     maximum; measured 4e-9).  With hide_emitters the camera ray passes through area emitters, as Mitsuba's."""
-    mi = llvm
+    mi = jit_variant
     import symsphere.mitsuba as sm
 
     scene = mi.load_file(str(sm.scene_path("cornell_box")), width=16, height=16)
@@ -303,13 +319,14 @@ def test_cosine_strategy_is_the_diffuse_bsdfs_own_sample(llvm, two_sided):
 
 
 def test_cosine_strategy_renders_the_bsdf_strategys_image(llvm):
-    """The consequence, end to end: the two strategies give the same image at the same seed, bit for bit."""
+    """The consequence, end to end: the two strategies give the same image at the same seed, bit for bit (and
+    cosine with Sobol' points, its own directions, another)."""
     mi = llvm
     import symsphere.mitsuba as sm
 
     scene = mi.load_file(str(sm.scene_path("textured")), width=16, height=16)
-    images = [
-        np.array(mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": s}), spp=8, seed=3))
-        for s in ("bsdf", "cosine")
-    ]
+    cases = (("bsdf", "random"), ("cosine", "random"), ("cosine", "sobol"))
+    integrators = [mi.load_dict({"type": "symsphere_path", "strategy": s, "points": p}) for s, p in cases]
+    images = [np.array(mi.render(scene, integrator=integrator, spp=8, seed=3)) for integrator in integrators]
     assert np.array_equal(images[0], images[1])
+    assert not np.array_equal(images[0], images[2])  # Sobol' points: its own directions, not the BSDF's

@@ -10,10 +10,13 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 ``bsdf``
     Mitsuba's own sampling (the BSDF samples itself): ``path`` exactly, in distribution.
 ``cosine``
-    Cosine-weighted, i.i.d. (Shirley-Chiu + Malley, ``mi.warp.square_to_cosine_hemisphere``).  This is
-    exactly how Mitsuba's ``diffuse`` samples itself, from the same 2D sample (and ``twosided`` with the
-    same flip), so the strategy takes the BSDF's own sample: the image of ``bsdf`` at the same seed, bit
-    for bit (tested; restating it at the vertex ran at 0.92-1.02x ``bsdf``'s paths/s for the same numbers).
+    Cosine-weighted (Shirley-Chiu + Malley, ``mi.warp.square_to_cosine_hemisphere``).  With ``points``
+    ``random`` this is exactly how Mitsuba's ``diffuse`` samples itself, from the same 2D sample (and
+    ``twosided`` with the same flip), so the strategy takes the BSDF's own sample: the image of ``bsdf``
+    at the same seed, bit for bit (tested; restating it at the vertex ran at 0.92-1.02x ``bsdf``'s
+    paths/s for the same numbers).  With ``sobol`` the 2D point of sample s at a vertex is point s of
+    the Owen-scrambled Sobol' sequence of that (pixel, vertex): QMC cosine sampling without the symmetry,
+    the control that tells the scheme's Sobol' points from its orbits.
 ``symmetric``
     The paper's scheme, uniform: orbits of the 24 hemisphere maps (:func:`symsphere.orbit`) of a base
     point mapped onto T0 by ``method`` (:func:`symsphere.warps.square_to_triangle`).
@@ -22,7 +25,8 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
-as :mod:`symsphere.render`'s samplers.  The grouping is the renderer's
+as :mod:`symsphere.render`'s samplers; ``bsdf`` takes the scene sampler's points (choose a QMC sampler
+there), so it refuses ``points='sobol'``.  The grouping is the renderer's
 (``symsphere.render._integrator.sample_local``): with n = 24 (symmetric) or 8 (symmetric_cosine),
 sample s of a pixel is in group g = s // n; at vertex ``depth`` the group shares one base point
 B(g, depth) and one offset o(g, depth) uniform in 0..n-1, and sample s takes orbit member
@@ -62,9 +66,10 @@ __all__ = [
 STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
 POINTS = ("random", "sobol")
 GROUP_SIZES = {"bsdf": 1, "cosine": 1, "symmetric": 24, "symmetric_cosine": 8}
-# the strategies that replace the BSDF's sample at Lambertian vertices: those with groups (bsdf and cosine
-# take the BSDF's own sample, which for cosine is the same direction: see the module docstring)
+# the strategies with groups; they, and cosine with Sobol' points, replace the BSDF's sample at Lambertian
+# vertices (bsdf, and cosine with random points, take the BSDF's own sample: see the module docstring)
 _SYMMETRIC_STRATEGIES = tuple(strategy for strategy, size in GROUP_SIZES.items() if size > 1)
+_COSINE_DENSITY = ("cosine", "symmetric_cosine")  # density |cos| / pi: the weight f cos / p is R
 _BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
 _BASE_V = 0x5851F42D4C957F2D
 _INV_PI = 1.0 / math.pi
@@ -102,7 +107,8 @@ class _PathMethods:
     variant's ``mi.SamplingIntegrator`` (:func:`integrator_class`).
 
     Parameters (scene file or ``load_dict``): ``strategy`` ('bsdf', 'cosine', 'symmetric',
-    'symmetric_cosine'; default 'symmetric'), ``points`` ('random', 'sobol'; default 'random'),
+    'symmetric_cosine'; default 'symmetric'), ``points`` ('random', 'sobol'; default 'random'; 'bsdf':
+    'random' only),
     ``method`` ('equal_area', 'paper1', 'paper2'; default 'equal_area', for 'symmetric'),
     ``max_depth`` (default -1), ``rr_depth`` (default 5), ``hide_emitters`` (default false).
     """
@@ -125,7 +131,14 @@ class _PathMethods:
         if self.rr_depth <= 0:
             raise ValueError(f"'rr_depth' must be > 0, got {self.rr_depth}")
         self.hide_emitters = bool(props.get("hide_emitters", False))
+        if self.strategy == "bsdf" and self.points != "random":
+            raise ValueError(
+                f"'points' must be 'random' for strategy='bsdf' (got {self.points!r}): it takes the scene "
+                "sampler's points; choose a QMC sampler there, or points='sobol' with another strategy"
+            )
         self.group_size = GROUP_SIZES[self.strategy]
+        # whether the strategy's own direction replaces the BSDF's sample at Lambertian vertices
+        self.replaces_sample = self.strategy in _SYMMETRIC_STRATEGIES or self.points == "sobol"
 
     def to_string(self) -> str:
         return (
@@ -188,7 +201,7 @@ class _PathMethods:
                 time, wavelength_sample, dr.fma(pos_f, scale, offset), aperture
             )
             key = _random.pixel_key(mi.UInt64(seed), pixel)
-            table = self._lambertian_table(scene) if self.strategy in _SYMMETRIC_STRATEGIES else None
+            table = self._lambertian_table(scene) if self.replaces_sample else None
             spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table)
 
             block = film.create_block()
@@ -238,6 +251,9 @@ class _PathMethods:
         else:
             fu, fv = _random.owen_sobol2(group, vertex_key)
             u, v = _random.fraction(fu), _random.fraction(fv)
+        if self.strategy == "cosine":  # points='sobol' (random: the BSDF's own sample); n = 1, group = s
+            wo = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u, v))
+            return wo, wo.z * _INV_PI
         if self.strategy == "symmetric_cosine":
             x, y, z = orbit_member(*cosine_wedge_point(u, v), member, members=8)
             return mi.Vector3f(x, y, z), z * _INV_PI
@@ -249,7 +265,7 @@ class _PathMethods:
     def _density(self, wo: Any, wi_z: Any) -> Any:
         """The strategy's density of the local direction *wo* (on the side of wi), for MIS."""
         same_side = wo.z * wi_z > 0
-        if self.strategy == "symmetric_cosine":  # density |cos| / pi
+        if self.strategy in _COSINE_DENSITY:  # density |cos| / pi
             return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
         if self.method == "equal_area":
             return dr.select(same_side, 1.0 / (2.0 * math.pi), 0.0)
@@ -274,7 +290,7 @@ class _PathMethods:
         prev_bsdf_delta = mi.Bool(True)
         active = mi.Bool(self.max_depth != 0)
         ctx = mi.BSDFContext()
-        symmetric = self.strategy in _SYMMETRIC_STRATEGIES  # bsdf and cosine: the BSDF's own sample
+        replaces = self.replaces_sample  # bsdf, and cosine with random points: the BSDF's own sample
 
         while active:
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
@@ -305,7 +321,7 @@ class _PathMethods:
                 ctx, si, wo, sample_1, sample_2, active_next
             )
 
-            if dr.hint(symmetric, mode="scalar"):
+            if dr.hint(replaces, mode="scalar"):
                 lambertian = active_next & (dr.gather(mi.UInt32, table, _bsdf_ids(bsdf), active_next) != 0)
                 local, pdf_local = self._local_direction(key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
@@ -313,7 +329,7 @@ class _PathMethods:
                 # whatever the direction (0 where wi is below a one-sided surface, and in the measure-zero
                 # event that its own direction has pdf 0), so f cos at `local` is R |z| / pi: no second
                 # BSDF evaluation (texture lookup, virtual call) per vertex.
-                if dr.hint(self.strategy == "symmetric_cosine", mode="scalar"):
+                if dr.hint(self.strategy in _COSINE_DENSITY, mode="scalar"):
                     weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
                 else:
                     weight_local = dr.select(
