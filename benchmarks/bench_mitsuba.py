@@ -142,9 +142,11 @@ def speed(args, mi, folder):
         depth = args.max_depth
         uniform = Case(mi, name, "ours", "symmetric", "random", max_depth=depth, integrator="symsphere_path_uniform",
                        label=UNIFORM_WARP)  # fmt: skip
+        uniform.token = "uniform_warp"
         cases = [Case(mi, name, "mitsuba", max_depth=depth)] + [
             Case(mi, name, "ours", s, p, max_depth=depth) for s, p in OURS
         ] + [uniform]  # fmt: skip
+        cases = cases[:1] + [c for c in cases[1:] if not args.only or c.token in args.only]  # path: the base
         first = {}
         for case in cases:
             first[case.label] = case.render(args.width, args.height, args.spp, 0)[1]
@@ -361,9 +363,10 @@ def main(argv=None):
         "--budgets", type=float, nargs="+", default=[1.0, 2.0, 4.0], help="quality: seconds (default 1 2 4)"
     )
     parser.add_argument("--seeds", type=int, default=2, help="quality: seeds per measurement (default %(default)s)")
-    parser.add_argument("--only", nargs="+", metavar="CASE", help="quality: only these cases, each "
-                        "strategy:points[+sampler] (e.g. cosine:sobol, symmetric_cosine:sobol+ldsampler) or "
-                        "mitsuba:SAMPLER (the reference is always rendered)")  # fmt: skip
+    parser.add_argument("--only", nargs="+", metavar="CASE", help="speed, quality: only these cases, each "
+                        "strategy:points[+sampler] (e.g. cosine:sobol, symmetric_cosine:sobol+ldsampler), "
+                        "mitsuba:SAMPLER or uniform_warp (speed's base, Mitsuba's path, and quality's reference "
+                        "always run)")  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="quality: write DIR/<scene>.png, the reference and every case "
                         "at the last budget side by side (in the order of the table)")  # fmt: skip

@@ -30,6 +30,10 @@ def kernel(x):
 
 def kernel_parts():
     return {"first": (first, (types.float64,)), "second": (second, (types.float64,))}
+
+
+def warm():
+    kernel(1.0)
 """
 
 two_cpus = pytest.mark.skipif(C._cpus() < 2, reason="compile_ahead needs two CPUs (it does nothing on one)")
@@ -104,3 +108,32 @@ def test_is_cached_is_false_for_an_uncached_dispatcher():
         return x
 
     assert not C.is_cached(f) and not C.is_cached(len)
+
+
+# --- a whole job in the background (start_in_background, finish: symsphere demo's render) -------------
+
+
+@two_cpus
+def test_a_background_job_fills_the_cache_and_this_process_loads_it(toy):
+    helper = C.start_in_background(toy.__name__, "warm")
+    assert helper is not None
+    C.finish(helper, 120.0)
+    assert helper.returncode == 0 and C.is_cached(toy.kernel)
+    assert toy.kernel(1.0) == 4.0
+    assert toy.kernel.stats.cache_hits and not toy.kernel.stats.cache_misses  # loaded, not compiled here
+
+
+@two_cpus
+def test_a_failing_or_endless_background_job_is_reaped(toy):
+    failing = C.start_in_background(toy.__name__, "no_such_function")
+    C.finish(failing, 120.0)
+    assert failing.returncode not in (0, None)  # AttributeError in the second process, nothing here
+    endless = C.start_in_background("signal", "pause")  # blocks until a signal
+    C.finish(endless, 0.5)
+    assert endless.returncode is not None  # killed and reaped, not left running
+    assert toy.kernel(1.0) == 4.0
+
+
+def test_no_background_job_on_one_cpu(toy, monkeypatch):
+    monkeypatch.setattr(C, "_cpus", lambda: 1)
+    assert C.start_in_background(toy.__name__, "warm") is None

@@ -459,9 +459,9 @@ def test_unit_direction_check_tolerance_and_extreme_norms():
     # computed without overflow or underflow (the reference: math.hypot, exact to an ulp).
     import math
 
-    from symsphere._validation import UNIT_TOLERANCE, check_unit_directions
+    from symsphere._testing import validation
 
-    tol = UNIT_TOLERANCE
+    check_unit_directions, tol = validation.check_unit_directions, validation.UNIT_TOLERANCE
     ok = np.array([[0.0, 0.0, 1.0 + 0.9 * tol], [0.0, 1.0 - 0.9 * tol, 0.0], [0.6, 0.0, -0.8]])
     assert check_unit_directions(ok) is not None
     assert check_unit_directions(ok.astype(np.float32)).dtype == np.float32

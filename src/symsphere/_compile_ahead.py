@@ -13,6 +13,11 @@ Nothing happens when the kernel is in the cache already (every run after the fir
 one core, or with caching off.  The second process is only a speed-up: if it fails, is
 killed or takes longer than *timeout*, this process compiles what is missing itself.
 Nothing happens at import.
+
+:func:`start_in_background` is the same idea for a whole job: a second process runs a
+function that fills the cache (the renderer's :func:`symsphere.render.renderer.warm_up`)
+while this one does other work, and :func:`finish` waits for it before the work that
+needs the cache (``symsphere demo`` renders last).
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from typing import Any
 
 from ._threads import compile_interruptibly
 
-__all__ = ["compile_ahead", "is_cached"]
+__all__ = ["compile_ahead", "finish", "is_cached", "start_in_background"]
 
 Parts = Mapping[str, tuple[Any, tuple[Any, ...]]]
 """name -> (numba dispatcher with ``cache=True``, its argument types)."""
@@ -65,25 +70,56 @@ def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence
     """
     if len(there) == 0 or is_cached(kernel) or _cpus() < 2:
         return
-    package = Path(__file__).resolve().parents[1]  # the second process imports this very package
-    environment = dict(os.environ)
-    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(package), environment.get("PYTHONPATH")]))
-    command = [sys.executable, "-m", __name__, module, *there]
-    try:
-        helper = subprocess.Popen(
-            command, env=environment, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
-        )
-    except OSError:
+    helper = _start(module, *there)
+    if helper is None:
         return  # no second process: this one compiles everything, as without this module
     try:
         _compile_parts(module, here, compile_interruptibly)
+    except BaseException:  # an error or Ctrl-C here: stop the second process at once
+        finish(helper, 0.0)
+        raise
+    finish(helper, timeout)  # the kernel's compile then loads what is cached and compiles the rest
+
+
+def start_in_background(module: str, function: str) -> subprocess.Popen[bytes] | None:
+    """Run ``module.function()`` (no arguments) in a second Python process, to fill the disk cache.
+
+    Returns the process, for :func:`finish`; None (nothing started) on one core or if no
+    process can start.  Its output is discarded, and its failure only means that this
+    process compiles what it needs itself.
+    """
+    if _cpus() < 2:
+        return None
+    return _start("--call", module, function)
+
+
+def finish(helper: subprocess.Popen[bytes], timeout: float = 300.0) -> None:
+    """Wait up to *timeout* seconds for a second process, then stop it if it still runs."""
+    try:
         helper.wait(timeout)
     except subprocess.TimeoutExpired:
-        pass  # the kernel's compile loads what is cached and compiles the rest
+        pass
     finally:
         if helper.poll() is None:
             helper.kill()
             helper.wait()
+
+
+def _start(*arguments: str) -> subprocess.Popen[bytes] | None:
+    """``python -m symsphere._compile_ahead ARGUMENTS`` with this very package first on the path."""
+    package = Path(__file__).resolve().parents[1]
+    environment = dict(os.environ)
+    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(package), environment.get("PYTHONPATH")]))
+    try:
+        return subprocess.Popen(
+            [sys.executable, "-m", __name__, *arguments],
+            env=environment,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    except OSError:
+        return None
 
 
 def _cpus() -> int:
@@ -101,7 +137,11 @@ def _compile_parts(module: str, names: Sequence[str], compile: Callable[[Any, tu
 
 
 def _main(argv: Sequence[str]) -> int:
-    """``python -m symsphere._compile_ahead MODULE NAME...``: compile those parts into the disk cache."""
+    """``python -m symsphere._compile_ahead MODULE NAME...``: compile those parts into the disk cache;
+    ``... --call MODULE FUNCTION``: run ``MODULE.FUNCTION()``."""
+    if argv[0] == "--call":
+        getattr(importlib.import_module(argv[1]), argv[2])()
+        return 0
     module, *names = argv
     _compile_parts(module, names, lambda dispatcher, signature: dispatcher.compile(signature))
     return 0

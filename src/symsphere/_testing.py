@@ -20,6 +20,7 @@ from . import _kernels as kernels
 from . import _numba_cache as numba_cache
 from . import _splitmix as splitmix
 from . import _threads as threads
+from . import _validation as validation
 from .render import _emitters as render_emitters
 from .render import _integrator as render_integrator
 from .render import _probes as render_probes
@@ -35,6 +36,7 @@ __all__ = [
     "numba_cache",
     "splitmix",
     "threads",
+    "validation",
     "render_emitters",
     "render_integrator",
     "render_probes",

@@ -724,3 +724,43 @@ def test_a_cold_render_compiles_the_parts_kernel_parts_names_and_gives_the_warm_
         assert {name for name, hits in cold["loaded"].items() if hits} == set(K.COMPILE_THERE)
     warm = render(cornell(), width=8, height=6, spp=48, seed=5).image
     assert cold["image"] == warm.tobytes().hex()
+
+
+BACKGROUND = """
+import json
+from symsphere.render import cornell, render
+from symsphere.render.renderer import compile_in_background
+from symsphere._testing import render_integrator as K
+with compile_in_background() as ready:
+    cold = not K.kernel_is_cached()
+    ready()
+image = render(cornell(), width=8, height=6, spp=48, seed=5).image
+print(json.dumps({"cold": cold, "cached": K.kernel_is_cached(), "image": image.tobytes().hex(),
+                  "hits": sum(K._render_rows.stats.cache_hits.values()),
+                  "misses": sum(K._render_rows.stats.cache_misses.values())}))
+"""
+
+
+def test_the_kernel_compiled_in_the_background_is_loaded_and_gives_the_warm_image(tmp_path):
+    # symsphere demo: on a cold cache a second process compiles the renderer's kernel while the demo
+    # works (renderer.compile_in_background); the render then loads it from the cache instead of
+    # compiling it, and renders the image this process renders from its own warm kernel, to the bit.
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    result = subprocess.run([sys.executable, "-c", BACKGROUND], env=env, capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout.splitlines()[-1])
+    assert out["cold"] and out["cached"]
+    if len(os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else range(os.cpu_count() or 1)) >= 2:
+        assert out["hits"] >= 1 and out["misses"] == 0  # loaded, not compiled in this process
+    assert out["image"] == render(cornell(), width=8, height=6, spp=48, seed=5).image.tobytes().hex()
+
+
+def test_compile_in_background_starts_nothing_for_a_cached_kernel(monkeypatch):
+    from symsphere.render.renderer import compile_in_background
+
+    render(cornell(), width=4, height=4, spp=24, seed=0)  # the kernel is in the cache now
+    calls = []
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: calls.append(a))
+    with compile_in_background() as ready:
+        ready()
+    assert calls == []

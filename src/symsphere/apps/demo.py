@@ -125,7 +125,10 @@ def run_demo(
         if progress:
             print(f"demo: step {number}/4: {what}", file=sys.stderr, flush=True)
 
-    with atomic_directory(out_dir, replaceable=DEMO_FILES) as build_dir:
+    from ..render.renderer import compile_in_background  # function-level: numba kernels (see run_demo)
+
+    # A new install: the render's kernel compiles on the second core during steps 1-3.
+    with atomic_directory(out_dir, replaceable=DEMO_FILES) as build_dir, compile_in_background() as kernel_ready:
         step(1, f"sampling {n} directions per map and domain ({', '.join(METHODS)}; sphere, hemisphere)")
         tests: list[_Test] = []
         scatter: dict[str, FloatArray] = {}
@@ -155,6 +158,7 @@ def run_demo(
         step(3, "the figure")
         _write_figure(build_dir / "figure.png", tests, results, scatter)
         step(4, "rendering the Cornell box")
+        kernel_ready()
         render_lines = _render(build_dir / "render.png", seed)
         shown = len(next(iter(scatter.values())))  # what the scatter plots show: n < 3072 shows all n
         report = _report(tests, results, n, seed, shown) + render_lines

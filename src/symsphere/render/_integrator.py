@@ -85,7 +85,7 @@ import numpy as np
 from numba import get_num_threads, njit, types
 from numba.extending import register_jitable
 
-from .._compile_ahead import compile_ahead
+from .._compile_ahead import compile_ahead, is_cached
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from .._splitmix import GOLDEN, ODD, mix64
@@ -683,6 +683,11 @@ def render_pass(
 # time (measured: docs/benchmarks.md, cold start) for symsphere._compile_ahead
 COMPILE_HERE = ("_light_sample", "intersect", "emitter_pdf", "_film_offset")
 COMPILE_THERE = ("sample_local", "bsdf_pdf", "_specular_direction")
+
+
+def kernel_is_cached() -> bool:
+    """Whether numba's disk cache holds the renderer's kernel (for its current source)."""
+    return is_cached(_render_rows)
 
 
 def kernel_parts() -> dict[str, tuple[Any, tuple[Any, ...]]]:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Literal, cast
@@ -342,6 +343,38 @@ class RenderPlan(RenderSettings):
             paths=self.width * self.height * self.spp,
             threads=threads,
         )
+
+
+def warm_up() -> None:
+    """Load or compile the renderer's kernel: a 4 x 4 render of ``cornell`` on one thread (what
+    :func:`compile_in_background` runs in its second process)."""
+    render("cornell", width=4, height=4, spp=24, threads=1, seed=0)
+
+
+@contextmanager
+def compile_in_background(timeout: float = 300.0) -> Iterator[Callable[[], None]]:
+    """On a cold numba cache, compile the renderer's kernel in a second process while the block runs.
+
+    For a job that renders after other work (``symsphere demo``): the compile runs on the second
+    core meanwhile; the block calls the function it gets before rendering, which waits up to
+    *timeout* seconds for the compile, and the render then loads the kernel from the cache.
+    Nothing is started when the kernel is cached already, on one core or with caching off; if
+    the second process fails, the render compiles the kernel itself.  Leaving the block stops
+    the process if it still runs (an error, Ctrl-C).
+    """
+    from .._compile_ahead import finish, start_in_background
+
+    helper = None if _k.kernel_is_cached() else start_in_background(__name__, "warm_up")
+
+    def wait() -> None:
+        if helper is not None:
+            finish(helper, timeout)
+
+    try:
+        yield wait
+    finally:
+        if helper is not None:
+            finish(helper, 0.0)
 
 
 def plan_passes(
