@@ -365,14 +365,21 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, default=2, help="quality: seeds per measurement (default %(default)s)")
     parser.add_argument("--only", nargs="+", metavar="CASE", help="speed, quality: only these cases, each "
                         "strategy:points[+sampler] (e.g. cosine:sobol, symmetric_cosine:sobol+ldsampler), "
-                        "mitsuba:SAMPLER or uniform_warp (speed's base, Mitsuba's path, and quality's reference "
-                        "always run)")  # fmt: skip
+                        "mitsuba:SAMPLER or uniform_warp; speed always runs its base, Mitsuba's path with "
+                        "independent; quality always renders the reference and needs a mitsuba:SAMPLER case")  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="quality: write DIR/<scene>.png, the reference and every case "
                         "at the last budget side by side (in the order of the table)")  # fmt: skip
     args = parser.parse_args(argv)
     if args.spp % 24 or args.equal_spp % 24:
         parser.error("--spp and --equal-spp must be multiples of 24 (the symmetric strategies' group)")
+    if args.only:
+        known = {f"{s}:{p}" for s, p in OURS} | {f"{s}:{p}+{q}" for s, p, q in OURS_WITH_QMC}
+        known |= {f"mitsuba:{q}" for q in MITSUBA_SAMPLERS} | {"uniform_warp"}
+        if unknown := sorted(set(args.only) - known):
+            parser.error(f"--only: {', '.join(unknown)} not a case; use some of {', '.join(sorted(known))}")
+        if args.what in ("quality", "all") and not any(c.startswith("mitsuba:") for c in args.only):
+            parser.error("--only: quality needs a mitsuba:SAMPLER case (its ratios are to Mitsuba's best sampler)")
     if args.what == "report":
         print(report(json.loads(Path(args.json).read_text(encoding="utf-8"))))
         return

@@ -1,7 +1,7 @@
 """Seconds of the public densities, of bin probabilities of a density and of a small demo: a before/after probe.
 
 Written for ``compare_revisions.py --same-script`` (it uses only public functions that every revision
-since the cold-start work has): ``sphere_pdf`` and ``hemisphere_pdf`` of every map on 2**20 directions
+since the cold-start work has): ``sphere_pdf`` and ``hemisphere_pdf`` of every map on 786 432 directions
 (the validation of the directions included, as a user calls them), ``bin_probabilities`` of
 ``sphere_pdf(method='paper1')`` on 32 x 16 (phi, cos theta) bins, and a warm
 ``run_demo(n=480)`` (whose chi-square tests integrate the maps' densities over their bins).  Each is the

@@ -4,6 +4,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -34,6 +35,16 @@ def kernel_parts():
 
 def warm():
     kernel(1.0)
+
+
+def spawn_and_wait():  # a job that starts a process of its own (as a cold render does), then blocks
+    import os, signal, subprocess, sys
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"])
+    with open(os.environ["TOY_CHILD_PID"] + ".tmp", "w") as f:
+        f.write(str(child.pid))
+    os.replace(os.environ["TOY_CHILD_PID"] + ".tmp", os.environ["TOY_CHILD_PID"])
+    signal.pause()
 """
 
 two_cpus = pytest.mark.skipif(C._cpus() < 2, reason="compile_ahead needs two CPUs (it does nothing on one)")
@@ -137,3 +148,35 @@ def test_a_failing_or_endless_background_job_is_reaped(toy):
 def test_no_background_job_on_one_cpu(toy, monkeypatch):
     monkeypatch.setattr(C, "_cpus", lambda: 1)
     assert C.start_in_background(toy.__name__, "warm") is None
+
+
+@two_cpus
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="process groups are POSIX")
+def test_stopping_a_background_job_stops_the_processes_it_started(toy, tmp_path, monkeypatch):
+    import time
+
+    marker = tmp_path / "child.pid"
+    monkeypatch.setenv("TOY_CHILD_PID", str(marker))
+    helper = C.start_in_background(toy.__name__, "spawn_and_wait")
+    deadline = time.monotonic() + 60
+    while not marker.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    child = int(marker.read_text())
+    C.finish(helper, 0.0)
+    assert helper.returncode is not None
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break  # gone (killed with its group, and reaped)
+        if Path("/proc/self/stat").exists():  # Linux: a zombie (killed, not yet reaped) is gone too
+            try:
+                state = Path(f"/proc/{child}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            except OSError:
+                break  # gone between the two looks
+            if state == "Z":
+                break
+        time.sleep(0.05)
+    else:
+        pytest.fail(f"the job's own process {child} outlived the job")

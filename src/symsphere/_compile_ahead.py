@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import signal
 import subprocess
 import sys
 from collections.abc import Callable, Mapping, Sequence
@@ -32,7 +33,7 @@ from typing import Any
 
 from ._threads import compile_interruptibly
 
-__all__ = ["compile_ahead", "finish", "is_cached", "start_in_background"]
+__all__ = ["cached_signatures", "compile_ahead", "finish", "is_cached", "start_in_background"]
 
 Parts = Mapping[str, tuple[Any, tuple[Any, ...]]]
 """name -> (numba dispatcher with ``cache=True``, its argument types)."""
@@ -43,14 +44,24 @@ def is_cached(dispatcher: Any) -> bool:
 
     False if it is not cached at all (``cache=False``, or no writable cache location).
     """
-    cache = getattr(dispatcher, "_cache", None)
-    index = getattr(cache, "_cache_file", None)
+    return bool(_index(dispatcher))
+
+
+def cached_signatures(dispatcher: Any) -> list[str]:
+    """The argument types (as text, sorted) of *dispatcher*'s entries in numba's disk cache for its current
+    source: what a process that calls it would load (a part compiled for other types shows here too)."""
+    return sorted(str(key[0]) for key in _index(dispatcher))
+
+
+def _index(dispatcher: Any) -> dict[Any, Any]:
+    """numba's cache index of *dispatcher*: {(argument types, target, code hashes): entry}, {} if none."""
+    index = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
     if index is None:
-        return False
+        return {}
     try:
-        return bool(index._load_index())  # {} when missing, or stale (another source stamp)
+        return dict(index._load_index())  # {} when missing, or stale (another source stamp)
     except (OSError, EOFError, ValueError):
-        return False
+        return {}
 
 
 def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence[str], timeout: float = 300.0) -> None:
@@ -90,23 +101,40 @@ def start_in_background(module: str, function: str) -> subprocess.Popen[bytes] |
     """
     if _cpus() < 2:
         return None
-    return _start("--call", module, function)
+    return _start("--call", module, function, own_group=True)  # with any process it starts (finish)
 
 
 def finish(helper: subprocess.Popen[bytes], timeout: float = 300.0) -> None:
-    """Wait up to *timeout* seconds for a second process, then stop it if it still runs."""
+    """Wait up to *timeout* seconds for a second process, then stop it if it still runs.
+
+    A job of :func:`start_in_background` is stopped with the processes it started (its own
+    process group: a cold render starts a second compiling process of its own).
+    """
     try:
         helper.wait(timeout)
     except subprocess.TimeoutExpired:
         pass
     finally:
         if helper.poll() is None:
-            helper.kill()
+            group = getattr(os, "killpg", None) is not None and _leads_group(helper.pid)
+            if group:
+                os.killpg(helper.pid, signal.SIGKILL)
+            else:
+                helper.kill()
             helper.wait()
 
 
-def _start(*arguments: str) -> subprocess.Popen[bytes] | None:
-    """``python -m symsphere._compile_ahead ARGUMENTS`` with this very package first on the path."""
+def _leads_group(pid: int) -> bool:
+    try:
+        return os.getpgid(pid) == pid
+    except OSError:
+        return False
+
+
+def _start(*arguments: str, own_group: bool = False) -> subprocess.Popen[bytes] | None:
+    """``python -m symsphere._compile_ahead ARGUMENTS`` with this very package first on the path; with
+    *own_group*, in a new session (its own process group, which Ctrl-C in the terminal does not reach:
+    the caller stops it)."""
     package = Path(__file__).resolve().parents[1]
     environment = dict(os.environ)
     environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(package), environment.get("PYTHONPATH")]))
@@ -117,6 +145,7 @@ def _start(*arguments: str) -> subprocess.Popen[bytes] | None:
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
+            start_new_session=own_group and os.name == "posix",
         )
     except OSError:
         return None

@@ -358,9 +358,10 @@ def compile_in_background(timeout: float = 300.0) -> Iterator[Callable[[], None]
     For a job that renders after other work (``symsphere demo``): the compile runs on the second
     core meanwhile; the block calls the function it gets before rendering, which waits up to
     *timeout* seconds for the compile, and the render then loads the kernel from the cache.
-    Nothing is started when the kernel is cached already, on one core or with caching off; if
-    the second process fails, the render compiles the kernel itself.  Leaving the block stops
-    the process if it still runs (an error, Ctrl-C).
+    Nothing is started when the kernel is cached already or on one core; if the second process
+    fails, or numba cannot cache (no writable cache location), the render compiles the kernel
+    itself.  Leaving the block stops the process, and any it started, if it still runs (an
+    error, Ctrl-C).
     """
     from .._compile_ahead import finish, start_in_background
 
