@@ -290,7 +290,7 @@ class _PathMethods:
         prev_bsdf_delta = mi.Bool(True)
         active = mi.Bool(self.max_depth != 0)
         ctx = mi.BSDFContext()
-        replaces = self.replaces_sample  # bsdf, and cosine with random points: the BSDF's own sample
+        replaces = self.replaces_sample  # False for bsdf, and cosine with random points: the BSDF's own sample
 
         while active:
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
