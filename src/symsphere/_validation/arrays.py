@@ -182,9 +182,7 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
             squares = np.einsum("...i,...i->...", wide, wide)  # one pass; finite, as checked above
         bad = (squares < (1.0 - UNIT_TOLERANCE) ** 2) | (squares > (1.0 + UNIT_TOLERANCE) ** 2)
         if np.any(bad):
-            first = wide[bad][0]
-            scale = float(np.max(np.abs(first)))  # the reported norm, without overflow in its squares
-            norm = scale * float(np.sqrt(np.sum((first / scale) ** 2))) if scale > 0 else 0.0
+            norm = math.hypot(*wide[bad][0].tolist())  # the first bad vector's, without overflow in its squares
             raise ValueError(
                 f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); got a norm of {norm:.6g}"
             )
