@@ -86,7 +86,7 @@ def test_bad_tolerance_arguments(kwargs, error, match):
 
 @pytest.mark.slow
 @pytest.mark.statistical
-@pytest.mark.parametrize("points, rtol", [("random", 1e-5), ("stratified", 1e-6), ("sobol", 1e-8)])
+@pytest.mark.parametrize("points, rtol", [("random", 1e-4), ("stratified", 1e-6), ("sobol", 1e-7)])
 def test_coverage_over_seeds(points, rtol):
     """Over 200 seeds the exact integral lies within the returned half-width (and so within the
     tolerance) at least 95% x the nominal 95% rate.
@@ -94,8 +94,11 @@ def test_coverage_over_seeds(points, rtol):
     With alpha spending every stage's interval covers with probability >= 95% (a union bound), so
     the count of covering seeds is at least Binomial(200, 0.95); the bound 181 = ceil(0.9025 * 200)
     rejects a correct rule with probability P(Bin(200, .95) < 181) = 0.2% per point set (0.6% for
-    the three: Sidak).  The rtol values make the rule stop after 2-8 stages, so that stopping early
-    matters.  Reference: the closed form 4 pi sinh|a| / |a|.
+    the three: Sidak), and one that covers 85% of the time with probability 0.985 (its count has mean
+    170, sd 5).  The rtol values make the rule stop after different numbers of stages (measured over
+    these seeds: random 2-3, stratified 2-3, sobol 1-5), so that stopping early matters; each is the
+    largest that does, as the work grows with 1/rtol^2 (random) and the coverage does not depend on
+    it.  Reference: the closed form 4 pi sinh|a| / |a|.
     """
     seeds = 200
     covered = within_tolerance = 0

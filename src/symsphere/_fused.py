@@ -23,9 +23,15 @@ and the 48 (24) values of an orbit are summed in image order; about a normal the
 images are ``x W0 + y W1 + z W2`` instead of numpy's ``local @ basis``.  The result
 does not depend on the thread count or on how the blocks are split between tasks.
 
-One kernel, specialised by closure cells (as :func:`symsphere._kernels._fill_kernel` is): the
-cells say where f comes from.  A user's compiled f is an argument, so numba compiles the kernel once
-per integrand and process (a few seconds), and cannot cache it on disk: a function-typed argument is
+One serial kernel per (integrand, map), specialised by closure cells (as
+:func:`symsphere._kernels._fill_kernel` is): the cells say where f comes from and which map the batch
+takes, so numba prunes the other maps before typing them; the chunks of a call are split into parts
+run at once on the threads of :mod:`symsphere._threads` (each chunk's stream and statistics depend on
+nothing but its index, so the result does not depend on the parts).  Measured on the 2-core Intel
+host, a user's f: ~4 s for its first kernel (the helpers shared with later ones included) and ~2 s
+for each further map, against ~7 s for the one ``prange`` kernel of every map this replaced.  A
+user's compiled f is an argument, so numba compiles its kernel once per integrand, map and process,
+and cannot cache it on disk: a function-typed argument is
 typed by the dispatcher object, which differs in every process, so a cached entry never matches
 (measured: saved, never hit).  A suite integrand (:mod:`symsphere.integrands`, whose kernel carries
 its spec ``(kind, params)``, see :mod:`symsphere._integrand_kernels`) is compiled into the kernel
@@ -43,7 +49,7 @@ import threading
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit
 from numba.extending import is_jitted
 
 from ._integrand_kernels import no_chain
@@ -60,6 +66,7 @@ from ._kernels import (
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
+from ._threads import run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 
@@ -146,30 +153,31 @@ def _value(kind, params, chain, f, caller, x, y, z, buffer):
     return spec_value(kind, params, chain, x, y, z)
 
 
-def _chunk_kernel(kind, params, chain, cache):
-    """The fused kernel of integrands of *kind* with constants *params* (closure cells: constants to
-    numba); kind _ARGUMENT: of the argument f (not cacheable on disk, see the module's docstring)."""
+def _chunk_kernel(kind, params, chain, code, cache):
+    """The fused kernel of integrands of *kind* with constants *params* and of map *code* (closure cells:
+    constants to numba); kind _ARGUMENT: of the argument f (not cacheable on disk, see the module's
+    docstring)."""
 
-    @njit(parallel=True, cache=cache, **_OPTIONS)
+    @njit(cache=cache, **_OPTIONS)
     def chunk_statistics(
-        f, caller, source_kind, seed_words, side, uv, first_point, m, code, uniform, weights, count, out
+        f, caller, source_kind, seed_words, side, uv, first_point, m, uniform, weights, count, c_lo, c_hi, out
     ):  # pragma: no cover - compiled by numba
         # out[c] = (orbits, sum of orbit estimates, sum of squared deviations) of chunk c, the
-        # orbits first_point + c CHUNK ... (+ CHUNK - 1) of the replicate.  f, caller: the integrand
-        # and its caller for kind _ARGUMENT, else unused zeros.
+        # orbits first_point + c CHUNK ... (+ CHUNK - 1) of the replicate, for c_lo <= c < c_hi (one part).
+        # f, caller: the integrand and its caller for kind _ARGUMENT, else unused zeros.
         start = pcg64_seeded(seed_words)
         images = weights.shape[1] // 3
         area = 4.0 * np.pi if count == 48 else 2.0 * np.pi
-        for c in prange(out.shape[0]):
+        u = np.full(BATCH, 0.5)
+        v = np.full(BATCH, 0.5)
+        base = np.empty((3, BATCH))
+        sums = np.empty(BATCH)
+        estimates = np.empty(BATCH)
+        buffer = np.empty(3)
+        for c in range(c_lo, c_hi):
             lo = c * CHUNK
             hi = min(m, lo + CHUNK)
             stream = pcg64_advanced(start, 2 * (first_point + lo))
-            u = np.full(BATCH, 0.5)
-            v = np.full(BATCH, 0.5)
-            base = np.empty((3, BATCH))
-            sums = np.empty(BATCH)
-            estimates = np.empty(BATCH)
-            buffer = np.empty(3)
             orbits, total, m2 = 0.0, 0.0, 0.0
             for first in range(lo, hi, BATCH):
                 b = min(BATCH, hi - first)
@@ -186,7 +194,7 @@ def _chunk_kernel(kind, params, chain, cache):
                             cell = first_point + first + j
                             u[j] = (cell // side + ju) / side
                             v[j] = (cell % side + jv) / side
-                map_batch(u, v, code, base)
+                map_batch(u, v, code, base)  # inlined in numba's IR: the other maps pruned
                 for j in range(BATCH):
                     sums[j] = 0.0
                 for k in range(images):
@@ -230,28 +238,34 @@ def _chunk_kernel(kind, params, chain, cache):
     return chunk_statistics
 
 
-_generic = _chunk_kernel(_ARGUMENT, (0.0,), no_chain, False)  # a user's f (an argument): one kernel, compiled per f
-_specialised_lock = threading.Lock()
-_specialised_kernels: dict[tuple[int, tuple[float, ...], Any], Any] = {}
+_kernels_lock = threading.Lock()
+_generic_kernels: dict[int, Any] = {}  # map code -> the kernel of a user's f (an argument), compiled per f
+_specialised_kernels: dict[tuple[tuple[int, tuple[float, ...], Any], int], Any] = {}
 _cache_checked = False
 
 
 def specialised_kernels() -> list[Any]:
     """The disk-cached kernels made in this process, in order (their ``stats`` show cache hits)."""
-    with _specialised_lock:
+    with _kernels_lock:
         return list(_specialised_kernels.values())
 
 
-def _specialised(spec: tuple[int, tuple[float, ...], Any]) -> Any:
-    """The disk-cached fused kernel of the suite's integrands of *spec*, made once per process."""
+def _kernel(spec: tuple[int, tuple[float, ...], Any] | None, code: int) -> Any:
+    """The fused kernel of map *code* for a user's f (*spec* None: f an argument, compiled per f) or the
+    disk-cached one of the suite's integrands of *spec*; each made once per process."""
     global _cache_checked
-    with _specialised_lock:
+    with _kernels_lock:
+        if spec is None:
+            kernel = _generic_kernels.get(code)
+            if kernel is None:
+                kernel = _generic_kernels[code] = _chunk_kernel(_ARGUMENT, (0.0,), no_chain, code, False)
+            return kernel
         if not _cache_checked:  # before the first cached kernel of this module runs
             invalidate_if_changed(_merge_chunks)
             _cache_checked = True
-        kernel = _specialised_kernels.get(spec)
+        kernel = _specialised_kernels.get((spec, code))
         if kernel is None:
-            kernel = _specialised_kernels[spec] = _chunk_kernel(spec[0], spec[1], spec[2], True)
+            kernel = _specialised_kernels[spec, code] = _chunk_kernel(spec[0], spec[1], spec[2], code, True)
         return kernel
 
 
@@ -286,8 +300,10 @@ def fused_partials(
     """Block partials (orbits, sum, M2) of blocks ``first_block ... stop_block - 1`` of a replicate of
     *orbits* base points, as :func:`symsphere._integration.block_partial` gives them (to rounding)."""
     prepare_kernels()
-    kernel, caller, spec = compiled
-    specialised = _specialised(spec) if spec is not None else None
+    f, caller, spec = compiled
+    kernel = _kernel(spec, METHOD_CODES[method])
+    if spec is not None:
+        f = caller = 0  # compiled into the kernel: the arguments are unused
     weights = rotated_weights(_IDENTITY if basis is None else np.ascontiguousarray(basis, dtype=np.float64), count)
     kind = {"random": _RANDOM, "stratified": _STRATIFIED}.get(source.kind, _GIVEN)
     seed_words = source.seed_words if source.seed_words is not None else np.zeros(4, dtype=np.uint64)
@@ -299,11 +315,14 @@ def fused_partials(
         m = stop - start
         uv = np.ascontiguousarray(source.take(start, stop)) if kind == _GIVEN else np.empty((0, 2))
         chunks = np.empty(((m + CHUNK - 1) // CHUNK, 3))
-        arguments = (kind, seed_words, side, uv, start, m, METHOD_CODES[method], uniform, weights, count, chunks)
-        if specialised is not None:
-            specialised(0, 0, *arguments)
-        else:
-            _generic(kernel, caller, *arguments)
+        parts = max(1, min(get_num_threads(), len(chunks)))
+        arguments = (f, caller, kind, seed_words, side, uv, start, m, uniform, weights, count)
+
+        def part(index: int, arguments: tuple[Any, ...] = arguments, chunks: Float64Array = chunks) -> tuple[Any, ...]:
+            lo, hi = len(chunks) * index // parts, len(chunks) * (index + 1) // parts
+            return (*arguments, lo, hi, chunks)
+
+        run_kernel(kernel, part, parts)
         blocks = np.empty(((m + BLOCK - 1) // BLOCK, 3))
         _merge_chunks(chunks, BLOCK // CHUNK, blocks)
         if not np.all(np.isfinite(blocks)):
