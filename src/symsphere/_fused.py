@@ -44,6 +44,7 @@ to this module (or under ``NUMBA_CACHE_DIR``), dropped when a file the kernel in
 
 from __future__ import annotations
 
+import functools
 import inspect
 import threading
 from typing import Any
@@ -286,6 +287,11 @@ def _merge_chunks(chunks, per_block, out):
 _IDENTITY = np.eye(3)
 
 
+def _part_arguments(arguments: tuple[Any, ...], chunks: Float64Array, parts: int, index: int) -> tuple[Any, ...]:
+    """The kernel's arguments for part *index* of *parts*: chunks ``lo ... hi - 1`` of *chunks*."""
+    return (*arguments, len(chunks) * index // parts, len(chunks) * (index + 1) // parts, chunks)
+
+
 def fused_partials(
     compiled: Compiled,
     source: BasePoints,
@@ -317,12 +323,7 @@ def fused_partials(
         chunks = np.empty(((m + CHUNK - 1) // CHUNK, 3))
         parts = max(1, min(get_num_threads(), len(chunks)))
         arguments = (f, caller, kind, seed_words, side, uv, start, m, uniform, weights, count)
-
-        def part(index: int, arguments: tuple[Any, ...] = arguments, chunks: Float64Array = chunks) -> tuple[Any, ...]:
-            lo, hi = len(chunks) * index // parts, len(chunks) * (index + 1) // parts
-            return (*arguments, lo, hi, chunks)
-
-        run_kernel(kernel, part, parts)
+        run_kernel(kernel, functools.partial(_part_arguments, arguments, chunks, parts), parts)
         blocks = np.empty(((m + BLOCK - 1) // BLOCK, 3))
         _merge_chunks(chunks, BLOCK // CHUNK, blocks)
         if not np.all(np.isfinite(blocks)):
