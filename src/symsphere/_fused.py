@@ -146,39 +146,44 @@ _ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called thro
 
 
 @njit(inline="always")
-def _value(kind, params, chain, f, caller, x, y, z, buffer):
-    """f at (x, y, z): the argument f (kind _ARGUMENT) or the spec's integrand, inlined in numba's IR:
-    with *kind* a cell of the kernel, numba prunes the other branch before typing."""
+def _value(kind, params, chain, f, vector, x, y, z, buffer):
+    """f at (x, y, z): the argument f (kind _ARGUMENT; f(w) if *vector*, else f(x, y, z)) or the spec's
+    integrand, inlined in numba's IR: with *kind* and *vector* cells of the kernel, numba prunes the other
+    branches before typing."""
     if kind == _ARGUMENT:
-        return caller(f, x, y, z, buffer)
+        if vector:
+            return call_vector(f, x, y, z, buffer)
+        return call_xyz(f, x, y, z, buffer)
     return spec_value(kind, params, chain, x, y, z)
 
 
-def _chunk_kernel(kind, params, chain, code, cache):
+def _chunk_kernel(kind, params, chain, code, vector, cache):
     """The fused kernel of integrands of *kind* with constants *params* and of map *code* (closure cells:
-    constants to numba); kind _ARGUMENT: of the argument f (not cacheable on disk, see the module's
-    docstring)."""
+    constants to numba); kind _ARGUMENT: of the argument f, f(w) if *vector* else f(x, y, z) (a cell too,
+    so that numba inlines the call and LLVM then f: with the caller passed as an argument the call was
+    opaque and the batch loop of a polynomial f ran 2.8x slower, measured), not cacheable on disk (see the
+    module's docstring)."""
 
     @njit(cache=cache, **_OPTIONS)
     def chunk_statistics(
-        f, caller, source_kind, seed_words, side, uv, first_point, m, uniform, weights, count, c_lo, c_hi, out
+        f, source_kind, seed_words, side, uv, first_point, m, uniform, weights, count, c_lo, c_hi, out
     ):  # pragma: no cover - compiled by numba
         # out[c] = (orbits, sum of orbit estimates, sum of squared deviations) of chunk c, the
         # orbits first_point + c CHUNK ... (+ CHUNK - 1) of the replicate, for c_lo <= c < c_hi (one part).
-        # f, caller: the integrand and its caller for kind _ARGUMENT, else unused zeros.
+        # f: the integrand for kind _ARGUMENT, else an unused zero.
         start = pcg64_seeded(seed_words)
         images = weights.shape[1] // 3
         area = 4.0 * np.pi if count == 48 else 2.0 * np.pi
-        u = np.full(BATCH, 0.5)
-        v = np.full(BATCH, 0.5)
-        base = np.empty((3, BATCH))
-        sums = np.empty(BATCH)
-        estimates = np.empty(BATCH)
-        buffer = np.empty(3)
         for c in range(c_lo, c_hi):
             lo = c * CHUNK
             hi = min(m, lo + CHUNK)
             stream = pcg64_advanced(start, 2 * (first_point + lo))
+            u = np.full(BATCH, 0.5)
+            v = np.full(BATCH, 0.5)
+            base = np.empty((3, BATCH))
+            sums = np.empty(BATCH)
+            estimates = np.empty(BATCH)
+            buffer = np.empty(3)
             orbits, total, m2 = 0.0, 0.0, 0.0
             for first in range(lo, hi, BATCH):
                 b = min(BATCH, hi - first)
@@ -209,7 +214,7 @@ def _chunk_kernel(kind, params, chain, code, cache):
                             params,
                             chain,
                             f,
-                            caller,
+                            vector,
                             x * w00 + y * w10 + z * w20,
                             x * w01 + y * w11 + z * w21,
                             x * w02 + y * w12 + z * w22,
@@ -240,7 +245,7 @@ def _chunk_kernel(kind, params, chain, code, cache):
 
 
 _kernels_lock = threading.Lock()
-_generic_kernels: dict[int, Any] = {}  # map code -> the kernel of a user's f (an argument), compiled per f
+_generic_kernels: dict[tuple[int, bool], Any] = {}  # (map code, f(w)?) -> the kernel of a user's f, compiled per f
 _specialised_kernels: dict[tuple[tuple[int, tuple[float, ...], Any], int], Any] = {}
 _cache_checked = False
 
@@ -251,22 +256,25 @@ def specialised_kernels() -> list[Any]:
         return list(_specialised_kernels.values())
 
 
-def _kernel(spec: tuple[int, tuple[float, ...], Any] | None, code: int) -> Any:
-    """The fused kernel of map *code* for a user's f (*spec* None: f an argument, compiled per f) or the
-    disk-cached one of the suite's integrands of *spec*; each made once per process."""
+def _kernel(spec: tuple[int, tuple[float, ...], Any] | None, code: int, caller: Any) -> Any:
+    """The fused kernel of map *code* for a user's f called by *caller* (*spec* None: f an argument,
+    compiled per f) or the disk-cached one of the suite's integrands of *spec*; each made once per process."""
     global _cache_checked
     with _kernels_lock:
         if spec is None:
-            kernel = _generic_kernels.get(code)
+            vector = caller is call_vector
+            kernel = _generic_kernels.get((code, vector))
             if kernel is None:
-                kernel = _generic_kernels[code] = _chunk_kernel(_ARGUMENT, (0.0,), no_chain, code, False)
+                kernel = _generic_kernels[code, vector] = _chunk_kernel(
+                    _ARGUMENT, (0.0,), no_chain, code, vector, False
+                )
             return kernel
         if not _cache_checked:  # before the first cached kernel of this module runs
             invalidate_if_changed(_merge_chunks)
             _cache_checked = True
         kernel = _specialised_kernels.get((spec, code))
         if kernel is None:
-            kernel = _specialised_kernels[spec, code] = _chunk_kernel(spec[0], spec[1], spec[2], code, True)
+            kernel = _specialised_kernels[spec, code] = _chunk_kernel(spec[0], spec[1], spec[2], code, False, True)
         return kernel
 
 
@@ -307,9 +315,9 @@ def fused_partials(
     *orbits* base points, as :func:`symsphere._integration.block_partial` gives them (to rounding)."""
     prepare_kernels()
     f, caller, spec = compiled
-    kernel = _kernel(spec, METHOD_CODES[method])
+    kernel = _kernel(spec, METHOD_CODES[method], caller)
     if spec is not None:
-        f = caller = 0  # compiled into the kernel: the arguments are unused
+        f = 0  # compiled into the kernel: the argument is unused
     weights = rotated_weights(_IDENTITY if basis is None else np.ascontiguousarray(basis, dtype=np.float64), count)
     kind = {"random": _RANDOM, "stratified": _STRATIFIED}.get(source.kind, _GIVEN)
     seed_words = source.seed_words if source.seed_words is not None else np.zeros(4, dtype=np.uint64)
@@ -322,7 +330,7 @@ def fused_partials(
         uv = np.ascontiguousarray(source.take(start, stop)) if kind == _GIVEN else np.empty((0, 2))
         chunks = np.empty(((m + CHUNK - 1) // CHUNK, 3))
         parts = max(1, min(get_num_threads(), len(chunks)))
-        arguments = (f, caller, kind, seed_words, side, uv, start, m, uniform, weights, count)
+        arguments = (f, kind, seed_words, side, uv, start, m, uniform, weights, count)
         run_kernel(kernel, functools.partial(_part_arguments, arguments, chunks, parts), parts)
         blocks = np.empty(((m + BLOCK - 1) // BLOCK, 3))
         _merge_chunks(chunks, BLOCK // CHUNK, blocks)
