@@ -142,7 +142,7 @@ def compiled_integrand(f: object) -> Compiled | None:
     return kernel, (call_xyz if arity == 3 else call_vector), None
 
 
-_ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called through *caller*
+_ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called as f(x, y, z) or f(w) (the *vector* cell)
 
 
 @njit(inline="always")
