@@ -109,6 +109,35 @@ def test_run_kernel_compiles_in_the_calling_thread_before_any_part():
     assert sorted(index for _, index in kernel.calls) == [0, 1, 2]
 
 
+def test_run_kernel_checks_the_compile_once_per_argument_types():
+    # A launch with arguments of types seen before skips the compile check (numba.typeof of every
+    # argument); new types are compiled again, in the calling thread; arguments without a faithful
+    # fingerprint (an unaligned array, a dispatcher) are checked at every launch.
+    import numba
+    from numba import types
+
+    from symsphere._testing import threads
+
+    kernel = _ProbeKernel()
+    values = np.zeros(4)
+    threads.run_kernel(kernel, lambda index: (values, index), 2)
+    threads.run_kernel(kernel, lambda index: (np.ones(4), index + 7), 2)  # the same types
+    assert kernel.compiled_in == [(True, (types.float64[::1], types.int64))]
+    threads.run_kernel(kernel, lambda index: (values.astype(np.float32), index), 2)
+    threads.run_kernel(kernel, lambda index: (values[::2], index), 2)
+    assert kernel.compiled_in[1:] == [
+        (True, (types.float32[::1], types.int64)),
+        (True, (types.float64[:], types.int64)),
+    ]
+    unaligned = np.frombuffer(bytearray(33), dtype=np.uint8)[1:].view(np.float64)
+    assert not unaligned.flags.aligned
+    function = numba.njit(lambda x: x)
+    for value in (unaligned, unaligned, function, function):
+        threads.run_kernel(kernel, lambda index, value=value: (value, index), 2)
+    assert len(kernel.compiled_in) == 3 + 4
+    assert len(kernel.calls) == 2 * 8
+
+
 def test_the_library_runs_its_kernels_through_run_kernel():
     # run_parts with a kernel inside the task would let a pool thread compile it
     source = Path(symsphere.__file__).parent
