@@ -132,10 +132,12 @@ def test_run_kernel_checks_the_compile_once_per_argument_types():
     unaligned = np.frombuffer(bytearray(33), dtype=np.uint8)[1:].view(np.float64)
     assert not unaligned.flags.aligned
     function = numba.njit(lambda x: x)
-    for value in (unaligned, unaligned, function, function):
+    big = 2**63  # numba: uint64, though its fingerprint is that of an int64
+    for value in (unaligned, unaligned, function, function, big, big, (1, big), (1, big)):
         threads.run_kernel(kernel, lambda index, value=value: (value, index), 2)
-    assert len(kernel.compiled_in) == 3 + 4
-    assert len(kernel.calls) == 2 * 8
+    assert len(kernel.compiled_in) == 3 + 8
+    assert kernel.compiled_in[7] == (True, (types.uint64, types.int64))
+    assert len(kernel.calls) == 2 * 12
 
 
 def test_the_library_runs_its_kernels_through_run_kernel():

@@ -139,16 +139,30 @@ _compiled: weakref.WeakKeyDictionary[Any, set[tuple[bytes, ...]]] = weakref.Weak
 
 
 def _fingerprints(values: tuple[Any, ...]) -> tuple[bytes, ...] | None:
-    """numba's type fingerprints of *values*, or None if one has none (a dispatcher, say: then the
-    kernel is checked by its types as before)."""
-    if _compute_fingerprint is None:  # pragma: no cover
+    """numba's type fingerprints of *values*, or None where a fingerprint would not tell numba's type
+    (then the kernel is checked by its types at every launch, as before).
+
+    A fingerprint has no size for a Python int (numba types one from 2**63 on as uint64), no
+    alignment for an array, and none at all for a dispatcher; such values, tuples of them and arrays
+    of other than plain numbers give None.
+    """
+    if _compute_fingerprint is None or not all(_faithful(value) for value in values):
         return None
-    if any(isinstance(value, np.ndarray) and not value.flags.aligned for value in values):
-        return None  # numba types an unaligned array apart; its fingerprint does not say so
     try:
         return tuple(_compute_fingerprint(value) for value in values)
     except (NotImplementedError, TypeError, ValueError):
         return None
+
+
+def _faithful(value: Any) -> bool:
+    """Whether numba's fingerprint of *value* determines its numba type."""
+    if isinstance(value, np.ndarray):
+        return bool(value.flags.aligned) and value.dtype.kind in "biufc"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return -(2**63) <= value < 2**63
+    if isinstance(value, tuple):
+        return all(_faithful(item) for item in value)
+    return True
 
 
 def compile_interruptibly(kernel: Any, signature: tuple[Any, ...]) -> None:
