@@ -6,7 +6,8 @@
 - by importing: no library module loads the applications; each public name has one home (a name
   listed in a public module's ``__all__`` is defined there, or in a private module behind exactly
   one public module; package ``__init__``s gather names for their documented namespaces);
-- the tests reach private modules only through ``symsphere._testing`` (docs/testing.md).
+- the tests reach private modules only through ``symsphere._testing`` (docs/testing.md);
+- the tests' seeds are fixed: none comes from ``hash()``, ``id()``, the clock or the process id.
 """
 
 from __future__ import annotations
@@ -275,3 +276,50 @@ def test_no_issue_numbers_in_code_tests_or_docs():
         if pattern.search(line) and "OpenBLAS issue" not in line
     ]
     assert found == []
+
+
+# --- the tests' seeds are fixed -------------------------------------------------------------
+# A statistical test draws the same numbers in every run (docs/testing.md): no seed comes from what
+# changes between processes or runs (hash() of a str, id(), the clock, the process id).
+
+_SEEDED = {"default_rng", "SeedSequence", "PCG64", "Generator", "RandomState", "seed"}
+_CHANGING = {"hash", "id", "time", "time_ns", "perf_counter", "perf_counter_ns", "monotonic", "getpid", "urandom"}
+
+
+def _called_name(node: ast.Call) -> str:
+    return node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+
+
+def _changing_seeds(path: Path) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.Call):
+            continue
+        seeds = list(node.args) if _called_name(node) in _SEEDED else []
+        seeds += [k.value for k in node.keywords if k.arg in ("rng", "seed", "random_state")]
+        for seed in seeds:
+            changing = sorted({_called_name(n) for n in ast.walk(seed) if isinstance(n, ast.Call)} & _CHANGING)
+            if changing:
+                found.append(f"{path.name}:{node.lineno} seeds from {', '.join(changing)}()")
+    return found
+
+
+def test_no_test_seeds_from_what_changes_between_runs():
+    found = [v for path in TEST_SOURCES if path != Path(__file__).resolve() for v in _changing_seeds(path)]
+    assert found == []
+
+
+def test_the_seed_check_sees_a_changing_seed(tmp_path):
+    probe = tmp_path / "test_probe.py"
+    probe.write_text(
+        "import os, time, zlib\nimport numpy as np\n"
+        "a = np.random.default_rng(abs(hash('case')) % 2**32)\n"
+        "b = f(n=3, rng=int(time.time()))\n"
+        "c = np.random.SeedSequence([os.getpid(), 1])\n"
+        "ok = np.random.default_rng(zlib.crc32(b'case'))\n"
+    )
+    assert [v.split(" ", 1)[1] for v in _changing_seeds(probe)] == [
+        "seeds from hash()",
+        "seeds from time()",
+        "seeds from getpid()",
+    ]
