@@ -305,7 +305,7 @@ def _changing_seeds(path: Path) -> list[str]:
 
 
 def test_no_test_seeds_from_what_changes_between_runs():
-    found = [v for path in TEST_SOURCES if path != Path(__file__).resolve() for v in _changing_seeds(path)]
+    found = [v for path in TEST_SOURCES for v in _changing_seeds(path)]  # this file too: its probe is a string
     assert found == []
 
 
