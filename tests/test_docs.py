@@ -36,7 +36,7 @@ API_INDEX = ROOT / "docs" / "api" / "index.rst"
 NOT_DOCUMENTED = {
     "symsphere.apps": "a package of applications without names of its own; its modules have pages",
     "symsphere.mitsuba": "needs Mitsuba 3 (the extra 'mitsuba', not in the docs build); docs/rendering.md documents it",
-    "symsphere.apps.study.compiled": "the study's compiled peer samplers, an internal of the study; docs/study.md describes them",
+    "symsphere.apps.study.compiled": "the study's compiled peer samplers, an internal of the study; docs/results/study-qmc.md describes them",
     "symsphere.apps.mitsuba_render": "the render verb's Mitsuba scene files; symsphere render --help and docs/rendering.md",
     "symsphere.render.image": "its public names are documented on the symsphere.render page",
     "symsphere.render.renderer": "its public names are documented on the symsphere.render page",
