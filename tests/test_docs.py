@@ -385,7 +385,7 @@ def test_blocks_not_run_are_few_and_say_why():
         if reason is not None
     ]
     assert all(len(reason) > 20 for _, _, reason in skipped), skipped
-    assert len(skipped) <= 6, skipped
+    assert len(skipped) <= 8, skipped  # a new one needs a reason good enough to raise this
 
 
 def test_code_block_parser_sees_the_blocks_and_the_marks():
