@@ -6,7 +6,7 @@ Writes into the folder (created if missing; each file replaced whole):
 
 - ``triangles.png``: the 48 triangles of the sphere (colour: the index k that ``symsphere.fold``
   returns) in the equal-area coordinates (phi, cos theta), with the orbit of one base point of T0;
-- ``orbit.png``: the same orbit on the sphere in 3-D, the front page's picture;
+- ``orbit.png``: an orbit on the sphere in 3-D beside the triangles it visits, the front page's picture;
 - ``warp_<name>.png`` for every warp of ``symsphere.warps.WARPS`` onto the sphere, the hemisphere,
   T0 or the wedge: its points (from a scrambled Sobol' set) beside its density relative to uniform;
 - ``convergence_integrate.png``: RMSE of ``symsphere.integrate`` on exp(w . a) against n, for random,
@@ -48,7 +48,7 @@ def _save(figure: plt.Figure, path: Path) -> None:
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
     os.close(fd)
     try:
-        figure.savefig(tmp, dpi=100)
+        figure.savefig(tmp, dpi=100, bbox_inches="tight")
         os.replace(tmp, path)
     finally:
         plt.close(figure)
@@ -94,8 +94,8 @@ def triangles(out: Path, n: int) -> None:
 
 
 def orbit_3d(out: Path) -> None:
-    figure = plt.figure(figsize=(4.5, 4.5), layout="constrained")
-    axes = figure.add_subplot(projection="3d")
+    figure = plt.figure(figsize=(10, 3.6), layout="constrained")
+    axes = figure.add_subplot(1, 3, 1, projection="3d")
     u, v = np.mgrid[0 : 2 * np.pi : 60j, 0 : np.pi : 30j]
     axes.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", linewidth=0.4)
     t = np.linspace(0, 2 * np.pi, 200)
@@ -113,8 +113,15 @@ def orbit_3d(out: Path) -> None:
     orbit = ss.orbit(BASE_POINT)
     axes.scatter(*orbit.T, c=np.arange(48), cmap="viridis", s=22, depthshade=False)
     axes.set_axis_off()
-    axes.set_box_aspect((1, 1, 1))
+    axes.set_box_aspect((1, 1, 1), zoom=1.5)
     axes.set_title("one point, its 48 mirror images", fontsize=10)
+    flat = figure.add_subplot(1, 3, (2, 3))
+    P, Z, d = _grid(200)
+    k, _ = ss.fold(d)
+    flat.pcolormesh(P, Z, k.reshape(P.shape), cmap="tab20", shading="auto", alpha=0.6)
+    phi, z = _equal_area(orbit)
+    flat.scatter(phi, z, c=np.arange(48), cmap="viridis", s=22)
+    flat.set(xlabel="φ", ylabel="cos θ", title="the 48 triangles (equal-area map), one image in each")
     _save(figure, out / "orbit.png")
 
 
