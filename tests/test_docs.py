@@ -20,6 +20,7 @@ runs ``make docs`` after ``make test`` (a test would build the docs a second tim
 from __future__ import annotations
 
 import ast
+import functools
 import importlib
 import importlib.util
 import inspect
@@ -267,25 +268,36 @@ for language, code, where in blocks:
 """
 
 
-def _needs(blocks, page):
-    """Skip (or, where CI requires it, fail) a page whose blocks need an optional extra that is missing."""
-    code = "".join(c for language, c, _, skip in blocks if language in ("python", "pycon") and skip is None)
-    if "import mitsuba" in code:
-        reason = None
-        try:
-            import drjit as dr
-            import mitsuba as mi
+@functools.cache
+def _mitsuba_reason():
+    """None if Mitsuba's llvm_ad_rgb variant runs here, else why not (as tests/mitsuba/conftest.py probes)."""
+    try:
+        import drjit as dr
+        import mitsuba as mi
 
-            mi.set_variant("llvm_ad_rgb")
-            dr.eval(dr.arange(mi.Float, 4) * 2)
-        except Exception as error:  # ImportError, or an LLVM that does not load
-            reason = f"{page} needs Mitsuba 3's llvm_ad_rgb variant: {error}"
-        if reason is not None:
-            if os.environ.get("SYMSPHERE_REQUIRE_MITSUBA") == "1":
-                pytest.fail(reason)
-            pytest.skip(reason)
+        mi.set_variant("llvm_ad_rgb")
+        dr.eval(dr.arange(mi.Float, 4) * 2)
+    except Exception as error:  # ImportError, or an LLVM that does not load
+        return f"Mitsuba 3's llvm_ad_rgb variant does not run here: {error}"
+    return None
+
+
+def _needs(blocks, page):
+    """The blocks to run, and why the rest were left out (None: all of them).
+
+    Without Mitsuba the page runs up to its first block that imports it, and the test then skips with the
+    reason (under ``SYMSPHERE_REQUIRE_MITSUBA=1``, as in CI, it fails instead).  A page that uses
+    symsphere.distributed skips without the extra 'distributed'.
+    """
+    code = "".join(c for language, c, _, skip in blocks if language in ("python", "pycon") and skip is None)
     if "distributed" in code:
         pytest.importorskip("dask.distributed", reason=f"{page} needs the extra 'distributed'")
+    first = next((i for i, (_, c, _, skip) in enumerate(blocks) if skip is None and "import mitsuba" in c), None)
+    if first is None or (reason := _mitsuba_reason()) is None:
+        return blocks, None
+    if os.environ.get("SYMSPHERE_REQUIRE_MITSUBA") == "1":
+        pytest.fail(f"SYMSPHERE_REQUIRE_MITSUBA=1, but {page} cannot run: {reason}")
+    return blocks[:first], f"{page}: ran the blocks before line {blocks[first][2]}; the rest need Mitsuba. {reason}"
 
 
 def _page_params():
@@ -304,8 +316,7 @@ def _page_params():
 
 @pytest.mark.parametrize("page", _page_params())
 def test_every_code_block_of_the_page_runs(page, tmp_path):
-    blocks = code_blocks((ROOT / page).read_text(encoding="utf-8"))
-    _needs(blocks, page)
+    blocks, left_out = _needs(code_blocks((ROOT / page).read_text(encoding="utf-8")), page)
     for name in ("src", "scripts", "benchmarks"):
         (tmp_path / name).symlink_to(ROOT / name)
     runnable = []
@@ -335,6 +346,8 @@ def test_every_code_block_of_the_page_runs(page, tmp_path):
     if runnable:
         run = _run_blocks(runnable, tmp_path)
         assert run.returncode == 0, f"{page}: a block failed\n{run.stdout[-3000:]}\n{run.stderr[-3000:]}"
+    if left_out is not None:
+        pytest.skip(left_out)
 
 
 def _run_blocks(runnable, folder):
