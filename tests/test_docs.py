@@ -414,3 +414,31 @@ def test_cli_reference_is_generated_from_the_parser():
         [sys.executable, str(ROOT / "scripts" / "cli_reference.py"), "--check"], capture_output=True, text=True
     )
     assert run.returncode == 0, run.stderr
+
+
+# --- the shape the reader meets -----------------------------------------------------------------------
+
+MACHINE_OR_DATE = re.compile(r"\b(?:AMD|EPYC|Xeon|Intel|Zen ?\d|load average|\d{4}-\d\d-\d\d|\d\d:\d\d UTC)\b")
+GENERATED_TABLE = re.compile(r"<!-- table: [\w-]+ -->.*?<!-- /table -->", flags=re.DOTALL)
+
+
+def test_readme_is_a_front_page():
+    lines = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 200
+    assert any(line.startswith("pip install") for line in lines[:40]), "installation within the first 40 lines"
+
+
+@pytest.mark.parametrize("page", [p for p in doc_pages() if p not in NOT_YET_RUN])
+def test_page_is_short_and_dates_and_machines_stay_in_the_results(page):
+    text = (ROOT / page).read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 400, f"{page}: split it (no page over 400 lines)"
+    if not page.startswith("docs/results/"):
+        # a generated table (the README's speed sentence) comes from a results file, machine and all
+        found = MACHINE_OR_DATE.findall(GENERATED_TABLE.sub("", text))
+        assert found == [], f"{page}: dates and machines belong in docs/results/, found {found}"
+
+
+def test_machine_and_date_pattern_sees_them():
+    probe = "measured on a 2-core AMD EPYC at 05:43 UTC on 2026-11-22 (load average 3)"
+    assert MACHINE_OR_DATE.findall(probe) == ["AMD", "EPYC", "05:43 UTC", "2026-11-22", "load average"]
+    assert MACHINE_OR_DATE.findall("pick Lebedev for smooth f; 48 maps; n = 786 432") == []
