@@ -173,15 +173,26 @@ def _wait(driver, condition, timeout=30):
     return WebDriverWait(driver, timeout).until(condition)
 
 
+def _images(driver, url):
+    """(src, naturalWidth) of every image of the page at *url*, once each has loaded or failed."""
+    driver.get(url)
+    _wait(driver, lambda d: d.execute_script("return document.readyState") == "complete")
+    _wait(driver, lambda d: d.execute_script("return Array.from(document.images).every(i => i.complete)"))
+    return driver.execute_script("return Array.from(document.images).map(i => [i.getAttribute('src'), i.naturalWidth])")
+
+
+def test_image_check_sees_an_image_that_does_not_load(browser):
+    driver, base = browser
+    images = _images(driver, base + "index.html")
+    assert images and all(width > 0 for _, width in images)
+    missing = base + "_images/no-such-picture.png"  # from the same server, no file written into the site
+    assert _images(driver, f'data:text/html,<img src="{missing}">') == [[missing, 0]]
+
+
 @pytest.mark.parametrize("page", PAGES)
 def test_page_opens_in_chromium_and_its_images_load(browser, page):
     driver, base = browser
-    driver.get(base + page)
-    _wait(driver, lambda d: d.execute_script("return document.readyState") == "complete")
-    _wait(driver, lambda d: d.execute_script("return Array.from(document.images).every(i => i.complete)"))
-    images = driver.execute_script(
-        "return Array.from(document.images).map(i => [i.getAttribute('src'), i.naturalWidth])"
-    )
+    images = _images(driver, base + page)
     content = [src for src, _ in images if "_static" not in src]  # the page's own pictures, not the theme's logo
     assert content, f"{page}: no images found"
     assert [src for src, width in images if width == 0] == []
