@@ -3,13 +3,14 @@
 #   make test   install into .venv (with the test extras, and Mitsuba 3: the extra mitsuba), then run the whole test
 #               suite in parallel (pytest-xdist, one worker per core; the 20 slowest tests are listed at the end)
 #   make docs   install the docs extra too, then build the HTML docs (docs/_build/html; warnings are errors)
+#   make gallery  redraw the docs' gallery (docs/images/gallery) from the library
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: demo test mitsuba-setup libllvm bench docs clean
+.PHONY: demo test mitsuba-setup libllvm bench docs gallery clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -64,6 +65,11 @@ $(DOCS_STAMP): $(STAMP)
 
 docs: $(DOCS_STAMP)
 	$(BIN)/python -m sphinx -E -W --keep-going -b html docs docs/_build/html
+
+# make gallery: every picture of docs/results/gallery.md, drawn from the library (seconds; tests/test_gallery.py
+# runs it small).
+gallery: $(STAMP)
+	$(BIN)/python scripts/gallery.py
 
 clean:
 	rm -rf $(VENV) symsphere-demo .pytest_cache

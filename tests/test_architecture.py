@@ -1,4 +1,4 @@
-"""The layout is the architecture (docs/design.md): checked on the source, so that it stays true.
+"""The layout is the architecture (docs/explanation/design.md): checked on the source, so that it stays true.
 
 - private means private: a name with a leading underscore is used only in its own module;
 - the library never imports the applications (``symsphere.apps``);

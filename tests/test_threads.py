@@ -26,7 +26,7 @@ print(json.dumps([after_import == before, after_sampling == before, os.environ.g
 
 @pytest.mark.parametrize("preset", [None, "active"])
 def test_threads_wait_passively_unless_the_user_says_otherwise_and_environ_is_untouched(preset):
-    # Spinning OpenMP threads starve numpy's BLAS threads (docs/design.md, "Threads"): the kernels start
+    # Spinning OpenMP threads starve numpy's BLAS threads (docs/explanation/design.md, "Threads"): the kernels start
     # numba's threads with OMP_WAIT_POLICY=passive unless the user set it, and put os.environ back.
     env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
     env["OMP_DISPLAY_ENV"] = "true"  # libgomp prints the settings it took, when it is loaded

@@ -15,7 +15,7 @@ kernel.  With as many threads as cores, they then hold the cores that numpy's
 BLAS threads need, and the next kernel waits for the spinning BLAS threads in
 turn: measured on 2 cores, ``integrate(lambda w: w @ a)`` took 128 ms instead of
 5.6 ms, and a loop of ``sample_sphere`` and ``d @ a`` ~30x longer.  Passive waiting
-costs the kernels nothing measurable (docs/design.md, "Threads").
+costs the kernels nothing measurable (docs/explanation/design.md, "Threads").
 
 libgomp reads ``OMP_WAIT_POLICY`` once, when it is loaded, i.e. when numba
 starts its threads.  :func:`start_threads` starts them with the variable set to

@@ -14,7 +14,7 @@ where they are importable too), public so that a study can make more:
   4, 6 and 8.
 
 A polynomial is a dict ``{(a, b, c): coefficient}`` of the monomials
-x^a y^b z^c.  See ``docs/integrands.md`` for the derivations.
+x^a y^b z^c.  See ``docs/explanation/when-orbits-help.md`` for the derivations.
 """
 
 from __future__ import annotations
@@ -238,7 +238,7 @@ def cubic_harmonic(degree: Literal[4, 6, 8]) -> dict[tuple[int, int, int], float
 
     The polynomials invariant under the 48 signed permutations form, on the
     sphere, one harmonic of each degree 0, 4, 6, 8 (and none of degree 2 or
-    any odd degree; see ``docs/integrands.md``).  Their homogeneous harmonic
+    any odd degree; see ``docs/explanation/when-orbits-help.md``).  Their homogeneous harmonic
     representatives (Laplacian 0 in R^3, derived by matching coefficients):
 
     - degree 4: ``sum x^4 - 3 sum x^2 y^2``  (= (5/2)(x^4 + y^4 + z^4 - 3/5) on the sphere)

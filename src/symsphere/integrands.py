@@ -6,7 +6,7 @@ respect to solid angle over its domain, and flags saying whether it is
 smooth, invariant under the 48 symmetries of the scheme, and whether the
 orbit average (the mean of ``f`` over the 48 or 24 images of a point of T0)
 integrates it exactly.  ``INTEGRANDS`` maps names to integrands and
-:func:`suite` selects them by domain.  See ``docs/integrands.md`` for the
+:func:`suite` selects them by domain.  See ``docs/reference/integrands.md`` and ``docs/explanation/when-orbits-help.md`` for the
 derivations and for why the orbit average is exact where it is.
 
 Building blocks, public so that a study can make more integrands:
@@ -99,7 +99,7 @@ class Integrand:
     orbit_exact : bool
         The orbit average integrates ``f`` exactly: ``area * mean(f(orbit(p)))
         == exact`` for every p, so the symmetric scheme has zero variance
-        on it (see ``docs/integrands.md``).  Verified in the tests.
+        on it (see ``docs/explanation/when-orbits-help.md``).  Verified in the tests.
     params : mapping
         The parameters (directions, angles, vertices, ...), read-only.
     kernel : numba function or None
@@ -444,7 +444,7 @@ def _cubic_integrand(degree: Literal[4, 6, 8], shift: float = 0.0) -> Integrand:
 def _build_integrands() -> dict[str, Integrand]:
     out: list[Integrand] = []
     # (a) pure harmonics: exact 0.  orbit_exact: those with no O_h-invariant component
-    # (odd l, l = 2, and odd under a sign change of x or y), see docs/integrands.md.
+    # (odd l, l = 2, and odd under a sign change of x or y), see docs/explanation/when-orbits-help.md.
     for l, m, exact_orbit in [
         (1, -1, True),
         (1, 0, True),

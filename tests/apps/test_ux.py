@@ -93,7 +93,10 @@ def test_sobol_balance_warning_is_one_note_on_the_cli(tmp_path, verb):
 _ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("page", ["docs/design.md", "docs/testing.md", "README.md"])
+@pytest.mark.parametrize(
+    "page",
+    ["README.md", "docs/testing.md", *sorted(str(p.relative_to(_ROOT)) for p in (_ROOT / "docs").glob("*/*.md"))],
+)
 def test_docs_cite_only_files_that_exist(page):
     text = (_ROOT / page).read_text(encoding="utf-8")
     # Repository paths; not patterns (tests/test_<module>.py, render/{scene, ...}.py) nor build output.
@@ -104,7 +107,7 @@ def test_docs_cite_only_files_that_exist(page):
     cited |= set(re.findall(r"\]\(((?!https?:|#)[^)#\s]+)", text))  # Markdown links
     # and any `dir/file.ext` in backquotes (the old first line of design.md cited `shared/DESIGN.md`)
     cited |= set(re.findall(r"`([\w.-]+/[\w./-]*\.(?:md|py|toml|json|png|rst|txt))`", text))
-    bases = [_ROOT, _ROOT / "docs", _ROOT / "src" / "symsphere", _ROOT / "tests"]
+    bases = [_ROOT, _ROOT / "docs", (_ROOT / page).parent, _ROOT / "src" / "symsphere", _ROOT / "tests"]
     generated = ("symsphere-demo/", "study-report/")  # what `make demo` and `symsphere study` write
     missing = [c for c in sorted(cited) if not (c.startswith(generated) or any((b / c).exists() for b in bases))]
     assert missing == []

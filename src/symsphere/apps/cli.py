@@ -273,7 +273,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     integrate.add_argument(
         "--integrand", required=True, metavar="NAME",
-        help=f"one of: {', '.join(sorted(INTEGRANDS))} (symsphere.integrands.INTEGRANDS; docs/integrands.md)",
+        help=f"one of: {', '.join(sorted(INTEGRANDS))} (symsphere.integrands.INTEGRANDS; docs/reference/integrands.md)",
     )  # fmt: skip
     integrate.add_argument(
         "--n",
