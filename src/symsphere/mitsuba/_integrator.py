@@ -147,6 +147,7 @@ class _PathMethods:
         self.group_size = GROUP_SIZES[strategy]
         # whether the strategy's own direction replaces the BSDF's sample at Lambertian vertices
         self.replaces_sample = strategy in _SYMMETRIC_STRATEGIES or points == "sobol"
+        self._pending: tuple[Any, int] | None = None  # (seed, spp) of the last prepare()
         self._layout: tuple[int, Any, Any] | None = None  # (width, pixel key, sample index) of this render
         self._warned: set[tuple[int, int, str]] = set()
 
@@ -223,7 +224,7 @@ class _PathMethods:
     def sample_rays(self, scene: Any, sensor: Any, sampler: Any) -> Any:
         """ADIntegrator.sample_rays, and the layout of its wavefront: lane = pixel x spp + sample index."""
         rays = type(self).__mro__[1].sample_rays(self, scene, sensor, sampler)  # type: ignore[attr-defined]
-        if self.replaces_sample:
+        if self.replaces_sample and self._pending is not None:
             seed, spp = self._pending
             film = sensor.film()
             film_size = film.crop_size()
@@ -325,14 +326,16 @@ class _PathMethods:
 
     # --- next-event estimation: one place, so that another light-sampling technique can replace it -----
 
-    def _sample_emitter(self, scene: Any, si: Any, sample: Any, active: Any, primal: bool) -> tuple[Any, Any, Any]:
-        """(direction sample, emitter weight Le / pdf, mask) of next-event estimation at *si*.
+    def _sample_emitter(self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool) -> tuple[Any, Any, Any]:
+        """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
+        the sample is valid).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the
+        BSDF's direction; :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
 
-        Mitsuba's emitter sampling (area measure converted to solid angle), detached; in a differential
-        mode the weight's derivative is re-attached as ``prb`` does (emitter parameters: radiance,
-        textures), without the terms of moving geometry.
+        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample), detached; in a
+        differential mode the weight's derivative is re-attached as ``prb`` does (emitter parameters:
+        radiance, textures), without the terms of moving geometry.
         """
-        ds, em_weight = scene.sample_emitter_direction(si, sample, True, active)
+        ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
         active = active & (ds.pdf != 0.0)
         if not primal:
             with dr.resume_grad():
@@ -396,7 +399,7 @@ class _PathMethods:
 
             # emitter sampling
             active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            ds, em_weight, active_em = self._sample_emitter(scene, si, sampler.next_2d(), active_em, primal)
+            ds, em_weight, active_em = self._sample_emitter(scene, si, sampler, active_em, primal)
             wo = si.to_local(ds.d)
 
             sample_1 = sampler.next_1d()
