@@ -1,12 +1,16 @@
 """Gradient variance of ``symsphere_path`` against Mitsuba's ``prb``, at equal spp and at equal time.
 
     .venv/bin/python benchmarks/bench_mitsuba_grad.py --json results/mitsuba_grad.json
+    .venv/bin/python benchmarks/bench_mitsuba_grad.py --scene textured --json results/mitsuba_grad_textured.json
 
-Scene: Mitsuba's Cornell box (``mi.cornell_box()``: one-sided diffuse walls, a rectangle light) at
---width x --height (64 x 64), --spp (24) samples per pixel, ``max_depth`` 6, ``rr_depth`` 5, variant
-llvm_ad_rgb.  Two parameters, each scaled in R, G and B alike: the white walls' reflectance (a BSDF
-parameter) and the light's radiance (an emitter parameter).  Two estimators per integrator and
-parameter, over --seeds seeds (independent renders: seed s, seed_grad s + 10^6):
+Scenes (--scene): ``cornell``, Mitsuba's Cornell box (``mi.cornell_box()``: one-sided diffuse walls, a
+rectangle light), with two parameters: the white walls' reflectance (a BSDF parameter) and the light's
+radiance (an emitter parameter); ``textured`` (tests/mitsuba's: a two-sided diffuse checkerboard floor
+and wall, a rough-plastic sphere, a glass sphere, a rectangle light, a constant sky), with a checker
+colour (a texture) and the sky's radiance.  Each parameter is scaled in R, G and B alike.  At --width x
+--height (64 x 64), --spp (24) samples per pixel, ``max_depth`` 6, ``rr_depth`` 5, variant llvm_ad_rgb.
+Two estimators per integrator and parameter, over --seeds seeds (independent renders: seed s,
+seed_grad s + 10^6):
 
 reverse
     The scalar gradient of the image mean (``mi.render`` + ``dr.backward``; the sum of the parameter's RGB
@@ -45,15 +49,38 @@ CASES = [
     ("symmetric_cosine · random", {"type": "symsphere_path", "strategy": "symmetric_cosine"}),
     ("symmetric_cosine · sobol", {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol"}),
 ]
-PARAMETERS = {"reflectance": "white.reflectance.value", "radiance": "light.emitter.radiance.value"}
+PARAMETERS = {
+    "cornell": {"reflectance": "white.reflectance.value", "radiance": "light.emitter.radiance.value"},
+    "textured": {"checker": "floor.bsdf.brdf_0.reflectance.color0.value", "sky": "sky.radiance.value"},
+}
 DEPTH = {"max_depth": 6, "rr_depth": 5}
 
 
-def _scene(mi, width, height):
-    scene = mi.cornell_box()
-    scene["sensor"]["film"] = {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}}
-    scene["sensor"]["sampler"] = {"type": "independent"}
-    return mi.load_dict(scene)
+def _scene(mi, name, width, height):
+    film = {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}}
+    if name == "cornell":
+        scene = mi.cornell_box()
+        scene["sensor"]["film"] = film
+        scene["sensor"]["sampler"] = {"type": "independent"}
+        return mi.load_dict(scene)
+    T = mi.ScalarTransform4f
+    white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}}}
+    checker = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
+        "type": "checkerboard", "color0": {"type": "rgb", "value": [0.8, 0.2, 0.1]},
+        "color1": {"type": "rgb", "value": [0.1, 0.3, 0.8]}, "to_uv": T().scale([4, 4, 1])}}}  # fmt: skip
+    plastic = {"type": "roughplastic", "alpha": 0.2, "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]}}
+    return mi.load_dict({
+        "type": "scene",
+        "sensor": {"type": "perspective", "fov": 50, "film": film, "sampler": {"type": "independent"},
+                   "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0])},
+        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": checker},
+        "wall": {"type": "rectangle", "to_world": T().translate([0, 1.5, -1.5]).scale(3), "bsdf": white},
+        "ball": {"type": "sphere", "center": [-0.7, 0.5, 0.2], "radius": 0.5, "bsdf": plastic},
+        "glass": {"type": "sphere", "center": [0.8, 0.4, 0.6], "radius": 0.4, "bsdf": {"type": "dielectric"}},
+        "light": {"type": "rectangle", "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
+                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}}},
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}},
+    })  # fmt: skip
 
 
 def _reverse(mi, dr, scene, integrator, key, seed, spp):
@@ -90,12 +117,12 @@ def run(args):
     mi.set_variant("llvm_ad_rgb")
     import symsphere.mitsuba  # noqa: F401  (registers symsphere_path)
 
-    scene = _scene(mi, args.width, args.height)
+    scene = _scene(mi, args.scene, args.width, args.height)
     integrators = {name: mi.load_dict({**spec, **DEPTH}) for name, spec in CASES}
     rows = []
     snapshot = cpu_snapshot()
     wall = time.perf_counter()
-    for parameter, key in PARAMETERS.items():
+    for parameter, key in PARAMETERS[args.scene].items():
         for integrator in integrators.values():  # warm-up: the JIT compile of each kernel
             _reverse(mi, dr, scene, integrator, key, 0, args.spp)
             _forward(mi, dr, scene, integrator, key, 0, args.spp)
@@ -134,13 +161,15 @@ def run(args):
         "command": " ".join(["benchmarks/bench_mitsuba_grad.py", *sys.argv[1:]]),
         "machine": cpu_name(),
         "others_cpu": others_cpu(snapshot, cpu_snapshot(), time.perf_counter() - wall),
-        "width": args.width, "height": args.height, "spp": args.spp, "seeds": args.seeds,
+        "scene": args.scene, "width": args.width, "height": args.height, "spp": args.spp, "seeds": args.seeds,
         "variant": "llvm_ad_rgb", "mitsuba": mi.__version__, "rows": rows,
     }  # fmt: skip
 
 
 def report(result):
-    print(f"{result['machine']}; {result['width']}x{result['height']}, {result['spp']} spp, {result['seeds']} seeds")
+    print(
+        f"{result['machine']}; {result.get('scene', 'cornell')} {result['width']}x{result['height']}, {result['spp']} spp, {result['seeds']} seeds"
+    )
     print(
         f"{'parameter':12} {'case':26} {'rev var/prb':>11} {'time/prb':>8} {'eff':>6}  {'fwd var/prb':>11} {'time/prb':>8} {'eff':>6}"
     )
@@ -154,6 +183,7 @@ def report(result):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scene", choices=sorted(PARAMETERS), default="cornell")
     parser.add_argument("--width", type=int, default=64)
     parser.add_argument("--height", type=int, default=64)
     parser.add_argument("--spp", type=int, default=24)

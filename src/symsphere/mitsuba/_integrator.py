@@ -163,7 +163,7 @@ class _PathMethods:
     # --- sample counts and the lanes' layout (ADIntegrator's prepare() and sample_rays()) ---------------
 
     def prepare(self, sensor: Any, seed: Any = 0, spp: int = 0, aovs: Any = ()) -> tuple[Any, int]:
-        """ADIntegrator.prepare with the sample count of :func:`sample_count` and an opaque seed."""
+        """ADIntegrator.prepare with the sample count of :meth:`_sample_count` and an opaque seed."""
         film = sensor.film()
         sampler = sensor.sampler().clone()
         spp = self._sample_count(sampler, spp)
