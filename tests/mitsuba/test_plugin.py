@@ -103,6 +103,17 @@ def test_aov_nests_the_symmetric_strategies_unbiased(llvm, strategy):
     assert _welch_p(ours, ref) > THRESHOLD, (ours.mean(), ref.mean())
 
 
+def test_moment_nests_it_too(llvm):
+    """Mitsuba's moment integrator (another wrapper calling sample()): the image and its second moment."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    integrator = mi.load_dict({"type": "moment", "img": {"type": "symsphere_path", **DEPTH}})
+    image = np.array(mi.render(_scene(mi), integrator=integrator, spp=24, seed=1))
+    assert image.shape[:2] == (SIZE, SIZE) and image.shape[2] >= 6 and np.all(np.isfinite(image))
+    assert image[..., :3].mean() > 0
+
+
 def test_nested_lanes_form_groups_of_consecutive_samples(llvm):
     """Called by another integrator (no render of its own), sample() groups consecutive lanes: lane l is
     member l mod n of group l // n, whose key (from the scene sampler, at the group's first lane) is one."""
