@@ -142,16 +142,6 @@ def test_bad_parameters_name_the_parameter(llvm, params, words):
     assert last.startswith("ValueError: ") and words in last
 
 
-def test_spp_must_be_a_multiple_of_the_group(jit_variant):
-    mi = jit_variant
-    import symsphere.mitsuba  # noqa: F401
-
-    scene = mi.load_dict(_scene_dict(mi, "cornell"))
-    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "symmetric_cosine"})
-    with pytest.raises(ValueError, match="'spp' must be a multiple of 8 for strategy='symmetric_cosine'"):
-        integrator.render(scene, spp=12)
-
-
 def test_scalar_variants_are_refused():
     import mitsuba as mi
 

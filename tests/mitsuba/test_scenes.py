@@ -89,8 +89,10 @@ def test_cli_spp_and_sampler_errors(llvm, tmp_path, capsys):
     import symsphere.mitsuba as sm
 
     scene = str(sm.scene_path("cornell_box"))
-    assert main(["render", "--scene", scene, "--spp", "10", "--out", str(tmp_path / "x.png")]) == 2
-    assert "'spp' must be a multiple of 24" in capsys.readouterr().err
+    # an spp that is not a multiple of the group: rounded up by the integrator (with Mitsuba's log warning)
+    assert main(["render", "--scene", scene, "--spp", "10", "--out", str(tmp_path / "x.png")]) == 0
+    assert (tmp_path / "x.png").stat().st_size > 0
+    capsys.readouterr()
     assert main(["render", "--scene", scene, "--sampler", "uniform", "--out", str(tmp_path / "x.png")]) == 2
     assert "is not available for Mitsuba scenes" in capsys.readouterr().err
 

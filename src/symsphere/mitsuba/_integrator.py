@@ -35,15 +35,24 @@ its own gets a uniform member of a fresh base point at every vertex (unbiased pa
 other BSDF samples itself.  At Lambertian vertices the throughput is ``f cos / p`` with f cos from
 the BSDF's ``eval`` (textures, two sides) and p the strategy's density, which MIS uses too.
 
-``render()`` is overridden (as Mitsuba's Python ``ADIntegrator`` does) because the scheme needs the
-sample index within the pixel; the whole image is one wavefront (``spp x pixels <= 2^32``).
+The class is a subclass of Mitsuba's Python ``RBIntegrator`` (the base of ``prb``): ``render``,
+``render_forward`` and ``render_backward`` are Mitsuba's, around :meth:`sample`, which is ``prb``'s
+interface: in primal mode the path.cpp estimator above (the same float operations, so ``bsdf`` is
+``path`` at the same seed), in forward and backward mode path replay backpropagation (Vicini et al.
+2021) of the same paths: detached sampling (no strategy's density depends on a scene parameter), the
+derivative of f cos at every vertex and of the emitters' radiance; like ``prb`` (and its
+limitations: no geometric derivatives), without the terms of moving geometry.  The scheme needs the
+sample index within the pixel: ``prepare`` (which also sets the sample count: rounded up to the group
+size, with one warning) and ``sample_rays`` record this render's layout of the wavefront (one
+wavefront, ``spp x pixels <= 2^32``); called by another integrator (``aov``), :meth:`sample` groups
+consecutive lanes instead, keyed from the scene's sampler.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from typing import Any, cast
+from typing import Any
 
 import drjit as dr
 import mitsuba as mi
@@ -73,6 +82,7 @@ _COSINE_DENSITY = ("cosine", "symmetric_cosine")  # density |cos| / pi: the weig
 _BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
 _BASE_V = 0x5851F42D4C957F2D
 _INV_PI = 1.0 / math.pi
+_REPLACE_GRAD: Any = dr.replace_grad  # its stub says it returns None
 
 
 def _mis_weight(pdf_a: Any, pdf_b: Any) -> Any:
@@ -103,42 +113,43 @@ def lambertian_codes(bsdf: Any) -> int:
 
 
 class _PathMethods:
-    """The ``symsphere_path`` plugin (see the module docstring); its methods become a subclass of each
-    variant's ``mi.SamplingIntegrator`` (:func:`integrator_class`).
+    """The ``symsphere_path`` plugin (see the module docstring and docs/mitsuba_plugin.md); its methods
+    become a subclass of each variant's ``RBIntegrator`` (:func:`integrator_class`)."""
 
-    Parameters (scene file or ``load_dict``): ``strategy`` ('bsdf', 'cosine', 'symmetric',
-    'symmetric_cosine'; default 'symmetric'), ``points`` ('random', 'sobol'; default 'random'; 'bsdf':
-    'random' only),
-    ``method`` ('equal_area', 'paper1', 'paper2'; default 'equal_area', for 'symmetric'),
-    ``max_depth`` (default -1), ``rr_depth`` (default 5), ``hide_emitters`` (default false).
-    """
+    hide_emitters: bool  # the C++ base's, read from the properties
+    skip_area_emitters: Any  # the C++ base's
 
     def __init__(self, props: Any) -> None:
-        # the current variant's base (this class is a template: its methods run on that subclass)
-        mi.SamplingIntegrator.__init__(cast(mi.SamplingIntegrator, self), props)
         if not dr.is_jit_v(mi.Float):
             raise ValueError(f"symsphere_path runs in Mitsuba's JIT variants (llvm_*, cuda_*), not in {mi.variant()!r}")
         if mi.is_polarized:
             raise ValueError(f"symsphere_path does not support polarized variants ({mi.variant()!r})")
-        self.strategy = check_choice(props.get("strategy", "symmetric"), "strategy", STRATEGIES)
-        self.points = check_choice(props.get("points", "random"), "points", POINTS)
-        self.method = check_choice(props.get("method", "equal_area"), "method", METHODS)
+        strategy = check_choice(props.get("strategy", "symmetric"), "strategy", STRATEGIES)
+        points = check_choice(props.get("points", "random"), "points", POINTS)
+        method = check_choice(props.get("method", "equal_area"), "method", METHODS)
         max_depth = int(props.get("max_depth", -1))
         if max_depth < -1:
             raise ValueError(f"'max_depth' must be -1 (unbounded) or >= 0, got {max_depth}")
-        self.max_depth = max_depth if max_depth != -1 else 0xFFFFFFFF
-        self.rr_depth = int(props.get("rr_depth", 5))
-        if self.rr_depth <= 0:
-            raise ValueError(f"'rr_depth' must be > 0, got {self.rr_depth}")
-        self.hide_emitters = bool(props.get("hide_emitters", False))
-        if self.strategy == "bsdf" and self.points != "random":
+        rr_depth = int(props.get("rr_depth", 5))
+        if rr_depth <= 0:
+            raise ValueError(f"'rr_depth' must be > 0, got {rr_depth}")
+        if strategy == "bsdf" and points != "random":
             raise ValueError(
-                f"'points' must be 'random' for strategy='bsdf' (got {self.points!r}): it takes the scene "
+                f"'points' must be 'random' for strategy='bsdf' (got {points!r}): it takes the scene "
                 "sampler's points; choose a QMC sampler there, or points='sobol' with another strategy"
             )
-        self.group_size = GROUP_SIZES[self.strategy]
+        # the variant's RBIntegrator (the class's only base): reads max_depth (default 6 there) and rr_depth
+        # again, valid by now, and hide_emitters (the C++ base's property)
+        type(self).__mro__[1].__init__(self, props)  # type: ignore[misc]
+        self.strategy, self.points, self.method = strategy, points, method
+        self.max_depth = max_depth if max_depth != -1 else 0xFFFFFFFF
+        self.rr_depth = rr_depth
+        self.group_size = GROUP_SIZES[strategy]
         # whether the strategy's own direction replaces the BSDF's sample at Lambertian vertices
-        self.replaces_sample = self.strategy in _SYMMETRIC_STRATEGIES or self.points == "sobol"
+        self.replaces_sample = strategy in _SYMMETRIC_STRATEGIES or points == "sobol"
+        self._pending: tuple[Any, int] | None = None  # (seed, spp) of the last prepare()
+        self._layout: tuple[int, Any, Any] | None = None  # (width, pixel key, sample index) of this render
+        self._warned: set[tuple[int, int, str]] = set()
 
     def to_string(self) -> str:
         return (
@@ -149,76 +160,115 @@ class _PathMethods:
     def aov_names(self) -> list[str]:
         return []
 
-    # --- render ---------------------------------------------------------------------------------
+    # --- sample counts and the lanes' layout (ADIntegrator's prepare() and sample_rays()) ---------------
+
+    def prepare(self, sensor: Any, seed: Any = 0, spp: int = 0, aovs: Any = ()) -> tuple[Any, int]:
+        """ADIntegrator.prepare with the sample count of :meth:`_sample_count` and an opaque seed."""
+        film = sensor.film()
+        sampler = sensor.sampler().clone()
+        spp = self._sample_count(sampler, spp)
+        sampler.set_samples_per_wavefront(spp)
+        film_size = film.crop_size()
+        if film.sample_border():
+            film_size += 2 * film.rfilter().border_size()
+        wavefront = int(dr.prod(film_size)) * spp
+        if wavefront > 2**32:
+            _fail(f"spp x pixels = {wavefront} exceeds 2^32 (one wavefront): use fewer samples per pixel")
+        if isinstance(seed, int):
+            seed = dr.opaque(mi.UInt32, seed)  # one kernel for every seed
+        sampler.seed(seed, wavefront)
+        film.prepare(list(aovs))
+        self._pending = (seed, spp)
+        return sampler, spp
+
+    def _sample_count(self, sampler: Any, spp: int) -> int:
+        """The samples per pixel rendered for the request *spp* (0: the scene sampler's), set on *sampler*.
+
+        Rounded up to a multiple of the group size if the sampler takes that count; a sampler that rounds
+        counts itself (stratified, ldsampler: squares or powers of 2; orthogonal: squares of primes) may
+        not: then its own count for the request is used and the samples after its last whole group form a
+        partial group (unbiased: every sample is a uniform member of its base point's orbit).  One
+        warning per (request, result, sampler) and integrator, through Mitsuba's log, where the count
+        is not the request or not a multiple of the group.
+        """
+        requested = int(spp) if spp else int(sampler.sample_count())
+        if requested <= 0:
+            _fail(f"'spp' must be > 0, got {requested}")
+        n = self.group_size
+        own = _taken_count(sampler, requested)
+        chosen = own
+        if own % n:
+            rounded = _taken_count(sampler, -(-own // n) * n)
+            if rounded % n == 0:
+                chosen = rounded
+        if chosen != int(sampler.sample_count()):
+            level = mi.log_level()
+            mi.set_log_level(mi.LogLevel.Error)  # this method's warning says what the sampler did
+            try:
+                sampler.set_sample_count(chosen)
+            finally:
+                mi.set_log_level(level)
+        name = sampler.class_name()
+        if (chosen != requested or chosen % n) and (requested, chosen, name) not in self._warned:
+            self._warned.add((requested, chosen, name))
+            what = f"{chosen} samples per pixel" + (f" instead of {requested}" if chosen != requested else "")
+            why = f"a group of {n} samples shares a base point with strategy={self.strategy!r}"
+            if chosen % n:
+                why += (
+                    f"; the {name} takes {chosen}, not a multiple of {n}, so the last group of each pixel has "
+                    f"{chosen % n} (unbiased, the symmetry in whole groups only)"
+                )
+            _warn(f"rendering {what} ({why})")
+        return chosen
+
+    def sample_rays(self, scene: Any, sensor: Any, sampler: Any) -> Any:
+        """ADIntegrator.sample_rays, and the layout of its wavefront: lane = pixel x spp + sample index."""
+        rays = type(self).__mro__[1].sample_rays(self, scene, sensor, sampler)  # type: ignore[attr-defined]
+        if self.replaces_sample and self._pending is not None:
+            seed, spp = self._pending
+            film = sensor.film()
+            film_size = film.crop_size()
+            if film.sample_border():
+                film_size += 2 * film.rfilter().border_size()
+            width = int(dr.prod(film_size)) * spp
+            idx = dr.arange(mi.UInt32, width)
+            pixel = idx // spp
+            self._layout = (width, _random.pixel_key(mi.UInt64(seed), pixel), idx - pixel * spp)
+        return rays
 
     def render(self, scene: Any, sensor: Any = 0, seed: Any = 0, spp: int = 0, develop: bool = True,
                evaluate: bool = True) -> Any:  # fmt: skip
-        if not develop:
-            raise ValueError("symsphere_path renders developed images only ('develop' must be True)")
-        if isinstance(sensor, int):
-            sensor = scene.sensors()[sensor]
-        film = sensor.film()
-        with dr.suspend_grad():
-            sampler = sensor.sampler().clone()
-            if spp != 0:
-                sampler.set_sample_count(spp)
-            spp = sampler.sample_count()
-            if spp % self.group_size:
-                raise ValueError(
-                    f"'spp' must be a multiple of {self.group_size} for strategy={self.strategy!r} "
-                    f"(a group of {self.group_size} samples shares a base point), got {spp}"
-                )
-            sampler.set_samples_per_wavefront(spp)
-            film_size = film.crop_size()
-            border = film.rfilter().border_size() if film.sample_border() else 0
-            film_size = film_size + 2 * border
-            wavefront = int(dr.prod(film_size)) * spp
-            if wavefront > 2**32:
-                raise ValueError(f"spp x pixels = {wavefront} exceeds 2^32: use fewer samples per pixel")
-            if isinstance(seed, int):
-                seed = dr.opaque(mi.UInt32, seed)  # one kernel for every seed
-            sampler.seed(seed, wavefront)
-            film.prepare([])
+        try:
+            return type(self).__mro__[1].render(self, scene, sensor, seed, spp, develop, evaluate)  # type: ignore[attr-defined]
+        finally:
+            self._layout = None  # a later nested sample() must not take this render's layout
 
-            idx = dr.arange(mi.UInt32, wavefront)
-            pixel = idx // spp
-            sample_index = idx - pixel * spp
-            pos = mi.Vector2i()
-            pos.y = pixel // film_size[0]
-            pos.x = pixel - pos.y * film_size[0]
-            if film.sample_border():
-                pos -= border
-            pos += mi.Vector2i(film.crop_offset())
-            pos_f = mi.Vector2f(pos) + sampler.next_2d()
-            scale = dr.rcp(mi.ScalarVector2f(film.crop_size()))
-            offset = -mi.ScalarVector2f(film.crop_offset()) * scale
-            aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Vector2f(0.5)
-            time = sensor.shutter_open()
-            if sensor.shutter_open_time() > 0:
-                time += sampler.next_1d() * sensor.shutter_open_time()
-            wavelength_sample = sampler.next_1d() if mi.is_spectral else 0.5
-            ray, ray_weight = sensor.sample_ray_differential(
-                time, wavelength_sample, dr.fma(pos_f, scale, offset), aperture
-            )
-            key = _random.pixel_key(mi.UInt64(seed), pixel)
-            table = self._lambertian_table(scene) if self.replaces_sample else None
-            spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table)
+    def render_forward(self, scene: Any, params: Any, sensor: Any = 0, seed: Any = 0, spp: int = 0) -> Any:
+        try:
+            return type(self).__mro__[1].render_forward(self, scene, params, sensor, seed, spp)  # type: ignore[attr-defined]
+        finally:
+            self._layout = None
 
-            block = film.create_block()
-            block.set_coalesce(block.coalesce() and spp >= 4)
-            value = spectrum * ray_weight
-            if mi.is_spectral:
-                rgb = mi.spectrum_to_srgb(value, ray.wavelengths)
-            elif mi.is_monochromatic:
-                rgb = mi.Color3f(value.x)
-            else:
-                rgb = value
-            alpha = dr.select(valid, mi.Float(1), mi.Float(0))
-            channels = [rgb.x, rgb.y, rgb.z] + ([alpha] if mi.has_flag(film.flags(), mi.FilmFlags.Alpha) else [])
-            splat = mi.Vector2f(pos) if film.rfilter().is_box_filter() else pos_f
-            block.put(splat, channels + [mi.Float(1)])
-            film.put_block(block)
-            return film.develop()
+    def render_backward(self, scene: Any, params: Any, grad_in: Any, sensor: Any = 0, seed: Any = 0,
+                        spp: int = 0) -> None:  # fmt: skip
+        try:
+            type(self).__mro__[1].render_backward(self, scene, params, grad_in, sensor, seed, spp)  # type: ignore[attr-defined]
+        finally:
+            self._layout = None
+
+    def _lanes(self, sampler: Any, width: int) -> tuple[Any, Any]:
+        """(pixel key, sample index) of each lane: this render's layout, or, when another integrator calls
+        sample() (``aov``, ``moment``: Mitsuba's C++ render, lane = pixel x spp + sample), groups of
+        consecutive lanes keyed by a random number of the scene sampler drawn at the group's first lane."""
+        if self._layout is not None and self._layout[0] == width:
+            return self._layout[1], self._layout[2]
+        lane = dr.arange(mi.UInt32, width)
+        s = lane % self.group_size
+        hi = mi.UInt64(mi.UInt32(sampler.next_1d() * 2.0**24))
+        lo = mi.UInt64(mi.UInt32(sampler.next_1d() * 2.0**24))
+        key = _random.mix64((hi << 24) | lo)
+        dr.eval(key)
+        return dr.gather(mi.UInt64, key, lane - s), s
 
     def _lambertian_table(self, scene: Any) -> Any:
         """UInt32 table over Dr.Jit's registry ids of the scene's BSDFs: 1 or 2 if Lambertian, else 0."""
@@ -274,45 +324,82 @@ class _PathMethods:
         base = (dr.maximum(lo_ab, dr.minimum(hi_ab, c)), dr.minimum(lo_ab, c), dr.maximum(hi_ab, c))
         return dr.select(same_side, triangle_density(*base, self.method) / 24, 0.0)
 
-    # --- the path loop (path.cpp) ------------------------------------------------------------------
+    # --- next-event estimation: one place, so that another light-sampling technique can replace it -----
+
+    def _sample_emitter(self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool) -> tuple[Any, Any, Any]:
+        """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
+        the sample is valid).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the
+        BSDF's direction; :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
+
+        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample), detached; in a
+        differential mode the weight's derivative is re-attached as ``prb`` does (emitter parameters:
+        radiance, textures), without the terms of moving geometry.
+        """
+        ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
+        active = active & (ds.pdf != 0.0)
+        if not primal:
+            with dr.resume_grad():
+                em_val = scene.eval_emitter_direction(si, ds, active)
+                inv_pdf = dr.select(ds.pdf != 0.0, dr.rcp(ds.pdf), 0.0)
+                em_weight = _REPLACE_GRAD(em_weight, em_val * dr.detach(inv_pdf))
+        return ds, em_weight, active
+
+    def _emitter_pdf(self, scene: Any, ref: Any, ds: Any, active: Any) -> Any:
+        """The density (solid angle) with which :meth:`_sample_emitter` at *ref* samples *ds*, for MIS."""
+        return scene.pdf_emitter_direction(ref, ds, active)
+
+    # --- the path loop (path.cpp; in a differential mode, prb's path replay) ---------------------------
 
     @dr.syntax
-    def _trace(self, scene: Any, sampler: Any, ray: Any, key: Any, s: Any, table: Any) -> tuple[Any, Any]:
-        ray = mi.Ray3f(ray)
+    def sample(self, mode: Any, scene: Any, sampler: Any, ray: Any, δL: Any = None, state_in: Any = None,
+               active: Any = True, **kwargs: Any) -> tuple[Any, Any, list[Any], Any]:  # fmt: skip
+        """``ADIntegrator.sample``: radiance (primal), or its derivative (forward) / adjoint (backward)."""
+        primal = mode == dr.ADMode.Primal
+        replaces = self.replaces_sample  # False for bsdf, and cosine with random points: the BSDF's own sample
+        key, s, table = None, None, None
+        if replaces:
+            key, s = self._lanes(sampler, dr.width(ray))
+            table = self._lambertian_table(scene)
+        ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
         throughput: Any = mi.Spectrum(1.0)
-        result = mi.Spectrum(0.0)
+        L: Any = mi.Spectrum(0.0 if primal else state_in)
+        δL = mi.Spectrum(δL if δL is not None else 0.0)
         eta = mi.Float(1.0)
         depth = mi.UInt32(0)
         valid_ray = mi.Bool((not self.hide_emitters) and scene.environment() is not None)
         prev_si = dr.zeros(mi.Interaction3f)
         prev_bsdf_pdf: Any = mi.Float(1.0)
         prev_bsdf_delta = mi.Bool(True)
-        active = mi.Bool(self.max_depth != 0)
+        active = mi.Bool(active) & (self.max_depth != 0)
         ctx = mi.BSDFContext()
-        replaces = self.replaces_sample  # False for bsdf, and cosine with random points: the BSDF's own sample
 
         while active:
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
             if dr.hint(self.hide_emitters, mode="scalar"):  # Mitsuba's: the camera ray passes through area emitters
                 skip = (depth == 0) & si.is_valid() & (si.shape.emitter() != None)  # noqa: E711 - a Dr.Jit comparison
                 ray_skip = si.spawn_ray(ray.d)
-                after = cast(mi.SamplingIntegrator, self).skip_area_emitters(scene, ray_skip, True, skip)
+                after = self.skip_area_emitters(scene, ray_skip, True, skip)
                 si = dr.select(skip, after.compute_surface_interaction(ray_skip, mi.RayFlags.All, skip), si)
 
             # direct emission, weighted against the previous vertex's emitter sampling
             ds = mi.DirectionSample3f(scene, si=si, ref=prev_si)
-            em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
+            em_pdf = self._emitter_pdf(scene, prev_si, ds, ~prev_bsdf_delta)
             mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
-            result = dr.fma(throughput, ds.emitter.eval(si, prev_bsdf_pdf > 0.0) * mis_bsdf, result)
+            shown = prev_bsdf_pdf > 0.0
+            if dr.hint(self.hide_emitters, mode="scalar"):  # a hidden environment behind the camera ray
+                shown &= (depth != 0) | si.is_valid()
+            with dr.resume_grad(when=not primal):
+                emitted = ds.emitter.eval(si, shown)
+            if dr.hint(primal, mode="scalar"):
+                L = dr.fma(throughput, emitted * mis_bsdf, L)
 
             active_next = (depth + 1 < self.max_depth) & si.is_valid()
             bsdf = si.bsdf(ray)
 
             # emitter sampling
             active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active_em)
-            active_em &= ds.pdf != 0.0
+            ds, em_weight, active_em = self._sample_emitter(scene, si, sampler, active_em, primal)
             wo = si.to_local(ds.d)
 
             sample_1 = sampler.next_1d()
@@ -341,7 +428,16 @@ class _PathMethods:
                 bsdf_weight = dr.select(lambertian, weight_local, bsdf_weight)
 
             mis_em = dr.select(ds.delta, 1.0, _mis_weight(ds.pdf, bsdf_pdf))
-            result[active_em] = dr.fma(throughput, bsdf_val * em_weight * mis_em, result)
+            if dr.hint(primal, mode="scalar"):
+                L[active_em] = dr.fma(throughput, bsdf_val * em_weight * mis_em, L)
+            else:
+                # path replay: the emission and direct light of this vertex, now with derivatives, are taken
+                # off the primal estimate; what remains arrives through the sampled direction
+                with dr.resume_grad():
+                    Le = throughput * emitted * mis_bsdf
+                    bsdf_val_em = bsdf.eval(ctx, si, wo, active_em)
+                    Lr_dir = dr.select(active_em, throughput * bsdf_val_em * em_weight * mis_em, 0.0)
+                L = L - Le - Lr_dir
 
             # BSDF sampling: the next ray and the loop state
             ray = si.spawn_ray(si.to_world(bsdf_sample.wo))
@@ -361,20 +457,63 @@ class _PathMethods:
             throughput[rr_active] *= dr.rcp(rr_prob)
             active = active_next & (~rr_active | rr_continue) & (throughput_max != 0.0)
 
-        return dr.select(valid_ray, result, 0.0), valid_ray
+            if dr.hint(not primal, mode="scalar"):
+                # the sampling is detached (its density has no parameters), so the derivative of what
+                # arrives through the sampled direction is L times the relative derivative of f cos there
+                with dr.resume_grad():
+                    bsdf_val_next = bsdf.eval(ctx, si, bsdf_sample.wo, active_next)
+                    Lo = Le + Lr_dir + L * dr.relative_grad(bsdf_val_next)
+                    if dr.hint(mode == dr.ADMode.Backward, mode="scalar"):
+                        dr.backward_from(δL * Lo)
+                    else:
+                        δL += dr.forward_to(Lo)
+
+        if dr.hint(primal, mode="scalar"):
+            L = dr.select(valid_ray, L, 0.0)
+        return (L if primal else δL), valid_ray, [], L
+
+
+def _taken_count(sampler: Any, count: int) -> int:
+    """The sample count *sampler* takes when asked for *count* (on a clone, without its log message)."""
+    probe = sampler.clone()
+    level = mi.log_level()
+    mi.set_log_level(mi.LogLevel.Error)
+    try:
+        probe.set_sample_count(count)
+    finally:
+        mi.set_log_level(level)
+    return int(probe.sample_count())
+
+
+def _fail(message: str) -> None:
+    """Raise ValueError(*message*), logged first: ``mi.render`` runs the integrator inside ``dr.custom``,
+    which re-raises every error as "error while performing a custom differentiable operation (see
+    above)"; the log line is what is above."""
+    _warn(message)
+    raise ValueError(message)
+
+
+def _warn(message: str) -> None:
+    """A warning in Mitsuba's log (as its samplers' when they round a sample count)."""
+    log: Any = mi.Log  # typed as an object by Mitsuba's stubs
+    log(mi.LogLevel.Warn, f"symsphere_path: {message}")
 
 
 _CLASSES: dict[str, type] = {}
 
 
 def integrator_class() -> type:
-    """The ``symsphere_path`` class of the current Mitsuba variant (a subclass of its ``mi.SamplingIntegrator``)."""
+    """The ``symsphere_path`` class of the current Mitsuba variant: a subclass of its ``RBIntegrator``
+    (Mitsuba's Python base of ``prb``: ``render``, ``render_forward``, ``render_backward``), or of
+    ``mi.SamplingIntegrator`` in the variants without one (scalar: the constructor refuses them)."""
     variant = mi.variant()
     if variant is None:
         raise RuntimeError("no Mitsuba variant is set: call mi.set_variant('llvm_ad_rgb') (or another) first")
     if variant not in _CLASSES:
+        common = getattr(mi.ad.integrators, "common", None)  # the variant's module (none in scalar variants)
+        base = common.RBIntegrator if common is not None else mi.SamplingIntegrator
         methods = {k: v for k, v in vars(_PathMethods).items() if k not in ("__dict__", "__weakref__")}
-        _CLASSES[variant] = type("SymspherePath", (mi.SamplingIntegrator,), methods)  # nanobind: one base only
+        _CLASSES[variant] = type("SymspherePath", (base,), methods)  # nanobind: one base only
     return _CLASSES[variant]
 
 
