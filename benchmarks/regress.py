@@ -26,6 +26,7 @@ fused kernel); the renderer's paths/s (cornell, 128 x 96, 48 spp, the default sa
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
 import resource
@@ -37,6 +38,7 @@ import time
 from pathlib import Path
 
 from _machine import cpu_name, cpu_snapshot  # benchmarks/_machine.py (the script's folder is on sys.path)
+from tables import source_hashes  # benchmarks/tables.py: the measured files, for the tables' stale note
 
 ROOT = Path(__file__).resolve().parents[1]
 N = 48 * 2**16
@@ -299,6 +301,9 @@ def main(argv=None):
         "base": base_rev, "new": new_rev, "rounds": args.rounds, "n": args.n, "cpu": cpu_name(),
         "others_share": share, "missing": {name: hello[name]["missing"] for name in hello},
         "symsphere": {name: hello[name]["symsphere"] for name in hello}, "table": table, "times": times,
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "command": " ".join(["python", "benchmarks/regress.py", *(argv if argv is not None else sys.argv[1:])]),
+        "sources": source_hashes(),
     }  # fmt: skip
     report(result)
     if args.json:

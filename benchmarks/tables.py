@@ -80,7 +80,8 @@ def _changed(measured: tuple[str, ...], results: dict, date: str | None) -> list
     if not date:
         return None
     try:
-        rev = subprocess.run(["git", "-C", str(ROOT), "rev-list", "-1", f"--before={date}+00:00", "HEAD"],
+        when = date if re.search(r"([+-]\d\d:\d\d|Z)$", date) else date + "+00:00"  # naive dates: UTC
+        rev = subprocess.run(["git", "-C", str(ROOT), "rev-list", "-1", f"--before={when}", "HEAD"],
                              capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
         if not rev:
             return None
@@ -91,12 +92,12 @@ def _changed(measured: tuple[str, ...], results: dict, date: str | None) -> list
     return sorted(diff.split())
 
 
-def _stale_note(measured: tuple[str, ...], loaded: list[tuple[str, dict]]) -> str:
+def _stale_note(measured: tuple[str, ...], loaded: list[tuple[str, dict]], rerun: str | None) -> str:
     notes = []
     for name, results in loaded:
         meta = results.get("meta", results)
         changed = _changed(measured, results, meta.get("date"))
-        command = meta.get("command") or "the command above"
+        command = rerun or meta.get("command") or "the command that made it"
         if changed is None:
             notes.append(f"`{name}` records neither its sources nor a date in this repository's history: "
                          "whether the measured code changed since is not known.")  # fmt: skip
@@ -104,7 +105,7 @@ def _stale_note(measured: tuple[str, ...], loaded: list[tuple[str, dict]]) -> st
             more = f" and {len(changed) - 3} more files" if len(changed) > 3 else ""
             shown = ", ".join(f"`{p}`" for p in changed[:3]) + more
             notes.append(f"**Stale:** `{name}` was measured before a change of the code it measures ({shown}); "
-                         f"rerun `{command}`, then `make bench-tables`.")  # fmt: skip
+                         f"`{command}` measures the code as it is now.")  # fmt: skip
     return "".join(f"\n\n{n}" for n in notes)  # a blank line first: a line after a table would join it
 
 
@@ -139,11 +140,26 @@ def _part_of(case):
     return ""
 
 
+def _caption(meta):
+    """The run's command, date, machine and load, from a bench_sample.py results file."""
+    others = meta.get("other_processes")
+    load = (f"; other processes used {others['cpu_s']:.1f} CPU-s in the {others['wall_s']:.0f} s of timing "
+            f"({others['share_of_all_cpus']:.0%} of all CPUs)") if others else ""  # fmt: skip
+    mitsuba = f", Mitsuba {meta['mitsuba']} with drjit {meta['drjit']}" if "mitsuba" in meta else ""
+    return (
+        f"`{meta['command']}`: {meta['date']}; {meta['cpus']}-core {meta['cpu']}; numba {meta['numba']} "
+        f"({meta['numba_threads']} threads, `{meta['numba_threading_layer']}`), numpy {meta['numpy']}, "
+        f"scipy {meta['scipy']}, Python {meta['python']}{mitsuba}; n = {meta['n']} directions per call, "
+        f"median of {meta['repeats']} rounds{load}."
+    )
+
+
 def _throughput(loaded):
     bench_sample = _bench_sample()
     (_, results), *_ = loaded
     cases = _cases(results)
-    return bench_sample.main_table(cases, bench_sample.ratios(cases), results["meta"]["n"])
+    table = bench_sample.main_table(cases, bench_sample.ratios(cases), results["meta"]["n"])
+    return _caption(results["meta"]) + "\n\n" + table
 
 
 def _profile(loaded):
@@ -221,12 +237,14 @@ def _sentence(loaded):
     )
 
 
-KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...]]] = {
-    "bench_sample": (_throughput, SAMPLING_CODE),
-    "bench_sample-profile": (_profile, SAMPLING_CODE),
-    "bench_sample-targets": (_targets, SAMPLING_CODE),
-    "regress": (_regress, (SOURCE + "/",)),
-    "speed-sentence": (_sentence, SAMPLING_CODE),
+# kind: (how the block is made, the code it measures, the command that measures it again: None for the
+# command recorded in the results file)
+KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...], str | None]] = {
+    "bench_sample": (_throughput, SAMPLING_CODE, "make bench"),
+    "bench_sample-profile": (_profile, SAMPLING_CODE, "make bench"),
+    "bench_sample-targets": (_targets, SAMPLING_CODE, "make bench"),
+    "regress": (_regress, (SOURCE + "/",), None),
+    "speed-sentence": (_sentence, SAMPLING_CODE, "make bench"),
 }
 
 
@@ -234,11 +252,11 @@ def generate(name: str, files: str) -> str:
     """The body of a block: the kind's table from the files, then the stale note if any."""
     if name not in KINDS:
         raise SystemExit(f"tables.py: {name!r} is not a valid table; use one of {sorted(KINDS)}")
-    make, measured = KINDS[name]
+    make, measured, rerun = KINDS[name]
     loaded = []
     for file in (f.strip() for f in files.split(",")):
         loaded.append((file, json.loads((ROOT / file).read_text(encoding="utf-8"))))
-    return make(loaded) + _stale_note(measured, loaded) + "\n"
+    return make(loaded) + _stale_note(measured, loaded, rerun) + "\n"
 
 
 def rewrite(text: str) -> str:
