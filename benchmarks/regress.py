@@ -162,6 +162,8 @@ def worker(args):
 class Worker:
     def __init__(self, tree, cache, args):
         env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=str(cache))
+        if args.threads:  # one thread: the kernels' own speed, less sensitive to a loaded machine
+            env["NUMBA_NUM_THREADS"] = str(args.threads)
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--n", str(args.n)]
         command += ["--no-mitsuba"] * args.no_mitsuba + ["--no-render"] * args.no_render
         self.process = subprocess.Popen(command, cwd=tree, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -209,7 +211,8 @@ def _limit(name):
 
 
 def report(result):
-    print(f"regress.py: base {result['base']} vs this checkout {result['new']}; medians of {result['rounds']} "
+    print(f"regress.py: base {result['base']} vs this checkout {result['new']}; numba threads: {result['threads']}; "
+          f"medians of {result['rounds']} "
           f"interleaved rounds; n = {result['n']}; {result['cpu']}, {os.cpu_count()} CPUs; "
           f"others' CPU share {result['others_share']}")  # fmt: skip
     for name in ("base", "new"):
@@ -238,6 +241,7 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=N, help="directions per sampling call (default: %(default)s)")
     parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba row")
     parser.add_argument("--no-render", action="store_true", help="skip the renderer's row")
+    parser.add_argument("--threads", type=int, help="NUMBA_NUM_THREADS of both workers (default: numba's own)")
     parser.add_argument("--json", type=Path, help="also write every timing and the table here")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -299,6 +303,7 @@ def main(argv=None):
         table.append(entry)
     result = {
         "base": base_rev, "new": new_rev, "rounds": args.rounds, "n": args.n, "cpu": cpu_name(),
+        "threads": args.threads or "numba's default",
         "others_share": share, "missing": {name: hello[name]["missing"] for name in hello},
         "symsphere": {name: hello[name]["symsphere"] for name in hello}, "table": table, "times": times,
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),

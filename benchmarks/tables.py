@@ -199,8 +199,11 @@ def _targets(loaded):
 def _regress(loaded):
     (_, result), *_ = loaded
     lines = [
-        f"`python benchmarks/regress.py --base {result['base']}` ({result['rounds']} interleaved rounds, "
-        f"n = {result['n']}; {result['cpu']}; other processes used {result['others_share']} of the CPUs):",
+        f"`{result.get('command') or 'python benchmarks/regress.py --base ' + result['base']}`: base "
+        f"{result['base']} against {result['new']}, {result['date'][:16].replace('T', ' ')} UTC; "
+        f"{result['rounds']} interleaved rounds, n = {result['n']}; {result['cpu']}, numba threads: "
+        f"{result.get('threads', 'numba' + chr(39) + 's default')}; other processes used {result['others_share']} "
+        "of the CPUs while it timed.",
         "",
         "| row | base (ms) | new (ms) | speed new / base | base of fill limit | new of fill limit |",
         "|---|---:|---:|---:|---:|---:|",
