@@ -13,6 +13,7 @@ the repository's root); everything between the two markers is replaced.  Kinds (
 * ``bench_sample-profile``  -- its profile table (the pieces);
 * ``bench_sample-targets``  -- its targets, one column pair per file (run 1, run 2, ...);
 * ``regress``               -- the table of ``regress.py --json``;
+* ``cold-start``            -- the steps of ``first_sample.py --cold-start --json`` (wall and CPU seconds);
 * ``speed-sentence``        -- one sentence for the README (``sample_sphere`` and the hemisphere about a
                                normal against the memory write limit), from a ``bench_sample.py`` file.
 
@@ -240,6 +241,28 @@ def _sentence(loaded):
     )
 
 
+def _cold_start(loaded):
+    import statistics
+
+    (_, result), *_ = loaded
+    meta = result.get("meta", {})
+    lines = [
+        f"`{meta.get('command', 'python benchmarks/first_sample.py --cold-start')}`: {meta.get('date', '?')}; "
+        f"{meta.get('cpus', '?')}-core {meta.get('cpu', '?')}; median of {result['runs']} run(s), each with an "
+        f"empty numba cache; load average {meta['loadavg_after'][0]:.1f} at the end."
+        if "loadavg_after" in meta
+        else f"median of {result['runs']} run(s), each with an empty numba cache.",
+        "",
+        "| step | wall s | CPU s |",
+        "|---|---:|---:|",
+    ]
+    for label, values in result["steps"].items():
+        wall = statistics.median(v[0] for v in values)
+        cpu = statistics.median(v[1] for v in values)
+        lines.append(f"| {label} | {wall:.2f} | {cpu:.2f} |")
+    return "\n".join(lines)
+
+
 # kind: (how the block is made, the code it measures, the command that measures it again: None for the
 # command recorded in the results file)
 KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...], str | None]] = {
@@ -248,6 +271,7 @@ KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...],
     "bench_sample-targets": (_targets, SAMPLING_CODE, "make bench"),
     "regress": (_regress, (SOURCE + "/",), None),
     "speed-sentence": (_sentence, SAMPLING_CODE, "make bench"),
+    "cold-start": (_cold_start, (SOURCE + "/",), None),
 }
 
 
