@@ -20,12 +20,14 @@ the repository's root); everything between the two markers is replaced.  Kinds (
 A block whose results predate a change of the code it measures says so in its last line: the results
 files record the git blob hash of every file under ``src/symsphere`` (:func:`source_hashes`), compared
 with the files as they are now; for a file written before that, the last commit before its date is
-compared with the working tree (``git diff``).  A new measurement removes the line.
+compared with the working tree (``git diff``).  A new measurement removes the line.  The line does not
+name the files (``--stale`` does), so that further changes leave a stale table's text as it is.
 
 Usage::
 
     python benchmarks/tables.py                  # rewrite every block in docs/*.md, README.md, benchmarks/*.md
     python benchmarks/tables.py --check          # exit 1 (and show the difference) if a block is not as generated
+    python benchmarks/tables.py --stale          # which measured files changed since each stale block's results
     python benchmarks/tables.py docs/benchmarks.md
 """
 
@@ -102,11 +104,10 @@ def _stale_note(measured: tuple[str, ...], loaded: list[tuple[str, dict]], rerun
         if changed is None:
             notes.append(f"`{name}` records neither its sources nor a date in this repository's history: "
                          "whether the measured code changed since is not known.")  # fmt: skip
-        elif changed:
-            more = f" and {len(changed) - 3} more files" if len(changed) > 3 else ""
-            shown = ", ".join(f"`{p}`" for p in changed[:3]) + more
-            notes.append(f"**Stale:** `{name}` was measured before a change of the code it measures ({shown}); "
-                         f"`{command}` measures the code as it is now.")  # fmt: skip
+        elif changed:  # which files, and how many, is left out: the note changes only when it appears
+            notes.append(f"**Stale:** `{name}` was measured before a change of the code it measures "
+                         f"(`python benchmarks/tables.py --stale` lists the files); `{command}` measures the "
+                         "code as it is now.")  # fmt: skip
     return "".join(f"\n\n{n}" for n in notes)  # a blank line first: a line after a table would join it
 
 
@@ -295,11 +296,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("files", nargs="*", type=Path, help="Markdown files (default: README.md, docs/*.md, "
                         "benchmarks/*.md)")  # fmt: skip
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if a block differs")
+    parser.add_argument("--stale", action="store_true", help="list the changed files of every stale block")
     args = parser.parse_args(argv)
     files = args.files or sorted({p for pattern in DEFAULT_FILES for p in ROOT.glob(pattern)})
     differ = 0
     for path in files:
         text = path.read_text(encoding="utf-8")
+        if args.stale:
+            for block in BLOCK.finditer(text):
+                _, measured, _ = KINDS[block["name"]]
+                for file in (f.strip() for f in block["files"].split(",")):
+                    results = json.loads((ROOT / file).read_text(encoding="utf-8"))
+                    changed = _changed(measured, results, results.get("meta", results).get("date"))
+                    if changed:
+                        print(f"{path}: {block['name']} from {file}: {', '.join(changed)}")
+            continue
         new = rewrite(text)
         blocks = len(BLOCK.findall(text))
         if new == text:
