@@ -311,6 +311,9 @@ def main(argv=None):
         "sources": source_hashes(),
     }  # fmt: skip
     report(result)
+    if share != "?" and float(share.rstrip("%")) > 20 and not args.threads:
+        print("\nregress.py: other processes used much of the CPUs while it timed; the two-thread kernels suffer "
+              "most (rerun with --threads 1, or on an idle machine)", file=sys.stderr)  # fmt: skip
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     return None
