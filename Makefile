@@ -10,7 +10,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: demo test mitsuba-setup libllvm bench docs gallery clean
+.PHONY: demo test mitsuba-setup libllvm bench bench-tables docs gallery clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -47,15 +47,21 @@ libllvm: $(STAMP)
 		echo "for Mitsuba's LLVM variants run 'sudo apt-get install libllvm19' (or set DRJIT_LIBLLVM_PATH to a libLLVM >= 16)"; \
 	fi
 
-# make bench: the speed benchmarks (docs/benchmarks.md).  Mitsuba 3 (the optional extra "bench") is
+# make bench: the speed benchmarks (docs/benchmarks.md), then the tables written from their results.  Mitsuba 3 (the optional extra "bench") is
 # a peer in the comparison; its LLVM backend needs libLLVM >= 16 (the target libllvm).  Both are optional:
 # if either cannot be installed, bench_sample.py says why and skips the Mitsuba cases.
 bench: $(STAMP) libllvm
 	$(BIN)/python -c "import mitsuba" 2>/dev/null || $(BIN)/python -m pip install --quiet -e ".[bench]" \
 		|| echo "bench: could not install mitsuba (the extra 'bench'); the Mitsuba cases will be skipped"
-	$(BIN)/python benchmarks/bench_sample.py
+	$(BIN)/python benchmarks/bench_sample.py --json benchmarks/results/bench_sample.json
 	$(BIN)/python benchmarks/first_sample.py
 	$(BIN)/python benchmarks/bench_render.py equal-time
+	$(BIN)/python benchmarks/tables.py
+
+# make bench-tables: rewrite the generated tables of the docs (<!-- table: ... --> blocks) from the committed
+# results files, without timing anything; tests/test_benchmark_tables.py checks that they are up to date.
+bench-tables: $(STAMP)
+	$(BIN)/python benchmarks/tables.py
 
 # make docs: Sphinx + numpydoc API reference and the Markdown pages (docs/conf.py).  -E re-reads
 # every page, so that a warning in an unchanged page still fails the next build too.

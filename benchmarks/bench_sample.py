@@ -854,8 +854,11 @@ def main(argv=None):
         print(profile_table(cases, table_ratios))
 
     if args.json:
+        from tables import source_hashes  # benchmarks/tables.py: what was measured, for its stale note
+
         payload = {
             "meta": meta,
+            "sources": source_hashes(),
             "cases": [
                 {
                     "group": c.group,
@@ -864,6 +867,7 @@ def main(argv=None):
                     "kind": c.kind,
                     "directions": c.directions,
                     "note": c.note,
+                    "part_of": c.part_of,
                     "median_s": c.median,
                     "min_s": c.best,
                     "times_s": c.times,

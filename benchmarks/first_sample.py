@@ -31,6 +31,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
 import statistics
@@ -39,7 +40,8 @@ import sys
 import tempfile
 import time
 
-from _machine import cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
+from _machine import cpu_name, cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
+from tables import source_hashes  # benchmarks/tables.py: the measured files, for the tables' stale note
 
 TARGET_SECONDS = 1.0
 
@@ -241,7 +243,15 @@ def cold_start(runs, json_path=None):
         print(f"| `{name}` | `{types[:90]}` | {statistics.median(values):.2f} |")
     if json_path:
         with open(json_path, "w", encoding="utf-8") as handle:
-            json.dump({"steps": rows, "kernels": kernels, "runs": runs}, handle, indent=1)
+            meta = {
+                "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+                "command": " ".join([os.path.relpath(sys.executable), *sys.argv]),
+                "cpu": cpu_name(),
+                "cpus": os.cpu_count(),
+                "loadavg_after": os.getloadavg(),
+            }
+            payload = {"meta": meta, "sources": source_hashes(), "steps": rows, "kernels": kernels, "runs": runs}
+            json.dump(payload, handle, indent=1)
 
 
 def main(argv=None):

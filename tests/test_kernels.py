@@ -189,3 +189,46 @@ def test_iter_validates_eagerly():
         iter_sphere(480, chunk=50)
     with pytest.raises(ValueError, match="'n_total'=10 is not a multiple of 24"):
         iter_hemisphere(10)
+
+
+def _dots_in_every_order(d, normal):
+    """d . normal in d's dtype (normal rounded to it), summed in the three orders; and in float64."""
+    n = np.asarray(normal, dtype=np.float64)
+    a, b, c = (d[:, i] * n.astype(d.dtype)[i] for i in range(3))
+    wide = d.astype(np.float64) @ n
+    return [(a + b) + c, a + (b + c), (a + c) + b, wide]
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_store_keeps_rows_about_a_normal_on_or_above_the_plane(dtype):
+    # Unscrambled Sobol' points include u = 0 and v = 0: base points on an edge of T0, whose images
+    # lie on the equator, where rounding puts rows just below the plane.  With *above* the store moves
+    # those rows, and only rows that close to the plane, by a few ulps; every row then has d . n >= 0
+    # in its dtype, whichever order the sum is taken in, and in float64, for the normal as given or
+    # scaled (the guarantee tests/test_reliability3.py checks through the public functions).
+    from scipy.stats import qmc
+
+    uv = qmc.Sobol(2, scramble=False).random(512)
+    eps = float(np.finfo(dtype).eps)
+    found_below = False
+    for normal in ([0.3, -0.5, 0.8], [1.0, 1.0, 1.0], [0.0, 0.0, 1.0], [-0.2, 0.9, 1e-9], [0.6, 0.0, -0.8]):
+        basis = frame(np.array(normal) / np.linalg.norm(normal))
+        unit = basis[2]
+        raw = kernels.fill_orbits(uv, "equal_area", 24, basis, np.empty((512 * 24, 3), dtype))
+        kept = kernels.fill_orbits(uv, "equal_area", 24, basis, np.empty((512 * 24, 3), dtype), above=True)
+        found_below |= any(np.any(dot < 0) for dot in _dots_in_every_order(raw, unit))
+        moved = ~np.all(raw == kept, axis=1)
+        assert np.all(np.abs(raw[moved].astype(np.float64) @ unit) < 16 * eps)  # only rows at the plane
+        assert np.max(np.abs(raw[moved].astype(np.float64) - kept[moved]), initial=0) <= 128 * eps
+        assert np.allclose(np.linalg.norm(kept.astype(np.float64), axis=1), 1, atol=4 * eps, rtol=0)
+        for scale in (1.0, 0.37, 3.1):
+            assert all(np.all(dot >= 0) for dot in _dots_in_every_order(kept, scale * np.asarray(normal)))
+            assert all(np.all(dot >= 0) for dot in _dots_in_every_order(kept, scale * unit))
+        # The random kernel's store does the same.
+        source = BasePoints("random", 4, total=300)
+        expected = kernels.fill_orbits(source.take(0, 300), "equal_area", 24, basis, np.empty((7200, 3), dtype),
+                                       above=True)  # fmt: skip
+        got = kernels.fill_random_orbits(source.seed_words, 0, 300, "equal_area", 24, basis,
+                                         np.empty((7200, 3), dtype), parts=3, above=True)  # fmt: skip
+        assert np.array_equal(got, expected)
+    assert found_below  # the points put rows below the plane before the store's check: it was tested

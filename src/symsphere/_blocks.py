@@ -111,45 +111,13 @@ def _fill(
     offset: int,
 ) -> FloatArray:
     """One kernel call: the orbits of points ``start ... stop - 1``, the last one cut to *out*'s rows."""
+    # about a normal the kernel keeps every row on or above its plane (_kernels._keep_above)
     if source.kind == "random":  # the kernel draws the points itself, in parallel
         assert source.seed_words is not None  # random sources always have the stream's seed
-        filled = fill_random_orbits(source.seed_words, start, stop - start, method, count, basis, out, offset=offset)
-    else:
-        filled = fill_orbits(source.take(start, stop), method, count, basis, out, offset=offset)
-    if count == 24 and basis is not None:
-        keep_above_plane(filled, basis[2])
-    return filled
-
-
-_MARGIN = 4 * float(np.finfo(np.float64).eps)  # float64 dot >= 4 ulps: >= 0 also for a normal not scaled to 1
-
-
-def keep_above_plane(rows: FloatArray, normal: Float64Array) -> None:
-    """Move the rows a few ulps below the plane of *normal* onto its upper side, in place.
-
-    A direction on the equator of the local hemisphere (z = 0), rotated onto *normal* and rounded to
-    the output dtype, can come out with d . n ~ -1e-8 in float32: its pdf counts it as on the plane,
-    but a ray spawned from it enters the surface.  Such rows (d . n < 0 in float64 from the stored
-    values at least 4 ulps of float64 above it, so that the sign holds for any scaling of the normal; or
-    in the rows' own dtype) are projected onto the plane in float64, nudged up by a few
-    ulps of the dtype along *normal* and renormalised, until both dot products are >= 0.  Only rows
-    within rounding of the plane are ever moved (by at most ~10 ulps), so the density is unchanged.
-    """
-    own = rows @ normal.astype(rows.dtype)
-    wide = rows.astype(np.float64) @ normal
-    bad = np.flatnonzero((own < 0) | (wide < _MARGIN))
-    if not len(bad):
-        return
-    eps = float(np.finfo(rows.dtype).eps)
-    d = rows[bad].astype(np.float64)
-    d -= np.minimum(d @ normal, 0.0)[:, None] * normal  # onto the plane (only those below it)
-    for ulps in (1, 2, 4, 8, 16, 32):
-        lifted = d + ulps * eps * normal
-        lifted /= np.linalg.norm(lifted, axis=1, keepdims=True)
-        cast = lifted.astype(rows.dtype)
-        if np.all(cast @ normal.astype(rows.dtype) >= 0) and np.all(cast.astype(np.float64) @ normal >= _MARGIN):
-            break
-    rows[bad] = cast
+        return fill_random_orbits(
+            source.seed_words, start, stop - start, method, count, basis, out, offset=offset, above=True
+        )
+    return fill_orbits(source.take(start, stop), method, count, basis, out, offset=offset, above=True)
 
 
 _MASK = (1 << 64) - 1

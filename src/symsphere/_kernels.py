@@ -305,6 +305,65 @@ def _weighted(x, y, z, row, weights):
         row[column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
 
 
+# Rows about a normal are kept on or above its plane where they are stored, not in a pass over the
+# output afterwards.  Image k's dot product with the normal is its local third coordinate, one of the
+# base point's x, y, z (Table 1 keeps the third coordinate's sign), up to rounding: the stored row's
+# dot product is that coordinate within ~1e-6 (float32), so an orbit whose base coordinates are all
+# >= _NEAR_PLANE has no row near the plane and is not checked.  The others (rare: a base point within
+# 2**-12 of an edge of T0) check every image and move the few that fail.
+_NEAR_PLANE = 2.0**-12
+_MARGIN = 4 * float(np.finfo(np.float64).eps)
+
+
+@register_jitable
+def _is_above(x, y, z, normal, slack):
+    """Whether the stored row (x, y, z) is safely on or above the plane of the unit *normal* (float64).
+
+    Passes if its float64 dot product d . n is >= _MARGIN + slack * sum |d_i n_i|, with *slack* 4 eps of
+    the row's dtype: then d . n' >= 0 for the normal as given or scaled to 1 (n' = s n), both in
+    float64 and rounded to the row's dtype, however the three-term sum is ordered (with or without
+    FMA): the normal's rounding (1 ulp), the products and sums (gamma_3 = 3 u) and this check's own
+    float64 sum stay below 4 eps = 8 u of sum |d_i n_i|, and _MARGIN (4 ulps of float64) covers a
+    row whose products are all ~0.
+    """
+    a = np.float64(x) * normal[0]
+    b = np.float64(y) * normal[1]
+    c = np.float64(z) * normal[2]
+    return a + b + c >= _MARGIN + slack * (abs(a) + abs(b) + abs(c))
+
+
+@register_jitable
+def _keep_above(row, normal):
+    """Move the images in *row* (3 count, the output dtype) that fail :func:`_is_above` onto the
+    upper side of the plane of *normal*, in place.
+
+    A direction on the equator of the local hemisphere (z = 0), rotated onto the normal and rounded
+    to the output dtype, can come out with d . n ~ -1e-8 in float32: its pdf counts it as on the
+    plane, but a ray spawned from it enters the surface.  Such a row is projected onto the plane in
+    float64 (if below it), nudged up by 1, 2, 4, ... 64 ulps of the dtype along the normal and
+    renormalised, until it passes.  Only rows within rounding of the plane are moved (by a few ulps),
+    so the density is unchanged.
+    """
+    eps = np.finfo(row.dtype).eps
+    slack = 4.0 * eps
+    for k in range(row.shape[0] // 3):
+        if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+            continue
+        x, y, z = np.float64(row[3 * k]), np.float64(row[3 * k + 1]), np.float64(row[3 * k + 2])
+        below = min(x * normal[0] + y * normal[1] + z * normal[2], 0.0)
+        x, y, z = x - below * normal[0], y - below * normal[1], z - below * normal[2]
+        lift = eps
+        for _ in range(7):
+            a = x + lift * normal[0]
+            b = y + lift * normal[1]
+            c = z + lift * normal[2]
+            norm = np.sqrt(a * a + b * b + c * c)
+            row[3 * k], row[3 * k + 1], row[3 * k + 2] = a / norm, b / norm, c / norm
+            if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+                break
+            lift *= 2.0
+
+
 @register_jitable
 def _copy_members(scratch, tail, offset):
     """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (3 count,)."""
@@ -370,7 +429,7 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
     """
 
     @njit(**_OPTIONS)
-    def fill(points, lo, hi, weights, rows, tail, offset):  # pragma: no cover - compiled by numba
+    def fill(points, lo, hi, weights, normal, rows, tail, offset):  # pragma: no cover - compiled by numba
         # The branches on source and kind are at this function's top level and the map's in
         # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are functions of
         # their own (register_jitable: compiled once per process and shared by the cases; LLVM
@@ -399,6 +458,8 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
                     _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], 24)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
+                    if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
+                        _keep_above(rows[first + j], normal)
                 if source == _RANDOM and j < upcoming:
                     u[j] = pcg64_random(points)
                     v[j] = pcg64_random(points)
@@ -410,6 +471,8 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
                     _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 24)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
+                    if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
+                        _keep_above(scratch, normal)
                 _copy_members(scratch, tail, offset)
 
     return fill
@@ -427,20 +490,21 @@ def _prepare_kernels():
         _ready = True
 
 
-def _run(source, method, count, basis, out, m, parts, part_input, offset):
+def _run(source, method, count, basis, out, m, parts, part_input, offset, above):
     """Run the case's kernel over the parts of m points, on the threads of symsphere._threads.
 
     *part_input(lo)* is the kernel's *points* argument for the part starting at point lo.
     """
     _prepare_kernels()
     kind, weights = _store_kind(count, basis)
+    normal = np.ascontiguousarray(basis[2], dtype=np.float64) if above and kind == _HEMISPHERE_ROTATED else _NO_NORMAL
     rows, tail = _split(out, count)
     kernel = _fill_kernel(source, METHOD_CODES[method], kind)
     parts = part_count(m, parts or _default_parts(m))
 
     def arguments(index):
         lo, hi = part_range(m, parts, index)
-        return part_input(lo), lo, hi, weights, rows, tail, offset
+        return part_input(lo), lo, hi, weights, normal, rows, tail, offset
 
     run_kernel(kernel, arguments, parts)
 
@@ -453,6 +517,7 @@ def fill_orbits(
     out: FloatArray,
     parts: int = 0,
     offset: int = 0,
+    above: bool = False,
 ) -> FloatArray:
     """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
 
@@ -462,10 +527,12 @@ def fill_orbits(
     into (0: numba's thread count, but at most one part per 256 points; the output does not depend on it).  If *out* has
     ``(m - 1) * count + rest`` rows, ``0 < rest < count``, the last point's orbit is cut:
     the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
-    same kernel call.
+    same kernel call.  With *above* (and a *basis*), every row is on or above the plane of the
+    normal ``basis[2]`` (scaled or not), its dot product with it >= 0 in *out*'s dtype and in float64
+    whatever the order of the sum (:func:`_is_above`; moved in the store by :func:`_keep_above`); without, the rows are the rotated images as computed.
     """
     uv = np.ascontiguousarray(uv, dtype=np.float64)
-    _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset)
+    _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset, above)
     return out
 
 
@@ -479,6 +546,7 @@ def fill_random_orbits(
     out: FloatArray,
     parts: int = 0,
     offset: int = 0,
+    above: bool = False,
 ) -> FloatArray:
     """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
     point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
@@ -488,7 +556,7 @@ def fill_random_orbits(
     def stream(lo):
         return pcg64_state(seed_words, 2 * (first_point + lo))
 
-    _run(_RANDOM, method, count, basis, out, m, parts, stream, offset)
+    _run(_RANDOM, method, count, basis, out, m, parts, stream, offset, above)
     return out
 
 
@@ -523,6 +591,7 @@ def part_bounds(m, parts=0):
 
 
 _NO_WEIGHTS = np.zeros((3, 0))
+_NO_NORMAL = np.zeros(0)
 
 
 def _store_kind(count, basis):
