@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from . import frames
 from ._blocks import fill_range, warn_at_caller
-from ._fused import Compiled, compiled_integrand, fused_partials
+from ._fused import Compiled, NonFiniteBlock, compiled_integrand, fused_partials, vectorised
 from ._kernels import fill_orbits
 from ._typing import Float64Array, MapMethod, PointsLike, RNGLike
 from ._validation import (
@@ -29,6 +29,7 @@ from ._validation import (
     check_normal,
     check_real_values,
     check_rng,
+    check_rtol,
     short_repr,
 )
 from .points import BLOCK, BasePoints, check_points
@@ -55,6 +56,7 @@ __all__ = [
     "Compute",
     "compute_here",
     "to_tolerance",
+    "check_sums",
 ]
 
 DEFAULT_REPLICATES = 8
@@ -258,17 +260,22 @@ def plan(
 def block_partials(plan: Plan, replicate: int, first: int, stop: int) -> list[Partial]:
     """The partials of blocks ``first ... stop - 1`` of a replicate (fused: in one parallel kernel call)."""
     if plan.compiled is not None:
-        return fused_partials(
-            plan.compiled,
-            plan.sources[replicate],
-            plan.orbits_per_replicate,
-            first,
-            stop,
-            plan.method,
-            plan.count,
-            plan.basis,
-            triangle_warp(plan.method).uniform,
-        )
+        try:
+            return fused_partials(
+                plan.compiled,
+                plan.sources[replicate],
+                plan.orbits_per_replicate,
+                first,
+                stop,
+                plan.method,
+                plan.count,
+                plan.basis,
+                triangle_warp(plan.method).uniform,
+            )
+        except NonFiniteBlock as error:  # the numpy path on that block names the first offending direction
+            numpy_plan = dataclasses.replace(plan, f=vectorised(plan.compiled), compiled=None)
+            block_partial(numpy_plan, replicate, error.block)
+            raise ValueError(str(error)) from None  # to rounding, the numpy path found nothing to name
     return [block_partial(plan, replicate, block) for block in range(first, stop)]
 
 
@@ -291,22 +298,58 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
         with np.errstate(divide="ignore"):
             weight = plan.count / triangle_map.densities(triangle_map.points(uv))
     values = evaluate(plan.f, directions)
-    estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
-    mean = estimates.mean(axis=0)
-    return stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
+        estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
+        mean = estimates.mean(axis=0)
+        partial = stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)
+    if not (np.all(np.isfinite(partial[1])) and np.all(np.isfinite(partial[2]))):
+        check_sums(values, directions)
+    return partial
 
 
 def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
-    """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
-    values = check_real_values(f(directions), "f")  # complex: TypeError, not a dropped imaginary part
+    """f at *directions*, as an (m, k) float64 array.
+
+    ValueError naming ``f`` and the first offending direction for a wrong shape, a non-finite value,
+    or an exception raised by f (chained); TypeError for complex values.
+    """
     m = len(directions)
+    try:
+        returned = f(directions)
+    except Exception as error:  # the user's error, told once with where it happened; KeyboardInterrupt passes
+        raise ValueError(
+            f"'f' raised {type(error).__name__}: {error} (on {m} directions, the first {_direction(directions, 0)})"
+        ) from error
+    values = check_real_values(returned, "f", finite=False)  # complex: TypeError, not a dropped imaginary part
     if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m and values.shape[1] >= 1)):
         raise ValueError(
-            f"'f' must return shape (m,) or (m, k) with k >= 1 for directions of shape ({m}, 3), got {values.shape}"
+            f"'f' must return shape (m,) or (m, k) with k >= 1 for directions of shape ({m}, 3), got {values.shape} "
+            f"(the first direction {_direction(directions, 0)})"
         )
+    values = values.reshape(m, -1)
     if not np.all(np.isfinite(values)):
-        raise ValueError("'f' returned non-finite values")
-    return values.reshape(m, -1)
+        row = int(np.flatnonzero(~np.all(np.isfinite(values), axis=1))[0])
+        bad = values[row][~np.isfinite(values[row])][0]
+        raise ValueError(
+            f"'f' returned non-finite values ({bad} at direction {_direction(directions, row)}, the first)"
+        )
+    return values
+
+
+def check_sums(values: Float64Array, directions: Float64Array) -> None:
+    """ValueError naming ``f`` if finite *values* overflow float64 when summed (or their squares are)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        running = np.cumsum(values, axis=0)
+        overflow = ~np.all(np.isfinite(running), axis=1)
+    row = int(np.flatnonzero(overflow)[0]) if np.any(overflow) else int(np.argmax(np.max(np.abs(values), axis=1)))
+    raise ValueError(
+        f"'f' returned values whose sum (or its variance) overflows float64 (f = {np.max(np.abs(values[row])):.3g} "
+        f"at direction {_direction(directions, row)}, the first where the running sum overflows); scale f down"
+    )
+
+
+def _direction(directions: Float64Array, row: int) -> str:
+    return "[" + ", ".join(f"{float(c):.17g}" for c in directions[row]) + "]"
 
 
 def combine(partials: Sequence[Partial]) -> Partial:
@@ -321,6 +364,11 @@ def combine(partials: Sequence[Partial]) -> Partial:
 
 def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResult:
     """Reduce per-block partials (a list per replicate, in block order) to the result."""
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
+        return _finish(plan, partials)
+
+
+def _finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResult:
     per_replicate = [combine(blocks) for blocks in partials]
     if plan.unit == "orbit":
         count, total, m2 = per_replicate[0]
@@ -332,6 +380,11 @@ def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResu
         integral = estimates.mean(axis=0)
         units = len(estimates)
         variance = estimates.var(axis=0, ddof=1) if units > 1 else np.full_like(integral, np.nan)
+    if not (np.all(np.isfinite(integral)) and np.all(np.isfinite(variance) | np.isnan(variance) & (units < 2))):
+        raise ValueError(  # the blocks were finite, their reduction is not: far-apart huge values
+            f"'f' returned values whose sum (or its variance) overflows float64 (integral {np.ravel(integral)[0]:.3g}, "
+            f"variance {np.ravel(variance)[0]:.3g}); scale f down"
+        )
     standard_error = np.sqrt(variance / units)
     if units > 1:
         from scipy import special  # not at import; scipy.stats (whose t.ppf is this function) costs 2x more
@@ -382,7 +435,7 @@ def to_tolerance(
     the reuse and so the result do not depend on it.
     """
     atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
-    rtol = 0.0 if rtol is None else check_nonnegative(rtol, "rtol")
+    rtol = 0.0 if rtol is None else check_rtol(rtol, "rtol")
     if atol == 0 and rtol == 0:
         raise ValueError("'atol' or 'rtol' must be positive")
     count = 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
@@ -453,7 +506,7 @@ def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
     ratio = float(np.max(t * np.asarray(result.standard_error))) / result.tolerance if result.tolerance > 0 else np.inf
     if not np.isfinite(ratio):
         return 2
-    return int(2 ** max(1, int(np.ceil(np.log2(max(ratio * ratio, 1.0))))))
+    return int(2 ** min(62, max(1, int(np.ceil(2 * np.log2(max(ratio, 1.0)))))))  # capped: n_max bounds it anyway
 
 
 def _stage_result(

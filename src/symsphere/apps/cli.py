@@ -50,6 +50,7 @@ from .._validation import (
     check_count,
     check_nonnegative,
     check_output_path,
+    check_rtol,
     check_seed,
     check_size,
     file_kind,
@@ -634,9 +635,10 @@ def _run_integrate(args: argparse.Namespace) -> int:
     )
     to_tolerance = args.rtol is not None or args.atol is not None
     if to_tolerance:
-        for name in ("rtol", "atol"):  # before the time estimate, which runs a pilot without them
-            if getattr(args, name) is not None:
-                check_nonnegative(getattr(args, name), name)
+        if args.rtol is not None:  # before the time estimate, which runs a pilot without them
+            check_rtol(args.rtol, "--rtol")
+        if args.atol is not None:
+            check_nonnegative(args.atol, "--atol")
         kwargs.update(rtol=args.rtol, atol=args.atol, n_max=args.n_max)
     elif args.n is None:
         raise _UsageError("--n is required unless --rtol or --atol is given")
