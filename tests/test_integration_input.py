@@ -38,8 +38,13 @@ def raising(w):
 
 @pytest.mark.parametrize(
     "kwargs",
-    [dict(n=96, rng=1), dict(atol=1e-3, rng=1), dict(n=384, points="sobol", rng=1)],
-    ids=["fixed-n", "atol", "sobol"],
+    [
+        dict(n=96, rng=1),
+        dict(atol=1e-3, rng=1),
+        dict(n=384, points="sobol", rng=1),
+        dict(rtol=1e-3, method="auto", rng=1),
+    ],
+    ids=["fixed-n", "atol", "sobol", "auto"],
 )
 @pytest.mark.parametrize("f", [huge, huge_compiled], ids=["numpy", "compiled"])
 def test_overflowing_sums_are_one_error_naming_f(f, kwargs):

@@ -56,6 +56,7 @@ __all__ = [
     "Compute",
     "compute_here",
     "to_tolerance",
+    "stage_result",
     "check_sums",
 ]
 
@@ -85,10 +86,12 @@ class IntegrationResult:
     domain : str
         ``'sphere'`` or ``'hemisphere'``.
     method : str
-        The map onto T0 (``'equal_area'``, ``'paper1'`` or ``'paper2'``).
+        The map onto T0 (``'equal_area'``, ``'paper1'`` or ``'paper2'``), or the rule family
+        (``'lebedev'``, ``'fibonacci'``); with ``method='auto'`` the family it chose.
     points : str
-        The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, or the
-        class name of the ``QMCEngine`` given.
+        The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, ``'sobol_interlaced2'``,
+        ``'sobol_interlaced3'``, the class name of the ``QMCEngine`` given, or ``'haar_rotations'``
+        (a rotated rule family).
     tolerance : float or None
         With ``atol``/``rtol``: the target ``max(atol, rtol * |integral|)`` the interval's
         half-width was compared with (None for a fixed n).
@@ -97,6 +100,12 @@ class IntegrationResult:
         ``1 - (1 - requested level) / (n_stages (n_stages + 1))``); 1 for a fixed n.
     converged : bool
         Whether the half-width reached the tolerance (always True for a fixed n).
+    history : tuple of dict
+        With ``method`` ``'auto'``, ``'lebedev'`` or ``'fibonacci'`` to a tolerance: one dict per stage
+        run, in order: ``method`` (the family), ``size`` (points per replicate), ``evaluations`` (new),
+        ``total_evaluations``, ``integral``, ``standard_error``, ``half_width``, ``tolerance``, ``level``
+        and ``reason`` (why this family ran this stage: the pilot, or the predicted costs of all
+        families).  Empty otherwise.
 
     Examples
     --------
@@ -129,6 +138,7 @@ class IntegrationResult:
     tolerance: float | None = field(default=None, repr=False)
     n_stages: int = field(default=1, repr=False)
     converged: bool = field(default=True, repr=False)
+    history: tuple[dict[str, Any], ...] = field(default=(), repr=False, compare=False)
 
     def __str__(self) -> str:
         low, high = self.confidence_interval
@@ -201,13 +211,14 @@ def plan(
     domain: str,
     n: int,
     method: MapMethod,
-    points: PointsLike,
+    points: PointsLike | None,
     normal: npt.ArrayLike | None,
     rng: RNGLike,
     replicates: int | None,
     confidence_level: float,
 ) -> Plan:
     """Validate every argument of :func:`symsphere.integrate` and fix the run: sources, blocks, unit."""
+    points = "random" if points is None else points  # integrate's default (distributed passes None on)
     if not callable(f):
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
     compiled = compiled_integrand(f)
@@ -417,7 +428,7 @@ def to_tolerance(
     domain: str,
     n: int | None,
     method: MapMethod,
-    points: PointsLike,
+    points: PointsLike | None,
     normal: npt.ArrayLike | None,
     rng: RNGLike,
     replicates: int | None,
@@ -434,6 +445,7 @@ def to_tolerance(
     :func:`symsphere.distributed.integrate` passes one that runs them as Dask tasks).  The stages,
     the reuse and so the result do not depend on it.
     """
+    points = "random" if points is None else points  # integrate's default (distributed passes None on)
     atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
     rtol = 0.0 if rtol is None else check_rtol(rtol, "rtol")
     if atol == 0 and rtol == 0:
@@ -476,7 +488,7 @@ def to_tolerance(
             work = dataclasses.replace(
                 largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK), confidence_level=level
             )
-        result = _stage_result(work, kept, stage, atol, rtol, compute or compute_here)
+        result = stage_result(work, kept, stage, atol, rtol, compute or compute_here)
         if result.converged or n_stage == largest_n:
             break
         factor = growth
@@ -509,7 +521,7 @@ def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
     return int(2 ** min(62, max(1, int(np.ceil(2 * np.log2(max(ratio, 1.0)))))))  # capped: n_max bounds it anyway
 
 
-def _stage_result(
+def stage_result(
     work: Plan, kept: dict[tuple[int, int], Partial], stage: int, atol: float, rtol: float, compute: Compute
 ) -> IntegrationResult:
     """The result at one stage: whole blocks from *kept*, the rest summed now (and whole ones kept)."""

@@ -38,8 +38,11 @@ combined in block order, so the result does not depend on how the work is split
 
 from __future__ import annotations
 
+from typing import Literal, cast
+
 import numpy.typing as npt
 
+from ._auto import RULE_METHODS, integrate_rules
 from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 
@@ -51,8 +54,8 @@ def integrate(
     *,
     domain: Domain = "sphere",
     n: int | None = None,
-    method: MapMethod = "equal_area",
-    points: PointsLike = "random",
+    method: MapMethod | Literal["auto", "fibonacci", "lebedev"] = "equal_area",
+    points: PointsLike | None = None,
     normal: npt.ArrayLike | None = None,
     rng: RNGLike = None,
     replicates: int | None = None,
@@ -76,12 +79,20 @@ def integrate(
         48 * replicates (24 * replicates) when replicates are used.  Required unless
         ``atol`` or ``rtol`` is given; then it is the first stage's n (default: 256 orbits
         per replicate; 'stratified': a 16 x 16 grid).
-    method : {'equal_area', 'paper1', 'paper2'}
-        Map onto T0; the paper's maps are weighted by 1/pdf, so the estimate
-        stays unbiased.
-    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
+    method : {'equal_area', 'paper1', 'paper2', 'auto', 'fibonacci', 'lebedev'}
+        The scheme's map onto T0 (the paper's maps are weighted by 1/pdf, so the estimate
+        stays unbiased); or a family of randomly rotated rules, ``'lebedev'`` (Lebedev rules of
+        increasing order) or ``'fibonacci'`` (spherical Fibonacci sets), each replicate under its own
+        uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
+        (needs ``atol`` or ``rtol``): a pilot of every family on f itself, then the family predicted
+        to reach the tolerance with the fewest evaluations (``result.method`` says which,
+        ``result.history`` why).  See ``docs/integration.md``.
+    points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
+or scipy.stats.qmc.QMCEngine, optional
         The base points of the unit square (as in :func:`symsphere.sample_sphere`); they decide
-        the independent units of the standard error (see the module's description).
+        the independent units of the standard error (see the module's description).  Default
+        ``'random'``; with ``method='auto'`` the scheme's family uses ``'sobol_interlaced3'``; not
+        valid with ``'lebedev'`` and ``'fibonacci'``.
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (``domain='hemisphere'`` only).  For the
         rendering equation, integrate ``L(w) * f_r * max(0, w . normal)``.
@@ -136,12 +147,18 @@ def integrate(
     >>> bool((high - low) / 2 <= result.tolerance), result.n_evaluations, result.n_stages
     (True, 393216, 3)
     """
+    if isinstance(method, str) and method in RULE_METHODS:
+        return integrate_rules(
+            f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max
+        )
+    points = "random" if points is None else points
+    map_method = cast(MapMethod, method)  # a map (plan checks it)
     if atol is None and rtol is None:
         if n_max is not None:
             raise ValueError("'n_max' is only valid with 'atol' or 'rtol'")
         if n is None:
             raise TypeError("integrate() missing required keyword argument 'n' (or give 'atol' or 'rtol')")
-        work = plan(f, domain, n, method, points, normal, rng, replicates, confidence_level)
+        work = plan(f, domain, n, map_method, points, normal, rng, replicates, confidence_level)
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
-    return to_tolerance(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
+    return to_tolerance(f, domain, n, map_method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
