@@ -151,17 +151,10 @@ class _Rotated(_Family):
     def run_stage(self, k: int) -> _Stage:
         """Stage k (0-based); copies stages reuse the copies drawn so far."""
         size, copies = self._size(k)
-        nodes, weights = (
-            (fibonacci_points(size), np.full(size, 4 * np.pi / size))
-            if self.name == "fibonacci"
-            else (np.asarray(sample_lebedev(size), dtype=np.float64), lebedev_weights(size))
-        )
-        if self.normal is not None:
-            weights = weights / 2  # the folded rule: (1/2) sum w f(fold(x))
         stage_seed = self.seed.spawn(1)[0]
         if copies == 1:
             rotations = haar_rotations(self.replicates, stage_seed)
-            estimates = np.stack([self._rule(rotation, nodes, weights) for rotation in rotations])
+            estimates = np.stack([self._rule(rotation, size) for rotation in rotations])
             cost = self.replicates * size
         else:
             if self.copy_seeds is None:  # one stream of copies per replicate: later stages extend it
@@ -170,7 +163,7 @@ class _Rotated(_Family):
             for r, copy_seed in enumerate(self.copy_seeds):
                 while len(self.copies[r]) < copies:
                     (rotation,) = haar_rotations(1, copy_seed.spawn(1)[0])
-                    self.copies[r].append(self._rule(rotation, nodes, weights))
+                    self.copies[r].append(self._rule(rotation, size))
                     cost += size
             estimates = np.stack([np.mean(self.copies[r][:copies], axis=0) for r in range(self.replicates)])
         integral = estimates.mean(axis=0)
@@ -186,18 +179,27 @@ class _Rotated(_Family):
         self.stages.append(stage)
         return stage
 
-    def _rule(self, rotation: Float64Array, nodes: Float64Array, weights: Float64Array) -> Float64Array:
-        """sum w_i f(R x_i) (folded onto the hemisphere about the normal), in chunks."""
+    def _rule(self, rotation: Float64Array, size: int) -> Float64Array:
+        """sum w_i f(R x_i) over the rule of *size* points (folded onto the hemisphere about the normal),
+        in chunks: a Fibonacci set's points are made chunk by chunk (bounded memory for any size)."""
+        half = 1.0 if self.normal is None else 0.5  # folded: (1/2) sum w f(fold(x))
         total: Float64Array | None = None
-        for start in range(0, len(nodes), _CHUNK):
-            directions = nodes[start : start + _CHUNK] @ rotation.T
+        for start in range(0, size, _CHUNK):
+            stop = min(start + _CHUNK, size)
+            if self.name == "fibonacci":
+                nodes, weights = fibonacci_points(size, start=start, stop=stop), np.full(stop - start, 4 * np.pi / size)
+            else:
+                nodes = np.asarray(sample_lebedev(size), dtype=np.float64)[start:stop]
+                weights = lebedev_weights(size)[start:stop]
+            weights = weights * half
+            directions = nodes @ rotation.T
             if self.normal is not None:
                 below = np.minimum(directions @ self.normal, 0.0)
                 directions = directions - 2 * below[:, None] * self.normal
             values = evaluate(self.f, directions)
             self.varies = self.varies or bool(np.any(values != values[:1]))
             with np.errstate(over="ignore", invalid="ignore"):
-                part = weights[start : start + _CHUNK] @ values
+                part = weights @ values
                 total = part if total is None else total + part
             if not np.all(np.isfinite(total)):
                 check_sums(values, directions)

@@ -30,6 +30,9 @@ the returned one included, covers the integral with probability at least
 ``confidence_level`` (a union bound), so stopping when an interval happens to be narrow
 cannot make it lie.
 
+``method='auto'``, ``'lebedev'``, ``'fibonacci'``: randomly rotated rule families and the choice
+among them by a pilot on f (:mod:`symsphere._auto`; ``docs/integration.md``).
+
 Work is done in blocks of ``symsphere.points.BLOCK`` orbits: f sees one block of
 directions at a time, so memory stays bounded for any n, and block results are
 combined in block order, so the result does not depend on how the work is split
@@ -45,6 +48,8 @@ import numpy.typing as npt
 from ._auto import RULE_METHODS, integrate_rules
 from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
+from ._validation import check_choice
+from .warps import METHODS
 
 __all__ = ["IntegrationResult", "integrate"]
 
@@ -146,8 +151,17 @@ or scipy.stats.qmc.QMCEngine, optional
     >>> low, high = result.confidence_interval
     >>> bool((high - low) / 2 <= result.tolerance), result.n_evaluations, result.n_stages
     (True, 393216, 3)
+
+    Let a pilot on f choose the rule (``result.history`` says why, stage by stage):
+
+    >>> result = integrate(lambda w: np.exp(w[:, 0]), rtol=1e-9, method="auto", rng=4)
+    >>> result.method, result.converged, result.n_evaluations
+    ('lebedev', True, 1920)
+    >>> bool(abs(result.integral - exact) <= 1e-9 * exact), result.history[0]["reason"][:5]
+    (True, 'pilot')
     """
-    if isinstance(method, str) and method in RULE_METHODS:
+    check_choice(method, "method", tuple(sorted((*METHODS, *RULE_METHODS))))
+    if method in RULE_METHODS:
         return integrate_rules(
             f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max
         )
