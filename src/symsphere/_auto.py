@@ -80,6 +80,9 @@ FIBONACCI_FIRST = 16
 AUTO_POINTS = "sobol_interlaced3"
 PILOT_STAGES = 2
 EXPLORE = 0.25
+SHARE = {"lebedev": 2.0}
+"""Balanced stages give a family this multiple of the others' total: Lebedev's small rules are cheap, and
+exact on band-limited f once the order passes the degree, which no small stage can predict."""
 _CHUNK = 1 << 16  # rows evaluated at a time: bounded memory
 
 
@@ -413,6 +416,11 @@ def _result(family: _Family, stage: _Stage, level: float, evaluations: int, doma
     )
 
 
+def _balanced(family: _Family) -> float:
+    """The family's total after its next stage, over its share: the balanced order of the pilot."""
+    return (family.spent + family.sizes()[0][1]) / SHARE.get(family.name, 1.0)
+
+
 def _race(
     families: Sequence[_Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
 ) -> IntegrationResult:
@@ -429,7 +437,7 @@ def _race(
         choice: _Family | None = None
         if pending:  # balanced: the family whose total after its next stage is smallest
             running = [fam for fam in families if fam.sizes()]
-            choice = min(running, key=lambda fam: fam.spent + fam.sizes()[0][1])
+            choice = min(running, key=_balanced)
             reason = f"pilot ({PILOT_STAGES} stages of every family): the smallest total after the stage"
             if choice.sizes()[0][1] > budget:
                 choice = None
@@ -460,11 +468,11 @@ def _race(
                     if fam is not choice and fam.sizes() and fam.spent + fam.sizes()[0][1] <= horizon
                 ]
                 if explore:
-                    choice = min(explore, key=lambda fam: fam.spent + fam.sizes()[0][1])
+                    choice = min(explore, key=_balanced)
                     reason = f"exploring: its total stays below {EXPLORE} of the leader's total; " + reason
             else:
                 affordable = [fam for fam in families if fam.sizes() and fam.sizes()[0][1] <= budget]
-                choice = min(affordable, key=lambda fam: fam.spent + fam.sizes()[0][1]) if affordable else None
+                choice = min(affordable, key=_balanced) if affordable else None
                 reason = (
                     "no family is predicted to meet the tolerance within n_max: balanced, the smallest total "
                     "after the stage"
