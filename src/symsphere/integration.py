@@ -83,7 +83,9 @@ def integrate(
         Evaluations of f in all: a multiple of 48 (hemisphere: 24), and of
         48 * replicates (24 * replicates) when replicates are used.  Required unless
         ``atol`` or ``rtol`` is given; then it is the first stage's n (default: 256 orbits
-        per replicate; 'stratified': a 16 x 16 grid).
+        per replicate; 'stratified': a 16 x 16 grid).  ``'lebedev'``, ``'fibonacci'``: replicates x
+        the points of one of the family's stages (a Lebedev rule's size or r x 5810; 16 x 2**k), and
+        only without a tolerance (to a tolerance they start at their smallest stage).
     method : {'equal_area', 'paper1', 'paper2', 'auto', 'fibonacci', 'lebedev'}
         The scheme's map onto T0 (the paper's maps are weighted by 1/pdf, so the estimate
         stays unbiased); or a family of randomly rotated rules, ``'lebedev'`` (Lebedev rules of
@@ -105,8 +107,8 @@ or scipy.stats.qmc.QMCEngine, optional
         Seeds the points (or their randomisations).  The same seed gives the same result, however
         the work is split.
     replicates : int, optional
-        Independent randomisations for stratified and QMC points (default 8);
-        must be None or 1 for random points and for a QMCEngine.
+        Independent randomisations for stratified and QMC points and for the rotated rule
+        families (default 8); must be None or 1 for random points and for a QMCEngine.
     confidence_level : float
         Of the returned confidence interval, in (0, 1).  With a tolerance: of all stages'
         intervals at once (see the module's description).
@@ -116,7 +118,9 @@ or scipy.stats.qmc.QMCEngine, optional
         at least 2 replicates for stratified and QMC points.
     n_max : int, optional
         With a tolerance: the largest n to try (default 48 * 2**24, hemisphere 24 * 2**24);
-        if the tolerance is not reached there, a warning gives the half-width reached.
+        if the tolerance is not reached there, a warning gives the half-width reached.  With
+        ``'auto'``, ``'lebedev'``, ``'fibonacci'``: a bound on every evaluation of every stage (and
+        family), the best interval is returned.
 
     Returns
     -------
