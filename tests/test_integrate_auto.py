@@ -240,3 +240,13 @@ def test_bad_integrand_names_f_and_a_direction_in_every_family():
         with pytest.raises(ValueError, match=r"'f' returned values whose sum .*overflows float64"):
             symsphere.integrate(lambda w: np.full(len(w), 1e308), rtol=1e-3, method=method, rng=1)
     assert math.isfinite(symsphere.integrate(exp_dot, n=8 * 6, method="lebedev", rng=1).integral)
+
+
+def test_cli_method_auto_says_which_family(capsys):
+    from symsphere.apps.cli import main
+
+    assert main(["integrate", "--integrand", "exp", "--method", "auto", "--rtol", "1e-9", "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "(lebedev, haar_rotations, seed 1)" in out and "tolerance" in out and "reached" in out
+    assert main(["integrate", "--integrand", "exp", "--method", "auto", "--n", "384", "--seed", "1"]) == 2
+    assert "method='auto' chooses by the tolerance" in capsys.readouterr().err
