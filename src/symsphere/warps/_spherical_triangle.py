@@ -253,6 +253,14 @@ def _arvo_inverse(
     c_hat = c_hat / np.where(norm > 0, norm, 1.0)
     # Of the two antipodal intersections, C' is the one on the arc AC.
     c_hat = np.where((c_hat @ (A + C))[..., None] < 0, -c_hat, c_hat)
+    # When B lies close to the great circle AC (a sliver), m and A x C are nearly parallel: their cross
+    # product is short and, normalised, carries an error of eps / |m x n_ac| in every direction,
+    # off the circle AC too, which the sub-triangle's area (of the sliver's width) magnifies (8e-4 in u
+    # for a 1e-7 sr sliver).  Its angle along AC is what the intersection determines; put C' back on
+    # the circle there.
+    c_perp = _unit(C - (C @ A) * A)
+    s = np.arctan2(c_hat @ c_perp, c_hat @ A)
+    c_hat = np.cos(s)[..., None] * A + np.sin(s)[..., None] * c_perp
     triple = np.abs(np.cross(B, c_hat) @ A)
     sub_area = 2.0 * np.arctan2(triple, 1.0 + A @ B + c_hat @ B + c_hat @ A)
     u = np.where(at_b, 0.0, sub_area / area)
