@@ -50,7 +50,7 @@ import mitsuba as mi
 
 from .._validation import check_choice
 from ..warps import METHODS
-from . import _random
+from . import _lights, _random
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
 __all__ = [
@@ -110,7 +110,8 @@ class _PathMethods:
     'symmetric_cosine'; default 'symmetric'), ``points`` ('random', 'sobol'; default 'random'; 'bsdf':
     'random' only),
     ``method`` ('equal_area', 'paper1', 'paper2'; default 'equal_area', for 'symmetric'),
-    ``max_depth`` (default -1), ``rr_depth`` (default 5), ``hide_emitters`` (default false).
+    ``max_depth`` (default -1), ``rr_depth`` (default 5), ``hide_emitters`` (default false),
+    ``emitter_sampling`` ('area': Mitsuba's own, the default; 'solid_angle': :mod:`._lights`).
     """
 
     def __init__(self, props: Any) -> None:
@@ -136,6 +137,9 @@ class _PathMethods:
                 f"'points' must be 'random' for strategy='bsdf' (got {self.points!r}): it takes the scene "
                 "sampler's points; choose a QMC sampler there, or points='sobol' with another strategy"
             )
+        self.emitter_sampling = check_choice(
+            props.get("emitter_sampling", "area"), "emitter_sampling", _lights.EMITTER_SAMPLINGS
+        )
         self.group_size = GROUP_SIZES[self.strategy]
         # whether the strategy's own direction replaces the BSDF's sample at Lambertian vertices
         self.replaces_sample = self.strategy in _SYMMETRIC_STRATEGIES or self.points == "sobol"
@@ -202,7 +206,8 @@ class _PathMethods:
             )
             key = _random.pixel_key(mi.UInt64(seed), pixel)
             table = self._lambertian_table(scene) if self.replaces_sample else None
-            spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table)
+            lights = _lights.build(scene, self.emitter_sampling)
+            spectrum, valid = self._trace(scene, sampler, ray, key, sample_index, table, lights)
 
             block = film.create_block()
             block.set_coalesce(block.coalesce() and spp >= 4)
@@ -277,7 +282,9 @@ class _PathMethods:
     # --- the path loop (path.cpp) ------------------------------------------------------------------
 
     @dr.syntax
-    def _trace(self, scene: Any, sampler: Any, ray: Any, key: Any, s: Any, table: Any) -> tuple[Any, Any]:
+    def _trace(
+        self, scene: Any, sampler: Any, ray: Any, key: Any, s: Any, table: Any, lights: Any = None
+    ) -> tuple[Any, Any]:
         ray = mi.Ray3f(ray)
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
         throughput: Any = mi.Spectrum(1.0)
@@ -302,7 +309,10 @@ class _PathMethods:
 
             # direct emission, weighted against the previous vertex's emitter sampling
             ds = mi.DirectionSample3f(scene, si=si, ref=prev_si)
-            em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
+            if dr.hint(lights is None, mode="scalar"):
+                em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
+            else:  # emitter_sampling='solid_angle': the light table's density at prev_si
+                em_pdf = lights.pdf_direction(scene, prev_si, si, ds, ~prev_bsdf_delta)
             mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
             result = dr.fma(throughput, ds.emitter.eval(si, prev_bsdf_pdf > 0.0) * mis_bsdf, result)
 
@@ -311,7 +321,10 @@ class _PathMethods:
 
             # emitter sampling
             active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active_em)
+            if dr.hint(lights is None, mode="scalar"):
+                ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active_em)
+            else:
+                ds, em_weight = lights.sample_direction(scene, si, sampler.next_2d(), active_em)
             active_em &= ds.pdf != 0.0
             wo = si.to_local(ds.d)
 
