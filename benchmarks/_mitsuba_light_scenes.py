@@ -70,7 +70,12 @@ def _grid(nx, nz, size, center, dome=0.05):
     faces = []
     for i in range(nx):
         for j in range(nz):
-            v00, v10, v01, v11 = i * (nz + 1) + j, (i + 1) * (nz + 1) + j, i * (nz + 1) + j + 1, (i + 1) * (nz + 1) + j + 1
+            v00, v10, v01, v11 = (
+                i * (nz + 1) + j,
+                (i + 1) * (nz + 1) + j,
+                i * (nz + 1) + j + 1,
+                (i + 1) * (nz + 1) + j + 1,
+            )
             faces += [(v00, v10, v11), (v00, v11, v01)]  # normal -y for this winding
     return vertices, faces
 

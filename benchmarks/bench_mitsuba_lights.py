@@ -79,7 +79,9 @@ def run(args, mi, workdir):
             base = CASES[0][0]
             eff = {label: 1.0 / (np.mean(errors[label]) * statistics.median(seconds[label])) for label, _ in cases}
             share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
-            print(f"{name}, max_depth {depth} (reference's own relMSE {own:.2g}; others' CPU share {share})", flush=True)
+            print(
+                f"{name}, max_depth {depth} (reference's own relMSE {own:.2g}; others' CPU share {share})", flush=True
+            )
             for label, _ in cases:
                 row = {
                     "scene": name, "max_depth": depth, "case": label, "spp": args.spp,
@@ -98,7 +100,10 @@ def run(args, mi, workdir):
 
 
 def report(record):
-    lines = ["| scene | max_depth | case | relMSE | × lower | s | paths/s × | efficiency × path |", "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| scene | max_depth | case | relMSE | × lower | s | paths/s × | efficiency × path |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in record["rows"]:
         lines.append(f"| {r['scene']} | {r['max_depth']} | {r['case']} | {r['rel_mse']:.3g} | {r['rel_mse_ratio']:.2f} | "
                      f"{r['seconds']:.3f} | {r['speed_ratio']:.2f} | {r['efficiency_ratio']:.2f} |")  # fmt: skip
@@ -131,7 +136,10 @@ def main(argv=None):
 
     record = {"cpu": cpu_name(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
               "mitsuba": mi.__version__}  # fmt: skip
-    print(f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}", flush=True)
+    print(
+        f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}",
+        flush=True,
+    )
     with tempfile.TemporaryDirectory() as workdir:
         record["rows"], images = run(args, mi, workdir)
     if args.json:

@@ -298,6 +298,7 @@ class _PathMethods:
         active = mi.Bool(self.max_depth != 0)
         ctx = mi.BSDFContext()
         replaces = self.replaces_sample  # False for bsdf, and cosine with random points: the BSDF's own sample
+        light_total = mi.Float64(0.0)  # emitter_sampling='solid_angle': the light choice's normaliser at prev_si
 
         while active:
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
@@ -312,7 +313,7 @@ class _PathMethods:
             if dr.hint(lights is None, mode="scalar"):
                 em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
             else:  # emitter_sampling='solid_angle': the light table's density at prev_si
-                em_pdf = lights.pdf_direction(scene, prev_si, si, ds, ~prev_bsdf_delta)
+                em_pdf = lights.pdf_direction(scene, prev_si, si, ds, ~prev_bsdf_delta, light_total)
             mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
             result = dr.fma(throughput, ds.emitter.eval(si, prev_bsdf_pdf > 0.0) * mis_bsdf, result)
 
@@ -324,7 +325,7 @@ class _PathMethods:
             if dr.hint(lights is None, mode="scalar"):
                 ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active_em)
             else:
-                ds, em_weight = lights.sample_direction(scene, si, sampler.next_2d(), active_em)
+                ds, em_weight, light_total = lights.sample_direction(scene, si, sampler.next_2d(), active_em)
             active_em &= ds.pdf != 0.0
             wo = si.to_local(ds.d)
 

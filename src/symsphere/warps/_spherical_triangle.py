@@ -235,6 +235,11 @@ def _arvo_forward(
     w = uv[..., 1] * one_minus_cb
     sin_d = np.sqrt(np.maximum(w * (2.0 - w), 0.0))
     tangent = c_hat - np.sum(c_hat * B, axis=-1, keepdims=True) * B
+    # When C' is nearly antipodal to B (a triangle of nearly a hemisphere), the tangent is short and,
+    # normalised, off orthogonal to B by eps / |tangent| (|d| - 1 was 2e-12): orthogonalise it once more.
+    norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
+    tangent = tangent / np.where(norm > 0, norm, 1.0)
+    tangent = tangent - np.sum(tangent * B, axis=-1, keepdims=True) * B
     norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
     tangent = tangent / np.where(norm > 0, norm, 1.0)
     d: Float64Array = (1.0 - w)[..., None] * B + sin_d[..., None] * tangent
