@@ -123,7 +123,7 @@ def _scene(mi, name, tmp_path, bare=False):
         del scene["ball"], scene["glass"], scene["wall"]
     scene["light"] = {
         "type": "obj",
-        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: chosen by power
+        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: the tree
         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}},
     }
     scene["panel"] = {
@@ -226,7 +226,7 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, tmp_path):
 
 
 @pytest.mark.statistical
-@pytest.mark.parametrize("per_side", [1, 3, 19])  # 12 triangles (exact choice), 108 (groups), 4332 (power)
+@pytest.mark.parametrize("per_side", [1, 3, 19])  # 12 triangles (exact choice), 108 and 4332 (the tree)
 def test_emitting_box_furnace(llvm, tmp_path, per_side):
     """Inside a closed box whose walls emit radiance 1 inward and reflect diffusely with albedo 1/2, the
     radiance is 1 / (1 - 1/2) = 2 everywhere."""
@@ -310,3 +310,21 @@ def _sliver_vertices(height):
     a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
     m = (a + b) / 2 + height * np.array([0.0, 0.0, 1.0])
     return [a, b, m / np.linalg.norm(m)]
+
+
+def test_a_scene_without_rectangle_or_mesh_lights_renders_as_with_area(llvm):
+    """Sphere lights and a sky only: no light table, Mitsuba samples every emitter; the same image, bit for bit."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    scene = _scene_dict(mi, "textured")
+    del scene["light"]
+    lamp = {"type": "area", "radiance": {"type": "rgb", "value": [20, 20, 20]}}
+    scene["lamp"] = {"type": "sphere", "center": [0.5, 2.5, 0.5], "radius": 0.2, "emitter": lamp}
+    scene = mi.load_dict(scene)
+    images = [
+        np.array(mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "bsdf",
+                 "emitter_sampling": sampling, "max_depth": 4}), spp=8, seed=3))
+        for sampling in ("area", "solid_angle")
+    ]  # fmt: skip
+    np.testing.assert_array_equal(images[0], images[1])
