@@ -11,9 +11,9 @@ shading point p:
    0 when p is behind the triangle (area emitters are one-sided).  For up to :data:`EXACT_MAX`
    triangles every w_i is evaluated (the loop is unrolled into the kernel, the triangles are
    constants of it; float32, the sums float64).  Above that, a light tree in the manner of pbrt-v4's
-   BVH light sampler: a balanced binary tree over the triangles in a spatial order (by the axis of
-   their normal, then a Morton curve of their centroids), each node bounded by a sphere, a mean
-   normal and its power; from the root, a child is taken with probability proportional to its
+   BVH light sampler: a binary tree over the triangles built top-down (split by the axis of their
+   normal, then at the middle of their centroids' largest extent), each node bounded by a sphere, a
+   mean normal and its power; from the root, a child is taken with probability proportional to its
    importance ``power cos / max(d^2, r^2)`` at p (:class:`_Group`), down to one triangle: log2(n)
    steps, and the same steps give a triangle's probability for MIS;
 2. a direction is drawn uniformly in the chosen triangle's solid angle with Arvo's map
@@ -96,20 +96,41 @@ def _triangles(shape: Any) -> tuple[np.ndarray, np.ndarray] | None:
     return tris, uvs
 
 
-def _spatial_order(tris: np.ndarray) -> np.ndarray:
-    """An order of the triangles by the axis their normal is closest to (and its sign), then along a
-    Morton curve of their centroids: runs of it are compact, similarly oriented groups."""
+def _light_tree(tris: np.ndarray) -> tuple[np.ndarray, list[list[int]]]:
+    """(order, nodes) of a binary tree over the triangles, built top-down: a node's triangles are split
+    first by the axis their normal is closest to (and its sign), then at the middle of their centroids'
+    largest extent (at the median if that leaves a side empty).  ``order`` lists the triangles so that
+    every node covers a run [lo, hi) of it; nodes are [lo, hi, left, right] (children _NONE at a leaf,
+    which is one triangle)."""
     normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     axis = np.argmax(np.abs(normal), axis=1)
     facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
     centroid = tris.mean(axis=1)
-    lo, hi = centroid.min(axis=0), centroid.max(axis=0)
-    cells = ((centroid - lo) / np.where(hi > lo, hi - lo, 1.0) * 1023).astype(np.int64)
-    code = np.zeros(len(tris), dtype=np.int64)
-    for bit in range(10):
-        for k in range(3):
-            code |= ((cells[:, k] >> bit) & 1) << (3 * bit + k)
-    return np.lexsort((code, facing))
+    order = np.arange(len(tris))
+    nodes: list[list[int]] = []
+    stack = [(0, len(tris), -1, 0)]  # (lo, hi, parent, side)
+    while stack:
+        lo, hi, parent, side = stack.pop()
+        index = len(nodes)
+        nodes.append([lo, hi, _NONE, _NONE])
+        if parent >= 0:
+            nodes[parent][2 + side] = index
+        if hi - lo == 1:
+            continue
+        rows = order[lo:hi]
+        if facing[rows].min() != facing[rows].max():
+            left = facing[rows] == facing[rows].min()
+        else:
+            c = centroid[rows]
+            k = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
+            left = c[:, k] < 0.5 * (c[:, k].max() + c[:, k].min())
+            if left.all() or not left.any():
+                rank = np.argsort(np.argsort(c[:, k], kind="stable"), kind="stable")
+                left = rank < len(rows) // 2
+        order[lo:hi] = np.concatenate([rows[left], rows[~left]])
+        mid = lo + int(left.sum())
+        stack += [(mid, hi, index, 1), (lo, mid, index, 0)]
+    return order, nodes
 
 
 class _Group:
@@ -182,7 +203,8 @@ class LightTable:
         uvs = np.concatenate(uv_rows)
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
-        order = _spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        self.exact = self.count <= EXACT_MAX
+        order, nodes = (np.arange(self.count), []) if self.exact else _light_tree(tris)
         tris, uvs, lum, emitter_of = tris[order], uvs[order], lum[order], emitter_of[order]
         row_of = np.empty(self.count, dtype=np.uint32)
         row_of[order] = np.arange(self.count, dtype=np.uint32)  # table index (shape's first + prim) -> row
@@ -203,9 +225,8 @@ class LightTable:
         for ident, (row, is_rect) in shape_rows.items():
             first[ident], rect[ident] = row, int(is_rect)
         self._first, self._rect = mi.UInt32(first), mi.UInt32(rect)
-        self.exact = self.count <= EXACT_MAX
         if not self.exact:
-            self._build_tree(tris, normal, area, lum)
+            self._build_tree(nodes, tris, normal, area, lum)
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
 
@@ -272,20 +293,10 @@ class LightTable:
 
     # --- the tree (more than EXACT_MAX triangles) ----------------------------------------------------
 
-    def _build_tree(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray) -> None:
-        """A binary tree over the rows (in their spatial order): node k covers rows [lo, hi), its children
-        the halves; a leaf is one row.  Each node keeps :class:`_Group`'s bounds of its rows."""
-        nodes: list[list[int]] = []  # [lo, hi, left, right]
-        stack = [(0, self.count, -1, 0)]  # (lo, hi, parent, side)
-        while stack:
-            lo, hi, parent, side = stack.pop()
-            index = len(nodes)
-            nodes.append([lo, hi, _NONE, _NONE])
-            if parent >= 0:
-                nodes[parent][2 + side] = index
-            if hi - lo > 1:
-                mid = (lo + hi) // 2
-                stack += [(mid, hi, index, 1), (lo, mid, index, 0)]
+    def _build_tree(
+        self, nodes: list[list[int]], tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray
+    ) -> None:
+        """The tree of :func:`_light_tree` as Dr.Jit arrays; each node keeps :class:`_Group`'s bounds of its rows."""
         table = np.array(nodes, dtype=np.int64)
         self._left, self._right = mi.UInt32(table[:, 2].astype(np.uint32)), mi.UInt32(table[:, 3].astype(np.uint32))
         self._hi, self._lo = mi.UInt32(table[:, 1].astype(np.uint32)), mi.UInt32(table[:, 0].astype(np.uint32))
