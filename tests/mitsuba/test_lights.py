@@ -123,7 +123,7 @@ def _scene(mi, name, tmp_path, bare=False):
         del scene["ball"], scene["glass"], scene["wall"]
     scene["light"] = {
         "type": "obj",
-        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: the tree
+        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: two levels
         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}},
     }
     scene["panel"] = {
@@ -226,7 +226,7 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, tmp_path):
 
 
 @pytest.mark.statistical
-@pytest.mark.parametrize("per_side", [1, 3, 19])  # 12 triangles (exact choice), 108 and 4332 (the tree)
+@pytest.mark.parametrize("per_side", [1, 3, 19])  # 12 triangles (exact choice), 108 (groups), 4332 (by power)
 def test_emitting_box_furnace(llvm, tmp_path, per_side):
     """Inside a closed box whose walls emit radiance 1 inward and reflect diffusely with albedo 1/2, the
     radiance is 1 / (1 - 1/2) = 2 everywhere."""
