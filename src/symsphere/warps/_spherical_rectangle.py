@@ -156,15 +156,19 @@ def _frame(corner: npt.ArrayLike, edge1: npt.ArrayLike, edge2: npt.ArrayLike) ->
     for v, name in ((c, "corner"), (e1, "edge1"), (e2, "edge2")):
         if v.shape != (3,) or not np.all(np.isfinite(v)):
             raise ValueError(f"'{name}' must be a finite 3-vector, got {v.tolist()}")
-    w, h = float(np.linalg.norm(e1)), float(np.linalg.norm(e2))
-    if not (w > 0 and h > 0) or abs(float(e1 @ e2)) > 1e-9 * w * h:
-        raise ValueError("'edge1' and 'edge2' must be non-zero and orthogonal (the edges of a rectangle)")
-    e, f = e1 / w, e2 / h
-    rows = np.array([e, f, np.cross(e, f)])
-    x0, y0, z0 = (float(r @ c) for r in rows)
-    setup = rectangle_frame(x0, y0, z0, w, h)
-    if not setup[0] > 0.0:
-        raise ValueError("the rectangle must not contain the origin in its plane (its solid angle is 0)")
+    with np.errstate(over="ignore", invalid="ignore"):
+        w, h = float(np.linalg.norm(e1)), float(np.linalg.norm(e2))
+        if not (0 < w < np.inf and 0 < h < np.inf) or not abs(float(e1 @ e2)) <= 1e-9 * w * h:
+            raise ValueError("'edge1' and 'edge2' must be non-zero, finite and orthogonal (the edges of a rectangle)")
+        e, f = e1 / w, e2 / h
+        rows = np.array([e, f, np.cross(e, f)])
+        x0, y0, z0 = (float(r @ c) for r in rows)
+        setup = rectangle_frame(x0, y0, z0, w, h)
+    if not (setup[0] > 0.0 and all(math.isfinite(x) for x in setup)):
+        raise ValueError(
+            "'corner', 'edge1', 'edge2' must give a rectangle of positive, finite solid angle "
+            "(the origin not in its plane, coordinates below 1e150)"
+        )
     return rows, setup
 
 
