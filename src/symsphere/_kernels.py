@@ -35,6 +35,7 @@ from llvmlite import ir
 from numba import get_num_threads, njit, types
 from numba.extending import intrinsic, register_jitable
 
+from ._constants import TWO_POW_M53
 from ._numba_cache import invalidate_if_changed
 from ._threads import run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
@@ -169,7 +170,7 @@ def pcg64_random(stream):
     mixed = hi ^ lo
     rotation = hi >> _U58
     bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
-    return np.float64(bits >> _U11) * (1.0 / 9007199254740992.0)  # numpy's next_double: 53 bits
+    return np.float64(bits >> _U11) * TWO_POW_M53  # numpy's next_double: 53 bits
 
 
 @register_jitable
