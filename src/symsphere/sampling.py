@@ -17,6 +17,10 @@ rows is the image of a uniform base point under a symmetry chosen uniformly, so 
 an unbiased estimate of its mean over the sphere.  For random base points the
 whole orbits are the rows of ``sample_sphere(48 * (n // 48))`` with the same
 seed; multiples of 48 take exactly the path they always took.
+
+The engine: :class:`Scheme` holds the arguments, checked once, and a position in the stream of base
+points (``random``, ``reset``, ``fast_forward``, ``blocks``, ``pdf``), as scipy's ``QMCEngine``; each
+function below is one call on a fresh :class:`Scheme`.
 """
 
 from __future__ import annotations
