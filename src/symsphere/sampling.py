@@ -332,6 +332,17 @@ or scipy.stats.qmc.QMCEngine
         Seeds the stream, once, here: a Generator advances now, by the same draw whatever the
         engine later produces.
 
+    Attributes
+    ----------
+    domain : {'hemisphere', 'sphere'}
+    orbit_size : int
+        48 or 24: directions per base point.
+    method : str
+    points : str or scipy.stats.qmc.QMCEngine
+    normal : ndarray of 3 floats or None
+        The unit normal (normalised from the argument).
+    dtype : numpy.dtype
+
     Notes
     -----
     The stream is one of base points: ``random(n)`` takes ``ceil(n / orbit_size)`` of them.  If
