@@ -81,6 +81,17 @@ OVERRIDES = {
     "square_to_spherical_triangle": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
     "spherical_triangle_to_square": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
     "square_to_spherical_triangle_pdf": dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2]),
+    "square_to_spherical_rectangle": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
+    "spherical_rectangle_to_square": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
+    "square_to_spherical_rectangle_pdf": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
+    "rectangle_frame": dict(x0=-1.0, y0=-1.0, z0=1.0, width=2.0, height=2.0),
+    "rectangle_point": dict(
+        zip(
+            ("solid_angle", "x0", "y0", "z0", "x1", "y1", "zsign", "b0", "b1", "ck", "sk"),
+            warps.rectangle_frame(-1.0, -1.0, 1.0, 2.0, 2.0),
+            strict=True,
+        )
+    ),  # fmt: skip
     "fit_slope": dict(n=[48, 96, 192]),
     "cap_discrepancy": dict(points=_SAMPLES[:48]),
     "cap_discrepancy_squared": dict(points=_SAMPLES[:48]),
@@ -111,7 +122,7 @@ MAY_BE_INF = {"square_to_triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
 # since the third reliability round (inside kernels they are the bare formulas) and are tested like the others, and below;
 # so do the elementwise warps of symsphere.warps.
-TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf"}
+TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf", "rectangle_frame", "rectangle_point"}
 MODULES = (symsphere, sampling, symmetry, frames, harmonics, stats, integrands, peers, quality, points_module,
            bins, integration, warps)  # fmt: skip
 

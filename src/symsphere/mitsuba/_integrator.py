@@ -59,7 +59,7 @@ import mitsuba as mi
 
 from .._validation import check_choice
 from ..warps import METHODS
-from . import _random
+from . import _lights, _random
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
 __all__ = [
@@ -138,10 +138,14 @@ class _PathMethods:
                 f"'points' must be 'random' for strategy='bsdf' (got {points!r}): it takes the scene "
                 "sampler's points; choose a QMC sampler there, or points='sobol' with another strategy"
             )
+        emitter_sampling = check_choice(
+            props.get("emitter_sampling", "area"), "emitter_sampling", _lights.EMITTER_SAMPLINGS
+        )
         # the variant's RBIntegrator (the class's only base): reads max_depth (default 6 there) and rr_depth
         # again, valid by now, and hide_emitters (the C++ base's property)
         type(self).__mro__[1].__init__(self, props)  # type: ignore[misc]
         self.strategy, self.points, self.method = strategy, points, method
+        self.emitter_sampling = emitter_sampling
         self.max_depth = max_depth if max_depth != -1 else 0xFFFFFFFF
         self.rr_depth = rr_depth
         self.group_size = GROUP_SIZES[strategy]
@@ -154,7 +158,8 @@ class _PathMethods:
     def to_string(self) -> str:
         return (
             f"SymspherePath[strategy={self.strategy!r}, points={self.points!r}, method={self.method!r}, "
-            f"max_depth={self.max_depth}, rr_depth={self.rr_depth}, hide_emitters={self.hide_emitters}]"
+            f"emitter_sampling={self.emitter_sampling!r}, max_depth={self.max_depth}, rr_depth={self.rr_depth}, "
+            f"hide_emitters={self.hide_emitters}]"
         )
 
     def aov_names(self) -> list[str]:
@@ -326,27 +331,39 @@ class _PathMethods:
 
     # --- next-event estimation: one place, so that another light-sampling technique can replace it -----
 
-    def _sample_emitter(self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool) -> tuple[Any, Any, Any]:
+    def _sample_emitter(
+        self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool, lights: Any
+    ) -> tuple[Any, Any, Any, Any]:
         """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
-        the sample is valid).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the
-        BSDF's direction; :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
+        the sample is valid, the light table's normaliser at si for :meth:`_emitter_pdf`: None without a
+        table).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the BSDF's direction;
+        :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
 
-        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample), detached; in a
-        differential mode the weight's derivative is re-attached as ``prb`` does (emitter parameters:
-        radiance, textures), without the terms of moving geometry.
+        Without a light table (``emitter_sampling='area'``, or a scene without rectangle or mesh lights)
+        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample); with one, the
+        table's choice of a triangle by solid angle x radiance and a uniform direction in its solid angle
+        (:mod:`._lights`).  Detached; in a differential mode the weight's derivative is re-attached as
+        ``prb`` does (emitter parameters: radiance, textures), without the terms of moving geometry.
         """
-        ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
+        if dr.hint(lights is None, mode="scalar"):
+            ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
+            total = None
+        else:
+            ds, em_weight, total = lights.sample_direction(scene, si, sampler.next_2d(), active)
         active = active & (ds.pdf != 0.0)
         if not primal:
             with dr.resume_grad():
                 em_val = scene.eval_emitter_direction(si, ds, active)
                 inv_pdf = dr.select(ds.pdf != 0.0, dr.rcp(ds.pdf), 0.0)
                 em_weight = _REPLACE_GRAD(em_weight, em_val * dr.detach(inv_pdf))
-        return ds, em_weight, active
+        return ds, em_weight, active, total
 
-    def _emitter_pdf(self, scene: Any, ref: Any, ds: Any, active: Any) -> Any:
-        """The density (solid angle) with which :meth:`_sample_emitter` at *ref* samples *ds*, for MIS."""
-        return scene.pdf_emitter_direction(ref, ds, active)
+    def _emitter_pdf(self, scene: Any, ref: Any, si: Any, ds: Any, active: Any, lights: Any, total: Any) -> Any:
+        """The density (solid angle) with which :meth:`_sample_emitter` at *ref* samples *ds* (the emitter
+        hit at *si*), for MIS; *total*: the normaliser :meth:`_sample_emitter` returned at *ref*."""
+        if dr.hint(lights is None, mode="scalar"):
+            return scene.pdf_emitter_direction(ref, ds, active)
+        return lights.pdf_direction(scene, ref, si, ds, active, total)
 
     # --- the path loop (path.cpp; in a differential mode, prb's path replay) ---------------------------
 
@@ -360,6 +377,8 @@ class _PathMethods:
         if replaces:
             key, s = self._lanes(sampler, dr.width(ray))
             table = self._lambertian_table(scene)
+        lights = _lights.build(scene, self.emitter_sampling)
+        light_total: Any = mi.Float64(0.0) if lights is not None else None  # the choice's normaliser at prev_si
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
         throughput: Any = mi.Spectrum(1.0)
@@ -384,7 +403,7 @@ class _PathMethods:
 
             # direct emission, weighted against the previous vertex's emitter sampling
             ds = mi.DirectionSample3f(scene, si=si, ref=prev_si)
-            em_pdf = self._emitter_pdf(scene, prev_si, ds, ~prev_bsdf_delta)
+            em_pdf = self._emitter_pdf(scene, prev_si, si, ds, ~prev_bsdf_delta, lights, light_total)
             mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
             shown = prev_bsdf_pdf > 0.0
             if dr.hint(self.hide_emitters, mode="scalar"):  # a hidden environment behind the camera ray
@@ -399,7 +418,9 @@ class _PathMethods:
 
             # emitter sampling
             active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            ds, em_weight, active_em = self._sample_emitter(scene, si, sampler, active_em, primal)
+            ds, em_weight, active_em, total = self._sample_emitter(scene, si, sampler, active_em, primal, lights)
+            if dr.hint(lights is not None, mode="scalar"):
+                light_total = total
             wo = si.to_local(ds.d)
 
             sample_1 = sampler.next_1d()

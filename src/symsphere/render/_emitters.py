@@ -42,6 +42,7 @@ from numba import njit
 from numba.extending import register_jitable
 
 from ..frames import frame_rows
+from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
 from ._random import next_u64, u01
 
 __all__ = [
@@ -106,31 +107,10 @@ def _sphere_cone(px, py, pz, i, spheres):
 
 @njit(**TABLE_FUNCTION)
 def spherical_rectangle(px, py, pz, j, quads):
-    """The rectangle j seen from p (Urena, Fajardo & King 2013, "An Area-Preserving Parametrization for
-    Spherical Rectangles", EGSR; pbrt-v4 ``SampleSphericalRectangle``).
-
-    In the frame (x, y, z) of its edges, with z flipped to point away from
-    the rectangle (so z0 < 0), the corners are (x0 | x1, y0 | y1, z0).  The
-    planes through p and each edge have normals n0..n3; the spherical
-    rectangle's interior angles are g_i = angle(-n_i, n_(i+1)) and its solid
-    angle S = g0 + g1 + g2 + g3 - 2 pi.  Returns (S, x0, y0, z0, x1, y1,
-    zsign, b0 = n0.z, b1 = n2.z, cos k, sin k) with k = 2 pi - g2 - g3; S = 0
-    when p is in the rectangle's plane.
-
-    No normal is formed (pbrt-v4: four cross products, four normalisations,
-    four ``asin``): with a = -z0 and r_xy the distance to corner (x, y), the
-    angle at that corner has cosine and sine proportional to (+-x y, a r_xy)
-    (the cross product of the normals of two edges is a times their corner),
-    so ``g = pi / 2 -+ A_xy`` with ``A_xy = atan(x y / (a r_xy))``, whence
-    S = (A11 - A10) + (A00 - A01) (the classic solid angle of a rectangle;
-    no cancellation against 2 pi) and k = pi - (A00 - A01).  The sums of
-    angles are formed as products of the complex numbers ``a r_xy + i x y``
-    (whose arguments are the A_xy), so that one ``atan2`` gives S: in
-    [0, pi] unless the foot of p lies inside the rectangle, in (0, 2 pi)
-    then (the argument is taken of -Z there, which has no branch cut near S
-    = 0; a rectangle off to one side lies in a quarter sphere, S <= pi).
-    ``e^{ik}`` is the normalised conjugate of -(A00 - A01)'s number: no angle.
-    """
+    """The rectangle j seen from p: :func:`symsphere.warps._spherical_rectangle.rectangle_frame` (Urena,
+    Fajardo & King 2013) of its corner in the frame (x, y, z) of its edges e, f and its normal e x f,
+    relative to p.  Returns (S, x0, y0, z0, x1, y1, zsign, b0, b1, cos k, sin k); S = 0 when p is in
+    the rectangle's plane."""
     ex, ey, ez = quads[17, j], quads[18, j], quads[19, j]
     fx, fy, fz = quads[20, j], quads[21, j], quads[22, j]
     gx, gy, gz = quads[9, j], quads[10, j], quads[11, j]  # the unit normal: e x f for a rectangle
@@ -140,36 +120,7 @@ def spherical_rectangle(px, py, pz, j, quads):
     x0 = dx * ex + dy * ey + dz * ez
     y0 = dx * fx + dy * fy + dz * fz
     z0 = dx * gx + dy * gy + dz * gz
-    zsign = 1.0
-    if z0 > 0.0:
-        zsign = -1.0
-        z0 = -z0
-    if not z0 < 0.0:
-        return 0.0, x0, y0, z0, x0, y0, zsign, 0.0, 0.0, 1.0, 0.0
-    x1 = x0 + quads[23, j]
-    y1 = y0 + quads[24, j]
-    a = -z0
-    z2 = z0 * z0
-    x02, x12, y02, y12 = x0 * x0, x1 * x1, y0 * y0, y1 * y1
-    c00 = a * math.sqrt(x02 + y02 + z2)  # e^{i A_xy} is proportional to c_xy + i x y
-    c10 = a * math.sqrt(x12 + y02 + z2)
-    c01 = a * math.sqrt(x02 + y12 + z2)
-    c11 = a * math.sqrt(x12 + y12 + z2)
-    s00, s10, s01, s11 = x0 * y0, x1 * y0, x0 * y1, x1 * y1
-    re1 = c11 * c10 + s11 * s10  # (c11 + i s11) (c10 - i s10): A11 - A10
-    im1 = s11 * c10 - c11 * s10
-    re2 = c00 * c01 + s00 * s01  # (c00 + i s00) (c01 - i s01): A00 - A01
-    im2 = s00 * c01 - c00 * s01
-    re = re1 * re2 - im1 * im2
-    im = re1 * im2 + im1 * re2
-    if x0 < 0.0 and x1 > 0.0 and y0 < 0.0 and y1 > 0.0:
-        solid_angle = _PI + math.atan2(-im, -re)
-    else:
-        solid_angle = max(0.0, math.atan2(im, re))
-    inv2 = 1.0 / math.sqrt(re2 * re2 + im2 * im2)
-    b0 = -y0 / math.sqrt(y02 + z2)
-    b1 = y1 / math.sqrt(y12 + z2)
-    return solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1, -re2 * inv2, im2 * inv2
+    return rectangle_frame(x0, y0, z0, quads[23, j], quads[24, j])
 
 
 @register_jitable
@@ -266,30 +217,12 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
         if quads[25, j] != 0.0:
             solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, ck, sk = spherical_rectangle(px, py, pz, j, quads)
             if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
-                # au = u S + k; cu = fu / sqrt(fu^2 + b0^2), fu = (cos(au) b0 - b1) / sin(au), and
-                # xu = -cu z0 / sqrt(1 - cu^2) = -z0 sign(fu) / sqrt(fu^2 - (1 - b0^2)), 1 - b0^2 = z0^2 / (y0^2 + z0^2):
-                # xu = -z0 sign(nu) sin(au) / sqrt(nu^2 - (1 - b0^2) sin(au)^2) with nu = cos(au) b0 - b1
-                cs = math.cos(u * solid_angle)
-                ss = math.sin(u * solid_angle)
-                ca = cs * ck - ss * sk
-                sa = ss * ck + cs * sk
-                nu = ca * b0 - b1_
-                z2 = z0 * z0
-                den = nu * nu - z2 / (y0 * y0 + z2) * (sa * sa)
-                xu = -z0 * math.copysign(1.0, nu) * sa / math.sqrt(max(den, 1e-300))
-                xu = min(max(xu, x0), x1)
-                d2 = xu * xu + z2
-                h0 = y0 / math.sqrt(d2 + y0 * y0)
-                h1 = y1 / math.sqrt(d2 + y1 * y1)
-                hv = h0 + v * (h1 - h0)
-                hv2 = hv * hv
-                yv = hv * math.sqrt(d2 / (1.0 - hv2)) if hv2 < 1.0 - 1e-12 else y1
-                yv = min(max(yv, y0), y1)
+                xu, yv, dist2 = rectangle_point(u, v, solid_angle, x0, y0, z0, x1, y1, b0, b1_, ck, sk)
                 lz = z0 * zsign  # back to the frame of the edges
                 wx = xu * quads[17, j] + yv * quads[20, j] + lz * quads[9, j]  # the normal is e x f
                 wy = xu * quads[18, j] + yv * quads[21, j] + lz * quads[10, j]
                 wz = xu * quads[19, j] + yv * quads[22, j] + lz * quads[11, j]
-                dist = math.sqrt(d2 + yv * yv)
+                dist = math.sqrt(dist2)
                 if not dist > 0.0:
                     return 0.0, 0.0, 1.0, 0.0, 0.0, False, state
                 inv = 1.0 / dist

@@ -24,6 +24,7 @@ maps                                domain       what
 ``square_to_cosine_hemisphere``     hemisphere   the concentric disk lifted by Malley's method: cos(theta)/pi
 ``square_to_spherical_triangle``    triangle     Arvo (1995) onto any spherical triangle;
                                                  ``square_to_arvo_triangle``: onto T0
+``square_to_spherical_rectangle``   rectangle    Urena, Fajardo & King (2013) onto a rectangle seen from 0
 =================================== ============ ============================================================
 
 Every map is exact and has no NaN or inf for u, v in {0, 1}, in float64 and float32; results take
@@ -71,6 +72,13 @@ from ._scheme import (
     square_to_sphere,
     square_to_sphere_pdf,
     strip_order,
+)
+from ._spherical_rectangle import (
+    rectangle_frame,
+    rectangle_point,
+    spherical_rectangle_to_square,
+    square_to_spherical_rectangle,
+    square_to_spherical_rectangle_pdf,
 )
 from ._spherical_triangle import (
     T0_VERTICES,
@@ -168,6 +176,11 @@ __all__ = [
     "square_to_spherical_triangle",
     "square_to_spherical_triangle_pdf",
     "spherical_triangle_to_square",
+    "square_to_spherical_rectangle",
+    "square_to_spherical_rectangle_pdf",
+    "spherical_rectangle_to_square",
+    "rectangle_frame",
+    "rectangle_point",
     "square_to_arvo_triangle",
     "square_to_arvo_triangle_pdf",
     "arvo_triangle_to_square",

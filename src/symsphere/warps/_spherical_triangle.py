@@ -235,6 +235,11 @@ def _arvo_forward(
     w = uv[..., 1] * one_minus_cb
     sin_d = np.sqrt(np.maximum(w * (2.0 - w), 0.0))
     tangent = c_hat - np.sum(c_hat * B, axis=-1, keepdims=True) * B
+    # When C' is nearly antipodal to B (a triangle of nearly a hemisphere), the tangent is short and,
+    # normalised, off orthogonal to B by eps / |tangent| (|d| - 1 was 2e-12): orthogonalise it once more.
+    norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
+    tangent = tangent / np.where(norm > 0, norm, 1.0)
+    tangent = tangent - np.sum(tangent * B, axis=-1, keepdims=True) * B
     norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
     tangent = tangent / np.where(norm > 0, norm, 1.0)
     d: Float64Array = (1.0 - w)[..., None] * B + sin_d[..., None] * tangent
@@ -253,6 +258,14 @@ def _arvo_inverse(
     c_hat = c_hat / np.where(norm > 0, norm, 1.0)
     # Of the two antipodal intersections, C' is the one on the arc AC.
     c_hat = np.where((c_hat @ (A + C))[..., None] < 0, -c_hat, c_hat)
+    # When B lies close to the great circle AC (a sliver), m and A x C are nearly parallel: their cross
+    # product is short and, normalised, carries an error of eps / |m x n_ac| in every direction,
+    # off the circle AC too, which the sub-triangle's area (of the sliver's width) magnifies (8e-4 in u
+    # for a 1e-7 sr sliver).  Its angle along AC is what the intersection determines; put C' back on
+    # the circle there.
+    c_perp = _unit(C - (C @ A) * A)
+    s = np.arctan2(c_hat @ c_perp, c_hat @ A)
+    c_hat = np.cos(s)[..., None] * A + np.sin(s)[..., None] * c_perp
     triple = np.abs(np.cross(B, c_hat) @ A)
     sub_area = 2.0 * np.arctan2(triple, 1.0 + A @ B + c_hat @ B + c_hat @ A)
     u = np.where(at_b, 0.0, sub_area / area)

@@ -1,0 +1,156 @@
+"""Light sampling by solid angle in Mitsuba 3: symsphere_path's emitter_sampling against Mitsuba's path.
+
+    .venv/bin/python benchmarks/bench_mitsuba_lights.py --json benchmarks/results/mitsuba_lights.json
+
+Scenes: benchmarks/_mitsuba_light_scenes.py (--scenes), at --width x --height, variant llvm_ad_rgb, for
+each --depths (max_depth 2: direct light only; 8: full paths; rr_depth 5).
+
+Per scene and depth: a reference (Mitsuba's ``path``, ``independent``, --ref-spp in two independent
+halves whose difference estimates the reference's own relMSE, which is subtracted), then --rounds
+interleaved rounds (alternating order) in which every case renders --spp samples per pixel with a new
+seed.  relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01) (as bench_mitsuba.py),
+the mean over the rounds; seconds = the median over the rounds.  Efficiency = 1 / (relMSE x seconds),
+which is the equal-time comparison (relMSE is inversely proportional to spp); reported as a ratio to
+Mitsuba's path in the same rounds, with the ratio of relMSE at equal spp and of paths/s.  The machine may
+be shared: the others' CPU share during the rounds is recorded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _machine import cpu_name, cpu_snapshot, others_cpu
+from _mitsuba_light_scenes import LIGHT_SCENES, light_scene
+
+CASES = [  # (label, integrator dict)
+    ("Mitsuba path", {"type": "path"}),
+    ("symsphere_path bsdf · area", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "area"}),
+    ("symsphere_path bsdf · solid_angle", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"}),
+    ("symsphere_path symmetric_cosine sobol · solid_angle",
+     {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
+]  # fmt: skip
+
+
+def _rel_mse(image, reference):
+    return float(np.mean((image - reference) ** 2 / (reference**2 + 0.01)))
+
+
+def _render(mi, scene, integrator, spp, seed):
+    start = time.perf_counter()
+    image = np.array(mi.render(scene, integrator=integrator, spp=spp, seed=seed), dtype=np.float64)[..., :3]
+    return image, time.perf_counter() - start
+
+
+def run(args, mi, workdir):
+    rows, images = [], {}
+    for depth in args.depths:
+        for name in args.scenes:
+            scene = light_scene(mi, name, args.width, args.height, workdir)
+            options = {"max_depth": depth, "rr_depth": 5}
+            ref_integrator = mi.load_dict({"type": "path", **options})
+            a = _render(mi, scene, ref_integrator, args.ref_spp // 2, 1000)[0]
+            b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
+            ref = 0.5 * (a + b)
+            own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
+            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in CASES]
+            for _, integrator in cases:  # compile
+                _render(mi, scene, integrator, args.spp, 0)
+            errors = {label: [] for label, _ in cases}
+            seconds = {label: [] for label, _ in cases}
+            before, t0 = cpu_snapshot(), time.perf_counter()
+            for r in range(args.rounds):
+                for label, integrator in cases if r % 2 == 0 else cases[::-1]:
+                    image, s = _render(mi, scene, integrator, args.spp, r + 1)
+                    errors[label].append(_rel_mse(image, ref) - own)
+                    seconds[label].append(s)
+                    if r == args.rounds - 1:
+                        images.setdefault((name, depth), [ref]).append(image)
+            load = others_cpu(before, cpu_snapshot(), time.perf_counter() - t0)
+            base = CASES[0][0]
+            eff = {label: 1.0 / (np.mean(errors[label]) * statistics.median(seconds[label])) for label, _ in cases}
+            share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
+            print(
+                f"{name}, max_depth {depth} (reference's own relMSE {own:.2g}; others' CPU share {share})", flush=True
+            )
+            for label, _ in cases:
+                row = {
+                    "scene": name, "max_depth": depth, "case": label, "spp": args.spp,
+                    "rel_mse": float(np.mean(errors[label])), "seconds": statistics.median(seconds[label]),
+                    "efficiency": eff[label], "efficiency_ratio": eff[label] / eff[base],
+                    "rel_mse_ratio": float(np.mean(errors[base]) / np.mean(errors[label])),
+                    "speed_ratio": statistics.median(seconds[base]) / statistics.median(seconds[label]),
+                    "reference_own_rel_mse": own,
+                    "others_cpu_share": None if load is None else load["share_of_all_cpus"],
+                }  # fmt: skip
+                rows.append(row)
+                print(f"  {label:<52} relMSE {row['rel_mse']:.4g} (x{row['rel_mse_ratio']:.2f} lower)  "
+                      f"{row['seconds']:.3f} s (speed x{row['speed_ratio']:.2f})  efficiency x{row['efficiency_ratio']:.2f}",
+                      flush=True)  # fmt: skip
+    return rows, images
+
+
+def report(record):
+    lines = [
+        "| scene | max_depth | case | relMSE | × lower | s | paths/s × | efficiency × path |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in record["rows"]:
+        lines.append(f"| {r['scene']} | {r['max_depth']} | {r['case']} | {r['rel_mse']:.3g} | {r['rel_mse_ratio']:.2f} | "
+                     f"{r['seconds']:.3f} | {r['speed_ratio']:.2f} | {r['efficiency_ratio']:.2f} |")  # fmt: skip
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--scenes", nargs="+", default=list(LIGHT_SCENES), choices=LIGHT_SCENES)
+    parser.add_argument("--depths", type=int, nargs="+", default=[2, 8])
+    parser.add_argument("--width", type=int, default=128)
+    parser.add_argument("--height", type=int, default=128)
+    parser.add_argument("--spp", type=int, default=16, help="spp per render, a multiple of 8 (default %(default)s)")
+    parser.add_argument("--ref-spp", type=int, default=4096, help="reference spp (default %(default)s)")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default %(default)s)")
+    parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    parser.add_argument("--images", metavar="DIR", help="write DIR/<scene>_<depth>.png: the reference and every "
+                        "case's last render side by side, in the order of the table")  # fmt: skip
+    parser.add_argument("--report", metavar="FILE", help="print the markdown table of a --json FILE and exit")
+    args = parser.parse_args(argv)
+    if args.report:
+        print(report(json.loads(Path(args.report).read_text(encoding="utf-8"))))
+        return
+    if args.spp % 8:
+        parser.error("--spp must be a multiple of 8 (symmetric_cosine's group)")
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_rgb")
+    import symsphere.mitsuba  # noqa: F401  (registers symsphere_path)
+
+    record = {"cpu": cpu_name(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
+              "mitsuba": mi.__version__}  # fmt: skip
+    print(
+        f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}",
+        flush=True,
+    )
+    with tempfile.TemporaryDirectory() as workdir:
+        record["rows"], images = run(args, mi, workdir)
+    if args.json:
+        Path(args.json).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
+    if args.images:
+        from symsphere.render import save_png
+
+        Path(args.images).mkdir(parents=True, exist_ok=True)
+        for (name, depth), strip in images.items():
+            save_png(Path(args.images) / f"{name}_{depth}.png", np.concatenate(strip, axis=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,330 @@
+"""``symsphere_path``'s ``emitter_sampling='solid_angle'``: its density, its MIS, that it is unbiased.
+
+Statistical tests (fixed seeds): the block test compares the mean image with Mitsuba's own ``path`` (the
+independent reference), K independent renders each, block by block (4 x 4 pixels, the mean of R, G, B):
+Welch's t-test, two-sided, significance 0.01 for the family with a Sidak correction over the
+UNBIASED_TESTS blocks.  The furnace tests are z-tests of an image mean against the closed form at 0.01,
+Sidak-corrected over the FURNACE_TESTS.  The normalisation test is a z-test of a Monte Carlo integral of
+the density over the sphere (uniform directions from numpy, not from the code under test) against 1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+SIZE, SPP, SEEDS = 16, 32, 12
+ALPHA = 0.01
+SCENES = ("cornell", "textured", "mesh_light")
+UNBIASED_TESTS = len(SCENES) * (SIZE // 4) ** 2
+FURNACE_TESTS = 3
+BLOCK = 4
+
+
+def _sidak(alpha, count):
+    return 1.0 - (1.0 - alpha) ** (1.0 / count)
+
+
+# the scenes of tests/mitsuba/test_integrator.py
+def _scene_dict(mi, name):
+    sensor_film = {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"}}
+    if name == "cornell":  # Mitsuba's Cornell box: one-sided diffuse walls, a rectangle light
+        scene = mi.cornell_box()
+        scene["sensor"]["film"] = sensor_film
+        scene["sensor"]["sampler"] = {"type": "independent"}
+        return scene
+    T = mi.ScalarTransform4f
+    white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}}}
+    checker = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
+        "type": "checkerboard", "color0": {"type": "rgb", "value": [0.8, 0.2, 0.1]}, "color1": {"type": "rgb", "value": [0.1, 0.3, 0.8]},
+        "to_uv": T().scale([4, 4, 1])}}}  # fmt: skip
+    return {
+        "type": "scene",
+        "sensor": {
+            "type": "perspective",
+            "fov": 50,
+            "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0]),
+            "film": sensor_film,
+            "sampler": {"type": "independent"},
+        },  # fmt: skip
+        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": checker},
+        "wall": {"type": "rectangle", "to_world": T().translate([0, 1.5, -1.5]).scale(3), "bsdf": white},
+        "ball": {
+            "type": "sphere",
+            "center": [-0.7, 0.5, 0.2],
+            "radius": 0.5,
+            "bsdf": {
+                "type": "roughplastic",
+                "alpha": 0.2,
+                "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]},
+            },
+        },  # fmt: skip
+        "glass": {"type": "sphere", "center": [0.8, 0.4, 0.6], "radius": 0.4, "bsdf": {"type": "dielectric"}},
+        "light": {
+            "type": "rectangle",
+            "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}},
+        },  # fmt: skip
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}},
+    }
+
+
+def _blocks(images):
+    k = images.shape[0]
+    lum = images.mean(axis=-1).reshape(k, SIZE // BLOCK, BLOCK, SIZE // BLOCK, BLOCK)
+    return lum.mean(axis=(2, 4)).reshape(k, -1)
+
+
+def _obj_box(path, n, inward=True):
+    """The six faces of the box [-1, 1]^3, each cut into n x n squares (2 n^2 triangles), facing inward."""
+    vertices, faces = [], []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            u_axis, v_axis = (axis + 1) % 3, (axis + 2) % 3
+            base = len(vertices)
+            for i in range(n + 1):
+                for j in range(n + 1):
+                    p = [0.0, 0.0, 0.0]
+                    p[axis], p[u_axis], p[v_axis] = side, -1 + 2 * i / n, -1 + 2 * j / n
+                    vertices.append(p)
+            for i in range(n):
+                for j in range(n):
+                    a, b = base + i * (n + 1) + j, base + (i + 1) * (n + 1) + j
+                    quad = (a, b, b + 1, a + 1)  # normal +axis for these (u, v) orders
+                    flip = (side > 0) == inward
+                    tri1, tri2 = (quad[0], quad[1], quad[2]), (quad[0], quad[2], quad[3])
+                    faces += [t[::-1] if flip else t for t in (tri1, tri2)]
+    with open(path, "w") as f:
+        f.writelines(f"v {x} {y} {z}\n" for x, y, z in vertices)
+        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+    return path
+
+
+def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
+    """A disk light of *segments* triangles about (x0, height, 0), facing down (-y)."""
+    lines = [f"v {x0} {height} 0\n"]
+    for k in range(segments):
+        phi = 2 * np.pi * k / segments
+        lines.append(f"v {x0 + radius * np.cos(phi)} {height} {radius * np.sin(phi)}\n")
+    for k in range(segments):
+        lines.append(f"f 1 {k + 2} {(k + 1) % segments + 2}\n")  # counter-clockwise from below: normal -y
+    with open(path, "w") as f:
+        f.writelines(lines)
+    return path
+
+
+def _scene(mi, name, tmp_path, bare=False):
+    if name != "mesh_light":
+        return mi.load_dict(_scene_dict(mi, name))
+    scene = _scene_dict(mi, "textured")
+    del scene["light"], scene["sky"]
+    if bare:  # the lights and the floor only: nothing between a point above the floor and the lights
+        del scene["ball"], scene["glass"], scene["wall"]
+    scene["light"] = {
+        "type": "obj",
+        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: two levels
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}},
+    }
+    scene["panel"] = {
+        "type": "obj",
+        "filename": str(_disk_obj(tmp_path / "panel.obj", 12, radius=0.4, height=2.0, x0=-2.0)),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3, 2, 2]}},
+    }
+    return mi.load_dict(scene)
+
+
+def test_unknown_emitter_sampling_names_the_parameter_and_the_values(llvm):
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    with pytest.raises(RuntimeError) as info:
+        mi.load_dict({"type": "symsphere_path", "emitter_sampling": "solid"})
+    last = str(info.value).strip().splitlines()[-1]
+    assert last.startswith("ValueError: ") and "'solid' is not a valid emitter_sampling" in last
+    assert "use one of {'area', 'solid_angle'}" in last
+
+
+def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path):
+    """MIS: for directions sampled at random shading points, the density the table gives the emitter hit
+    (selection probability x solid-angle density, at the previous vertex) equals the sampled one."""
+    mi = llvm
+    import drjit as dr
+
+    from symsphere._testing import mitsuba_lights as lights
+
+    for name in SCENES:
+        scene = _scene(mi, name, tmp_path)
+        table = lights.LightTable(scene)
+        rng = np.random.default_rng(5)
+        n = 4000
+        origin = mi.Point3f(*(rng.uniform(-1.2, 1.2, n) for _ in range(2)), rng.uniform(-1.2, 1.2, n))
+        origin.y = mi.Float(rng.uniform(0.05, 1.0, n))  # above the floor, below the lights
+        si = dr.zeros(mi.SurfaceInteraction3f, n)
+        si.p = origin
+        si.n = mi.Normal3f(0, 1, 0)
+        si.sh_frame = mi.Frame3f(si.n)
+        ds, weight, total = table.sample_direction(scene, si, mi.Point2f(rng.random(n), rng.random(n)), mi.Bool(True))
+        hit = scene.ray_intersect(mi.Ray3f(si.p, ds.d))  # from p itself: the points are on no surface
+        # (the Cornell box's light is coplanar with its ceiling: a traced ray may hit either)
+        lit = (dr.max(weight) > 0).numpy() & (hit.shape.emitter() != None).numpy()  # noqa: E711 - Dr.Jit
+        assert lit.sum() > n // 10, name
+        hit_ds = mi.DirectionSample3f(scene, si=hit, ref=si)
+        for cached in (None, total):  # evaluated at si.p here, or the normaliser sample_direction found there
+            pdf = table.pdf_direction(scene, si, hit, hit_ds, mi.Bool(True), cached).numpy()
+            np.testing.assert_allclose(pdf[lit], ds.pdf.numpy()[lit], rtol=2e-3, err_msg=name)
+
+
+@pytest.mark.statistical
+def test_the_density_integrates_to_one(llvm, tmp_path):
+    """The density of the table's directions over the sphere, by Monte Carlo with numpy's uniform directions
+    (the mesh-light scene: two emitters, one chosen by power, one exactly), is 1 at a point below them."""
+    mi = llvm
+    import drjit as dr
+
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = _scene(mi, "mesh_light", tmp_path, bare=True)
+    table = lights.LightTable(scene)
+    n = 400_000
+    g = np.random.default_rng(6).standard_normal((n, 3))
+    d = g / np.linalg.norm(g, axis=1, keepdims=True)
+    prev = dr.zeros(mi.SurfaceInteraction3f, n)
+    prev.p = mi.Point3f(0.1, 0.3, -0.2)
+    prev.n = mi.Normal3f(0, 1, 0)
+    hit = scene.ray_intersect(mi.Ray3f(prev.p, mi.Vector3f(d[:, 0], d[:, 1], d[:, 2])))
+    ds = mi.DirectionSample3f(scene, si=hit, ref=prev)
+    on_light = (hit.shape.emitter() != None).numpy()  # noqa: E711 - a Dr.Jit comparison
+    pdf = np.where(on_light, table.pdf_direction(scene, prev, hit, ds, mi.Bool(True)).numpy(), 0.0)
+    values = 4 * np.pi * pdf
+    z = (values.mean() - 1.0) / (values.std(ddof=1) / np.sqrt(n))
+    assert abs(z) < stats.norm.isf(ALPHA / 2), (values.mean(), z)
+
+
+def _renders(mi, scene, integrator):
+    return np.stack(
+        [np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=seed))[..., :3] for seed in range(SEEDS)]
+    )
+
+
+@pytest.mark.statistical
+@pytest.mark.parametrize("scene_name", SCENES)
+def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, tmp_path):
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    scene = _scene(mi, scene_name, tmp_path)
+    depth = {"max_depth": 6, "rr_depth": 3}
+    ref = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
+    integrator = mi.load_dict(
+        {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", **depth}
+    )
+    ours = _blocks(_renders(mi, scene, integrator))
+    assert np.all(np.isfinite(ours))
+    result = stats.ttest_ind(ours, ref, axis=0, equal_var=False)
+    assert np.min(result.pvalue) > _sidak(ALPHA, UNBIASED_TESTS), (np.min(result.pvalue), ours.mean(0), ref.mean(0))
+
+
+@pytest.mark.statistical
+@pytest.mark.parametrize("per_side", [1, 3, 19])  # 12 triangles (exact choice), 108 (groups), 4332 (by power)
+def test_emitting_box_furnace(llvm, tmp_path, per_side):
+    """Inside a closed box whose walls emit radiance 1 inward and reflect diffusely with albedo 1/2, the
+    radiance is 1 / (1 - 1/2) = 2 everywhere."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    T = mi.ScalarTransform4f
+    scene = mi.load_dict({
+        "type": "scene",
+        "sensor": {"type": "perspective", "fov": 60, "to_world": T().look_at(origin=[0.2, -0.3, 0.5], target=[-1, 0.2, -1], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"}}},
+        "box": {"type": "obj", "filename": str(_obj_box(tmp_path / "box.obj", per_side)),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}},
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1, 1, 1]}}},
+    })  # fmt: skip
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle",
+                               "max_depth": -1, "rr_depth": 5})  # fmt: skip
+    images = np.stack([np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=s))[..., :3] for s in range(4)])
+    values = images.mean(axis=-1).ravel()
+    z = (values.mean() - 2.0) / (values.std(ddof=1) / np.sqrt(values.size))
+    assert abs(z) < stats.norm.isf(_sidak(ALPHA, FURNACE_TESTS) / 2), (values.mean(), z)
+
+
+def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path):
+    """A mesh light with zero-area triangles and one seen edge-on: finite images, the same mean as Mitsuba's."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    path = tmp_path / "bad.obj"
+    path.write_text(
+        "v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\nv 0 1.5 0\n"
+        "f 1 3 2\nf 1 4 3\nf 1 1 2\nf 1 5 3\n"  # two faces down, a repeated vertex, a collinear one
+    )
+    scene = _scene_dict(mi, "textured")
+    del scene["light"], scene["sky"]
+    scene["light"] = {
+        "type": "obj",
+        "filename": str(path),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [5, 5, 5]}},
+    }
+    scene = mi.load_dict(scene)
+    integrator = mi.load_dict(
+        {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", "max_depth": 2}
+    )
+    image = np.array(mi.render(scene, integrator=integrator, spp=16, seed=1))
+    assert np.all(np.isfinite(image)) and image.mean() > 0
+
+
+def test_drjit_spherical_triangle_equals_numpy(llvm):
+    """The Dr.Jit form of Arvo's map (float64 inside the kernel, with sin(A' - alpha) and sin(A'/2 - alpha)
+    by the addition theorems) against the numpy one, on ordinary and adversarial triangles whose vertex
+    vectors are scaled by 2.5 (the Dr.Jit form normalises them itself).  Bound: 1e-9 in direction (measured <= 7e-10 on the 1e-7 sr slivers,
+    1e-14 on the rest; the vertices' differences are formed and normalised differently)."""
+    mi = llvm
+    from symsphere._testing import mitsuba_warps
+
+    rng = np.random.default_rng(12)
+    uv = rng.random((2000, 2))
+    triangles = [
+        [[0.1, -0.3, 0.95], [0.9, 0.4, -0.2], [-0.6, 0.7, 0.3]],
+        _sliver_vertices(1e-7),
+        _sliver_vertices(1e-5),
+        [[np.cos(p), np.sin(p), 3e-4] for p in (0.0, 2 * np.pi / 3, 4 * np.pi / 3)],
+        [[1, 0, 0], [-0.2, 1, 0], [-0.2, 1, 1e-6]],
+    ]
+    from symsphere.warps import square_to_spherical_triangle
+
+    for tri in triangles:
+        tri = np.array(tri, dtype=np.float64)
+        tri /= np.linalg.norm(tri, axis=1, keepdims=True)
+        scale = 2.5
+        corners = [mi.Vector3d(*(mi.Float64(np.full(len(uv), x * scale)) for x in v)) for v in tri]
+        d, area = mitsuba_warps.square_to_spherical_triangle((mi.Float64(uv[:, 0]), mi.Float64(uv[:, 1])), *corners)
+        got = np.stack([d.x.numpy(), d.y.numpy(), d.z.numpy()], axis=1)
+        assert np.all(np.isfinite(got)) and np.all(area.numpy() > 0)
+        np.testing.assert_allclose(got, square_to_spherical_triangle(uv, *tri), rtol=0, atol=1e-9)
+
+
+def _sliver_vertices(height):
+    a, b = np.array([1.0, 0.0, 0.2]), np.array([0.0, 1.0, 0.2])
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    m = (a + b) / 2 + height * np.array([0.0, 0.0, 1.0])
+    return [a, b, m / np.linalg.norm(m)]
+
+
+def test_a_scene_without_rectangle_or_mesh_lights_renders_as_with_area(llvm):
+    """Sphere lights and a sky only: no light table, Mitsuba samples every emitter; the same image, bit for bit."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    scene = _scene_dict(mi, "textured")
+    del scene["light"]
+    lamp = {"type": "area", "radiance": {"type": "rgb", "value": [20, 20, 20]}}
+    scene["lamp"] = {"type": "sphere", "center": [0.5, 2.5, 0.5], "radius": 0.2, "emitter": lamp}
+    scene = mi.load_dict(scene)
+    images = [
+        np.array(mi.render(scene, integrator=mi.load_dict({"type": "symsphere_path", "strategy": "bsdf",
+                 "emitter_sampling": sampling, "max_depth": 4}), spp=8, seed=3))
+        for sampling in ("area", "solid_angle")
+    ]  # fmt: skip
+    np.testing.assert_array_equal(images[0], images[1])
