@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING
 
 from .integration import IntegrationResult, integrate
 from .points import POINT_SETS
-from .sampling import hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
+from .sampling import Scheme, hemisphere_pdf, iter_hemisphere, iter_sphere, sample_hemisphere, sample_sphere, sphere_pdf
 from .symmetry import HEMISPHERE_MAPS, SPHERE_MAPS, fold, orbit
 from .warps import (
     METHODS,
@@ -94,6 +94,7 @@ __all__ = [
     "warps",
     "fold",
     "IntegrationResult",
+    "Scheme",
     "hemisphere_pdf",
     "hemisphere_to_square",
     "integrate",

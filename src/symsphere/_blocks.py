@@ -19,16 +19,16 @@ from typing import Any
 import numpy as np
 
 from . import frames
-from ._kernels import fill_orbits, fill_random_orbits
+from ._kernels import Plan, fill
 from ._splitmix import GOLDEN, mix64_int
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_dtype
 from .points import BasePoints
-from .symmetry import orbit
+from .symmetry import orbit, orbit_size
 from .warps import triangle_warp
 
 __all__ = [
-    "CUT_ORBIT_KEY", "prepare", "fill_range", "fill_rows", "cut_offset",
+    "CUT_ORBIT_KEY", "base_points", "prepare", "fill_range", "fill_rows", "cut_offset",
     "reference_orbits",
     "warn_at_caller",
 ]  # fmt: skip
@@ -60,13 +60,20 @@ def prepare(
     n = check_count(n, name, multiple=1 if any_size else count)
     dtype = check_dtype(dtype)
     triangle_warp(method)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        source = BasePoints(points, rng, -(-n // count), per_point=count, n=n)
-    for warning in caught:
-        warn_at_caller(str(warning.message), warning.category)
+    source = base_points(points, rng, -(-n // count), count, n)
     basis = None if normal is None else frames.frame(normal)
     return n, dtype, method, source, basis
+
+
+def base_points(points: PointsLike, rng: RNGLike, total: int, count: int, n: int | None = None) -> BasePoints:
+    """``BasePoints(points, rng, total, per_point=count, n=n)``, its warnings (scipy's Sobol' balance
+    warning) attributed to the user's line that called into symsphere, not to a line of the package."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        source = BasePoints(points, rng, total, per_point=count, n=n)
+    for warning in caught:
+        warn_at_caller(str(warning.message), warning.category)
+    return source
 
 
 def fill_range(
@@ -111,13 +118,7 @@ def _fill(
     offset: int,
 ) -> FloatArray:
     """One kernel call: the orbits of points ``start ... stop - 1``, the last one cut to *out*'s rows."""
-    # about a normal the kernel keeps every row on or above its plane (_kernels._keep_above)
-    if source.kind == "random":  # the kernel draws the points itself, in parallel
-        assert source.seed_words is not None  # random sources always have the stream's seed
-        return fill_random_orbits(
-            source.seed_words, start, stop - start, method, count, basis, out, offset=offset, above=True
-        )
-    return fill_orbits(source.take(start, stop), method, count, basis, out, offset=offset, above=True)
+    return fill(Plan(source, method, count, basis), start, stop, out, offset)
 
 
 _MASK = (1 << 64) - 1
@@ -150,7 +151,7 @@ def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
 
 def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:
     """The numpy path (map, orbit, frame): what the kernels must reproduce."""
-    directions = orbit(triangle_warp(method).points(uv), "sphere" if count == 48 else "hemisphere")
+    directions = orbit(triangle_warp(method).points(uv), "sphere" if count == orbit_size("sphere") else "hemisphere")
     if basis is not None:
         directions = frames.to_world(directions, basis)
     return directions.reshape(-1, 3)

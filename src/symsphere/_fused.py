@@ -55,6 +55,7 @@ import numpy as np
 from numba import get_num_threads, njit
 from numba.extending import is_jitted
 
+from ._constants import HEMISPHERE_AREA, SPHERE_AREA
 from ._integrand_kernels import no_chain
 from ._integrand_kernels import value as spec_value
 from ._kernels import (
@@ -72,6 +73,9 @@ from ._numba_cache import invalidate_if_changed
 from ._threads import run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
+from .symmetry import orbit_size
+
+_SPHERE_ORBIT = orbit_size("sphere")  # a global: numba freezes it as a constant
 
 __all__ = [
     "CHUNK",
@@ -193,7 +197,7 @@ def _chunk_kernel(kind, params, chain, code, vector, cache):
         # f: the integrand for kind _ARGUMENT, else an unused zero.
         start = pcg64_seeded(seed_words)
         images = weights.shape[1] // 3
-        area = 4.0 * np.pi if count == 48 else 2.0 * np.pi
+        area = SPHERE_AREA if count == _SPHERE_ORBIT else HEMISPHERE_AREA
         for c in range(c_lo, c_hi):
             lo = c * CHUNK
             hi = min(m, lo + CHUNK)

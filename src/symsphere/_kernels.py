@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import Any, cast
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -34,13 +35,19 @@ from llvmlite import ir
 from numba import get_num_threads, njit, types
 from numba.extending import intrinsic, register_jitable
 
+from ._constants import TWO_POW_M53
 from ._numba_cache import invalidate_if_changed
 from ._threads import run_kernel, start_threads
-from ._typing import Float64Array, FloatArray
-from .symmetry import SIGNS, SOURCES
+from ._typing import Float64Array, FloatArray, MapMethod
+from .symmetry import SIGNS, SOURCES, orbit_size
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
+if TYPE_CHECKING:
+    from .points import BasePoints
+
 __all__ = [
+    "Plan",
+    "fill",
     "BATCH",
     "METHOD_CODES",
     "map_batch",
@@ -163,7 +170,7 @@ def pcg64_random(stream):
     mixed = hi ^ lo
     rotation = hi >> _U58
     bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
-    return np.float64(bits >> _U11) * (1.0 / 9007199254740992.0)  # numpy's next_double: 53 bits
+    return np.float64(bits >> _U11) * TWO_POW_M53  # numpy's next_double: 53 bits
 
 
 @register_jitable
@@ -236,6 +243,7 @@ def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) ->
 # longer wait for the next point's dependent chain of square roots and divisions.
 _BATCH = 16
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
+_SPHERE_ORBIT, _HEMISPHERE_ORBIT = orbit_size("sphere"), orbit_size("hemisphere")
 
 
 @njit(inline="always")
@@ -288,7 +296,7 @@ def _store_orbit(x, y, z, row, count):
     _store_columns(row, 36, z, x, y)
     _store_columns(row, 48, x, z, y)
     _store_columns(row, 60, y, z, x)
-    if count == 48:
+    if count == _SPHERE_ORBIT:
         _store_columns(row, 72, x, y, -z)
         _store_columns(row, 84, y, x, -z)
         _store_columns(row, 96, z, y, -x)
@@ -453,9 +461,9 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], 48)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _SPHERE_ORBIT)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], 24)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _HEMISPHERE_ORBIT)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
@@ -466,9 +474,9 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 48)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _SPHERE_ORBIT)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 24)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _HEMISPHERE_ORBIT)
                 else:
                     _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
@@ -491,15 +499,20 @@ def _prepare_kernels():
 
 
 def _run(source, method, count, basis, out, m, parts, part_input, offset, above):
-    """Run the case's kernel over the parts of m points, on the threads of symsphere._threads.
-
-    *part_input(lo)* is the kernel's *points* argument for the part starting at point lo.
-    """
+    """Run the case's kernel over the parts of m points (the entry of :func:`fill_orbits` and
+    :func:`fill_random_orbits`, which take the run's facts one by one instead of a :class:`Plan`)."""
     _prepare_kernels()
     kind, weights = _store_kind(count, basis)
     normal = np.ascontiguousarray(basis[2], dtype=np.float64) if above and kind == _HEMISPHERE_ROTATED else _NO_NORMAL
+    _launch(_fill_kernel(source, METHOD_CODES[method], kind), weights, normal, count, out, m, parts, part_input, offset)
+
+
+def _launch(kernel, weights, normal, count, out, m, parts, part_input, offset):
+    """Run *kernel* over the parts of m points, on the threads of symsphere._threads.
+
+    *part_input(lo)* is the kernel's *points* argument for the part starting at point lo.
+    """
     rows, tail = _split(out, count)
-    kernel = _fill_kernel(source, METHOD_CODES[method], kind)
     parts = part_count(m, parts or _default_parts(m))
 
     def arguments(index):
@@ -507,6 +520,63 @@ def _run(source, method, count, basis, out, m, parts, part_input, offset, above)
         return part_input(lo), lo, hi, weights, normal, rows, tail, offset
 
     run_kernel(kernel, arguments, parts)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A run fixed before any work starts: what every kernel call of it needs, built once.
+
+    *source* gives the base points (its ``kind`` says whether the kernel draws them itself:
+    ``'random'``), *method* the map onto T0, *count* the orbit size
+    (:func:`symsphere.symmetry.orbit_size`), *basis* the frame of the normal or None; the store
+    kind, the image weights and the normal the rows are kept above follow from them.
+    """
+
+    source: BasePoints
+    method: MapMethod
+    count: int
+    basis: Float64Array | None = None
+    kind: int = field(init=False, repr=False, compare=False)
+    weights: Float64Array = field(init=False, repr=False, compare=False)
+    normal: Float64Array = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        kind, weights = _store_kind(self.count, self.basis)
+        basis = self.basis
+        normal = _NO_NORMAL if basis is None else np.ascontiguousarray(basis[2], dtype=np.float64)
+        object.__setattr__(self, "kind", kind)
+        object.__setattr__(self, "weights", weights)
+        object.__setattr__(self, "normal", normal)
+
+
+def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, parts: int = 0) -> FloatArray:
+    """Write the orbits of base points ``start ... stop - 1`` of *plan* into *out*: one kernel call.
+
+    As :func:`fill_orbits` with ``above=True``: if *out* has fewer rows than
+    ``(stop - start) * count``, the last orbit is cut to its members ``(offset + i) % count``.
+    Random points are drawn inside the kernel (point i: draws 2i, 2i + 1 of the source's PCG64
+    stream); other sources' points are taken from *plan.source*.
+    """
+    _prepare_kernels()
+    source = plan.source
+    part_input: Callable[[int], npt.NDArray[Any]]
+    if source.kind == "random":
+        seed_words = source.seed_words
+        assert seed_words is not None  # random sources always have the stream's seed
+
+        def part_input(lo: int) -> npt.NDArray[Any]:
+            return pcg64_state(seed_words, 2 * (start + lo))
+
+        kernel = _fill_kernel(_RANDOM, METHOD_CODES[plan.method], plan.kind)
+    else:
+        uv = np.ascontiguousarray(source.take(start, stop), dtype=np.float64)
+
+        def part_input(lo: int) -> npt.NDArray[Any]:
+            return uv
+
+        kernel = _fill_kernel(_GIVEN, METHOD_CODES[plan.method], plan.kind)
+    _launch(kernel, plan.weights, plan.normal, plan.count, out, stop - start, parts, part_input, offset)
+    return out
 
 
 def fill_orbits(
@@ -597,5 +667,5 @@ _NO_NORMAL = np.zeros(0)
 def _store_kind(count, basis):
     """(kind of store, the image weights: none without a frame)."""
     if basis is None:
-        return (_SPHERE if count == 48 else _HEMISPHERE), _NO_WEIGHTS
+        return (_SPHERE if count == _SPHERE_ORBIT else _HEMISPHERE), _NO_WEIGHTS
     return _HEMISPHERE_ROTATED, _rotated_weights(np.ascontiguousarray(basis, dtype=np.float64), count)

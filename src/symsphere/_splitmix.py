@@ -14,9 +14,11 @@ from __future__ import annotations
 import numpy as np
 from numba.extending import register_jitable
 
+from ._constants import GOLDEN_BITS
+
 __all__ = ["GOLDEN", "MIX1", "MIX2", "ODD", "mix64", "mix64_int"]
 
-GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+GOLDEN = np.uint64(GOLDEN_BITS)
 MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 MIX2 = np.uint64(0x94D049BB133111EB)
 ODD = np.uint64(0xD6E8FEB86659FD93)

@@ -41,6 +41,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from ._constants import HEMISPHERE_AREA, SPHERE_AREA
 from ._integrand_kernels import CAP, EXP, PHONG, POLYGON_LIGHT, POLYNOMIAL, SPHERE_LIGHT, Z, integrand_kernel
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
 from ._validation import (
@@ -70,7 +71,7 @@ __all__ = [
 ]
 
 _DOMAINS: tuple[Domain, ...] = ("sphere", "hemisphere")
-_AREA = {"sphere": 4.0 * math.pi, "hemisphere": 2.0 * math.pi}
+_AREA = {"sphere": SPHERE_AREA, "hemisphere": HEMISPHERE_AREA}
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,23 +17,43 @@ rows is the image of a uniform base point under a symmetry chosen uniformly, so 
 an unbiased estimate of its mean over the sphere.  For random base points the
 whole orbits are the rows of ``sample_sphere(48 * (n // 48))`` with the same
 seed; multiples of 48 take exactly the path they always took.
+
+The engine: :class:`Scheme` holds the arguments, checked once, and a position in the stream of base
+points (``random``, ``reset``, ``fast_forward``, ``blocks``, ``pdf``), as scipy's ``QMCEngine``; each
+function below is one call on a fresh :class:`Scheme`.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from . import _blocks, frames
-from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
-from ._validation import check_count, check_normal, check_out, check_unit_directions
+from . import _blocks, _kernels, frames
+from ._typing import Domain, DTypeLike, FloatArray, MapMethod, PointsLike, RNGLike
+from ._validation import (
+    check_choice,
+    check_count,
+    check_dtype,
+    check_normal,
+    check_out,
+    check_rng,
+    check_unit_directions,
+)
+from .points import check_points
+from .symmetry import DOMAINS, orbit_size
+from .warps import triangle_warp
 from .warps._scheme import scheme_pdf
 
-__all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
+__all__ = [
+    "Scheme", "sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf",
+    "hemisphere_pdf",
+]  # fmt: skip
 
-DEFAULT_CHUNK = 48 * 2**16
+DEFAULT_CHUNK = orbit_size("sphere") * 2**16
 """Directions per block of :func:`iter_sphere` (3 145 728: 75 MB in float64)."""
 
 
@@ -87,7 +107,7 @@ def sample_sphere(
     >>> e.shape, bool(np.array_equal(e[:96], d))
     ((100, 3), True)
     """
-    return _sample(n, 48, None, method, points, rng, dtype, out)
+    return Scheme("sphere", method=method, points=points, dtype=dtype, rng=rng).random(n, out=out)
 
 
 def sample_hemisphere(
@@ -129,8 +149,7 @@ def sample_hemisphere(
     >>> sample_hemisphere(7, rng=2).shape              # any n
     (7, 3)
     """
-    normal = check_normal(normal)
-    return _sample(n, 24, normal, method, points, rng, dtype, out)
+    return Scheme("hemisphere", method=method, points=points, normal=normal, dtype=dtype, rng=rng).random(n, out=out)
 
 
 def iter_sphere(
@@ -175,7 +194,7 @@ def iter_sphere(
     >>> bool(np.array_equal(np.concatenate(blocks), sample_sphere(48 * 1000, rng=5)))
     True
     """
-    return _iterate(n_total, chunk, 48, None, method, points, rng, dtype, out)
+    return Scheme("sphere", method=method, points=points, dtype=dtype, rng=rng).blocks(n_total, chunk, out=out)
 
 
 def iter_hemisphere(
@@ -217,8 +236,8 @@ def iter_hemisphere(
     >>> bool(np.array_equal(np.concatenate(list(blocks)), sample_hemisphere(2400, normal=[1, 0, 0], rng=5)))
     True
     """
-    normal = check_normal(normal)
-    return _iterate(n_total, chunk, 24, normal, method, points, rng, dtype, out)
+    scheme = Scheme("hemisphere", method=method, points=points, normal=normal, dtype=dtype, rng=rng)
+    return scheme.blocks(n_total, chunk, out=out)
 
 
 def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -248,8 +267,7 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     >>> float(sphere_pdf([0.0, 0.6, -0.8])) * 4 * 3.141592653589793
     1.0
     """
-    d = check_unit_directions(d, "d")
-    return scheme_pdf(d.astype(np.float64), method, 48, d.dtype)
+    return Scheme("sphere", method=method, rng=0).pdf(d)
 
 
 def hemisphere_pdf(
@@ -283,62 +301,238 @@ def hemisphere_pdf(
     >>> hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * 3.141592653589793
     array([1., 0.])
     """
-    d = check_unit_directions(d, "d")
-    normal = check_normal(normal)
-    local: FloatArray = d.astype(np.float64)
-    if normal is not None:
-        local = frames.to_local(local, frames.frame(normal))
-    return scheme_pdf(local, method, 24, d.dtype)
+    return Scheme("hemisphere", method=method, normal=normal, rng=0).pdf(d)
 
 
-# --- private ------------------------------------------------------------------
+class Scheme:
+    """The symmetric sampling scheme as an engine: arguments checked once, a stream drawn on demand.
 
+    As ``scipy.stats.qmc.QMCEngine``: the engine holds a position in its stream of base points of
+    T0; :meth:`random` returns the orbits of the next ones and moves on, :meth:`reset` goes back to
+    the start, :meth:`fast_forward` skips.  :func:`sample_sphere`, :func:`sample_hemisphere`,
+    :func:`iter_sphere`, :func:`iter_hemisphere`, :func:`sphere_pdf` and :func:`hemisphere_pdf` are
+    one call on a fresh engine each, with the same output bit for bit.
 
-def _sample(
-    n: int,
-    count: int,
-    normal: Float64Array | None,
-    method: MapMethod,
-    points: PointsLike,
-    rng: RNGLike,
-    dtype: DTypeLike,
-    out: FloatArray | None,
-) -> FloatArray:
-    n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype, any_size=True)
-    if out is None:
-        out = np.empty((n, 3), dtype=dtype)
-    else:
-        check_out(out, (n, 3), dtype)
-    return _blocks.fill_rows(source, 0, method, count, basis, out)
+    Parameters
+    ----------
+    domain : {'hemisphere', 'sphere'}
+        The sphere (orbits of :func:`symsphere.symmetry.orbit_size` = 48 directions) or the
+        hemisphere (24).
+    method : {'equal_area', 'paper1', 'paper2'}
+        Map from the unit square onto T0, as in :func:`sample_sphere`.
+    points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
+or scipy.stats.qmc.QMCEngine
+        The base points.  ``'stratified'`` is one grid of the size of a call: its engine draws
+        once (then :meth:`reset`); the others are streams.
+    normal : array_like of 3 floats, optional
+        Pole of the hemisphere (``domain='hemisphere'`` only; default (0, 0, 1)).
+    dtype : {numpy.float64, numpy.float32}
+        Of the directions :meth:`random` returns.
+    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Seeds the stream, once, here: a Generator advances now, by the same draw whatever the
+        engine later produces.
 
+    Attributes
+    ----------
+    domain : {'hemisphere', 'sphere'}
+    orbit_size : int
+        48 or 24: directions per base point.
+    method : str
+    points : str or scipy.stats.qmc.QMCEngine
+    normal : ndarray of 3 floats or None
+        The unit normal (normalised from the argument).
+    dtype : numpy.dtype
 
-def _iterate(
-    n_total: int,
-    chunk: int,
-    count: int,
-    normal: Float64Array | None,
-    method: MapMethod,
-    points: PointsLike,
-    rng: RNGLike,
-    dtype: DTypeLike,
-    out: FloatArray | None,
-) -> Iterator[FloatArray]:
-    # Validate now, not at the first next(): a generator function would defer the errors.
-    n_total, dtype, method, source, basis = _blocks.prepare(
-        n_total, count, normal, method, points, rng, dtype, name="n_total"
-    )
-    per_chunk = check_count(chunk, "chunk", multiple=count) // count
-    total = n_total // count
-    if out is not None:
-        check_out(out, (n_total, 3), dtype)
+    Notes
+    -----
+    The stream is one of base points: ``random(n)`` takes ``ceil(n / orbit_size)`` of them.  If
+    *n* is a multiple of the orbit size they are all whole orbits, so ``random(a)`` then
+    ``random(b)`` equals ``random(a + b)`` bit for bit whenever *a* is a multiple of the orbit size
+    (any *b*).  Otherwise the last orbit of ``random(a)`` is cut to ``a % orbit_size`` random members
+    (each uniform) and its base point is used up: the next call starts at the next orbit.
+    :meth:`fast_forward` therefore counts whole orbits: *n* a multiple of the orbit size.
 
-    def blocks() -> Iterator[FloatArray]:
-        for start in range(0, total, per_chunk):
-            stop = min(start + per_chunk, total)
-            if out is None:
-                block = np.empty(((stop - start) * count, 3), dtype=dtype)
-            else:
-                block = out[start * count : stop * count]
-            yield _blocks.fill_range(source, start, stop, method, count, basis, block)
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere import Scheme, sample_sphere
+    >>> scheme = Scheme("sphere", rng=7)
+    >>> a = scheme.random(96)
+    >>> b = scheme.random(100)                   # continues the stream
+    >>> bool(np.array_equal(np.concatenate([a, b]), sample_sphere(196, rng=7)))
+    True
+    >>> _ = scheme.reset().fast_forward(96)       # back to the start, skip two orbits
+    >>> bool(np.array_equal(scheme.random(100), b))
+    True
+    >>> h = Scheme("hemisphere", normal=[0, 1, 0], dtype=np.float32, rng=1)
+    >>> d = h.random(24)
+    >>> d.dtype, bool(np.all(d[:, 1] >= 0))
+    (dtype('float32'), True)
+    >>> float(h.pdf([0.0, 1.0, 0.0]) * 2 * np.pi)
+    1.0
+    """
 
-    return blocks()
+    def __init__(
+        self,
+        domain: Domain = "sphere",
+        *,
+        method: MapMethod = "equal_area",
+        points: PointsLike = "random",
+        normal: npt.ArrayLike | None = None,
+        dtype: DTypeLike = np.float64,
+        rng: RNGLike = None,
+    ) -> None:
+        self.domain: Domain = check_choice(domain, "domain", sorted(DOMAINS))
+        self.orbit_size = orbit_size(self.domain)
+        self.normal = check_normal(normal)
+        if self.normal is not None and self.domain != "hemisphere":
+            raise ValueError("'normal' is for domain='hemisphere' only; leave it None for the sphere")
+        self.dtype: np.dtype[Any] = check_dtype(dtype)
+        triangle_warp(method)  # raises for an unknown map, naming the choices
+        self.method: MapMethod = method
+        engine = check_points(points)
+        self.points: PointsLike = points
+        self._basis = None if self.normal is None else frames.frame(self.normal)
+        # An engine of the user's is drawn from by position: each call puts it back where it was.
+        self._engine_start = 0 if engine is None else engine.num_generated
+        generator = check_rng(rng)
+        if isinstance(rng, (np.random.Generator, np.random.BitGenerator)):
+            # The user's: keep its state for the sources, and advance it once by the draw a source makes.
+            self._seed = copy.deepcopy(generator)
+            generator.integers(0, 2**63, size=4, dtype=np.int64)
+        else:
+            self._seed = generator
+        self._random_plan: _kernels.Plan | None = None
+        self._position = 0
+
+    def random(self, n: int, out: FloatArray | None = None) -> FloatArray:
+        """The next *n* directions of the stream, shape (n, 3), as :func:`sample_sphere` orders them.
+
+        Parameters
+        ----------
+        n : int
+            Any positive number: ``n // orbit_size`` whole orbits, then ``n % orbit_size`` members of
+            one more (see the class's Notes).
+        out : ndarray, optional
+            Output array of shape (n, 3) and the engine's dtype, C-contiguous (as
+            ``numpy.random.Generator.random``).
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            *out* if given.
+        """
+        n = check_count(n, "n")
+        count = self.orbit_size
+        m = -(-n // count)
+        plan = self._plan(self._position + m, n)
+        if out is None:
+            out = np.empty((n, 3), dtype=self.dtype)
+        else:
+            check_out(out, (n, 3), self.dtype)
+        start = self._position
+        whole, rest = divmod(n, count)
+        offset = _blocks.cut_offset(plan.source, start + whole, count) if rest else 0
+        _kernels.fill(plan, start, start + m, out, offset)
+        self._position += m
+        return out
+
+    def blocks(self, n_total: int, chunk: int | None = None, *, out: FloatArray | None = None) -> Iterator[FloatArray]:
+        """The next *n_total* directions in blocks of *chunk* (as :func:`iter_sphere`).
+
+        Parameters
+        ----------
+        n_total : int
+            A positive multiple of the orbit size.
+        chunk : int, optional
+            Directions per block, a multiple of the orbit size (default ``orbit_size * 2**16``); the
+            last block may be shorter.
+        out : ndarray, optional
+            An (n_total, 3) array of the engine's dtype (a ``numpy.memmap`` too), filled block by block.
+
+        Returns
+        -------
+        iterator of ndarray, shape (m, 3)
+            Concatenated, the blocks equal ``random(n_total)`` at the same position.  The arguments
+            are checked, and the stream moved past the *n_total* directions, at the call.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from symsphere import Scheme
+        >>> blocks = Scheme("hemisphere", rng=3).blocks(24 * 10, chunk=24 * 4)
+        >>> [len(b) for b in blocks]
+        [96, 96, 48]
+        """
+        count = self.orbit_size
+        n_total = check_count(n_total, "n_total", multiple=count)
+        total = n_total // count
+        plan = self._plan(self._position + total, n_total)
+        per_chunk = check_count(count * 2**16 if chunk is None else chunk, "chunk", multiple=count) // count
+        if out is not None:
+            check_out(out, (n_total, 3), self.dtype)
+        first = self._position
+        self._position += total
+
+        def blocks() -> Iterator[FloatArray]:
+            for start in range(0, total, per_chunk):
+                stop = min(start + per_chunk, total)
+                if out is None:
+                    block = np.empty(((stop - start) * count, 3), dtype=self.dtype)
+                else:
+                    block = out[start * count : stop * count]
+                yield _kernels.fill(plan, first + start, first + stop, block)
+
+        return blocks()
+
+    def reset(self) -> Scheme:
+        """Go back to the start of the stream; returns the engine."""
+        self._position = 0
+        return self
+
+    def fast_forward(self, n: int) -> Scheme:
+        """Skip the next *n* directions (a multiple of the orbit size: whole orbits); returns the engine."""
+        if isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n == 0:
+            return self
+        n = check_count(n, "n", multiple=self.orbit_size)
+        if self.points == "stratified":
+            raise ValueError("points='stratified' is one grid of the size of a call; it cannot be fast-forwarded")
+        self._position += n // self.orbit_size
+        return self
+
+    def pdf(self, d: npt.ArrayLike) -> FloatArray:
+        """Density (solid angle) of the directions *d* (shape (..., 3)): :func:`sphere_pdf` /
+        :func:`hemisphere_pdf` of the engine's map and normal, in *d*'s dtype."""
+        d = check_unit_directions(d, "d")
+        local: FloatArray = d.astype(np.float64)
+        if self._basis is not None:
+            local = frames.to_local(local, self._basis)
+        return scheme_pdf(local, self.method, self.orbit_size, d.dtype)
+
+    def __repr__(self) -> str:
+        normal = "" if self.normal is None else f", normal={self.normal.tolist()}"
+        return (
+            f"Scheme({self.domain!r}, method={self.method!r}, points={self.points!r}{normal}, "
+            f"dtype={self.dtype.name}, position={self._position})"
+        )
+
+    def _plan(self, total: int, n: int) -> _kernels.Plan:
+        """The plan of a call that ends at base point *total* (its caller's count is *n*)."""
+        if isinstance(self.points, str) and self.points == "random":
+            # One stream, however long: its source does not depend on the run's size.
+            if self._random_plan is None:
+                source = _blocks.base_points("random", self._seed, 1, self.orbit_size)
+                self._random_plan = _kernels.Plan(source, self.method, self.orbit_size, self._basis)
+            return self._random_plan
+        if isinstance(self.points, str) and self.points == "stratified" and self._position:
+            raise ValueError("points='stratified' is one grid of the size of a call; call reset() before drawing again")
+        engine = check_points(self.points)
+        if engine is not None and engine.num_generated != self._engine_start:
+            engine.reset()
+            if self._engine_start:  # scipy's Sobol.fast_forward(0) raises
+                engine.fast_forward(self._engine_start)
+        # The caller's n quoted in errors of a first draw; later ones are phrased in the stream's total.
+        source = _blocks.base_points(
+            self.points, copy.deepcopy(self._seed), total, self.orbit_size, None if self._position else n
+        )
+        return _kernels.Plan(source, self.method, self.orbit_size, self._basis)

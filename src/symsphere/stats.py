@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy import stats as _scipy_stats
 
+from ._constants import INV_2PI, INV_4PI, T0_DENSITY
 from ._typing import ChiDomain, Density, Float64Array, FloatArray, IntArray, RNGLike
 from ._validation import (
     MAX_QUADRATURE_ORDER,
@@ -393,7 +394,7 @@ def uniform_pdf(domain: ChiDomain = "sphere") -> Callable[[npt.ArrayLike], Float
     """
     domain = check_choice(domain, "domain", _DOMAINS)
     if domain == "sphere":
-        value = 1.0 / (4.0 * math.pi)
+        value = INV_4PI
 
         def uniform_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
             d = check_directions(d, "d")
@@ -401,7 +402,7 @@ def uniform_pdf(domain: ChiDomain = "sphere") -> Callable[[npt.ArrayLike], Float
 
         return uniform_sphere_pdf
     if domain == "hemisphere":
-        value = 1.0 / (2.0 * math.pi)
+        value = INV_2PI
 
         def uniform_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
             d = check_directions(d, "d")
@@ -409,7 +410,7 @@ def uniform_pdf(domain: ChiDomain = "sphere") -> Callable[[npt.ArrayLike], Float
 
         return uniform_hemisphere_pdf
 
-    value = 12.0 / math.pi
+    value = T0_DENSITY
 
     def uniform_triangle_pdf(d: npt.ArrayLike) -> Float64Array:
         d = check_directions(d, "d")

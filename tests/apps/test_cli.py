@@ -11,7 +11,7 @@ import pytest
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
-from symsphere._testing import blocks
+from symsphere._testing import kernels
 from symsphere.apps.cli import main
 
 
@@ -123,7 +123,7 @@ def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monk
     out = tmp_path / "d.npy"
     out.write_bytes(b"previous run")
     calls = []
-    original = blocks.fill_range
+    original = kernels.fill  # the one kernel entry of every sampling call
 
     def interrupted_on_third_chunk(*args):
         calls.append(1)
@@ -131,7 +131,7 @@ def test_interrupted_command_leaves_no_file_and_keeps_the_old_one(tmp_path, monk
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(blocks, "fill_range", interrupted_on_third_chunk)
+    monkeypatch.setattr(kernels, "fill", interrupted_on_third_chunk)
     assert main(["sample", "--n", "960", "--chunk", "96", "--seed", "1", "--out", str(out)]) == 130
     assert len(calls) == 3
     assert "interrupted" in capsys.readouterr().err
