@@ -378,13 +378,6 @@ class _PathMethods:
             key, s = self._lanes(sampler, dr.width(ray))
             table = self._lambertian_table(scene)
         lights = _lights.build(scene, self.emitter_sampling)
-        if lights is not None and not primal:
-            # the light table's emitter weights lose their derivative (measured: an emitter radiance's
-            # gradient from next-event estimation came out 1e-4 of prb's); refused rather than wrong
-            _fail(
-                "emitter_sampling='solid_angle' renders primal images only; for gradients use "
-                "emitter_sampling='area' (the default)"
-            )
         light_total: Any = mi.Float64(0.0) if lights is not None else None  # the choice's normaliser at prev_si
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time

@@ -393,20 +393,22 @@ class LightTable:
             ds_o, w_o = emitter.sample_direction(si, mi.Point2f(u_other, sample.y), other)
             other &= ds_o.pdf != 0.0
             visible = ~scene.ray_test(si.spawn_ray_to(ds_o.p), other)
-            ds_o.pdf *= self.p_other * self._other.eval_pmf_normalized(index, other)
+            # an occluded sample has density 0, as the table's own: a differential mode re-attaches the
+            # emitter's derivative wherever the density is not 0
+            ds_o.pdf = dr.select(visible, ds_o.pdf * self.p_other * self._other.eval_pmf_normalized(index, other), 0.0)
             w_o = dr.select(other & visible, w_o / (self.p_other * self._other.eval_pmf_normalized(index, other)), 0.0)
             ds = dr.select(other, ds_o, ds)
             weight = dr.select(other, w_o, weight)
         total = mi.Float64(0.0)
         if self.count:
-            d, pdf, value, total = self._sample_table(scene, si, u / self.p_table, sample.y, ours)
-            ds.d = dr.select(ours, d, ds.d)
-            ds.pdf = dr.select(ours, pdf, ds.pdf)
-            ds.delta = dr.select(ours, False, ds.delta)
+            ds_table, value, total = self._sample_table(scene, si, u / self.p_table, sample.y, ours)
+            # the whole sample (point, normal, uv, emitter), so that the emitter can be evaluated at it
+            # again (a differential mode re-attaches the radiance's derivative that way)
+            ds = dr.select(ours, ds_table, ds)
             weight = dr.select(ours, value, weight)
         return ds, weight, total
 
-    def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any, Any]:
+    def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any]:
         p = mi.Vector3d(si.p)
         row, probability, u_map, total = self._choose(mi.Vector3f(si.p), mi.Float64(u), active)
         active &= probability > 0.0
@@ -444,7 +446,9 @@ class LightTable:
         radiance: Any = ds.emitter.eval_direction(si, ds, active)
         pdf_f = mi.Float(pdf)
         value = dr.select(active & (pdf_f > 0.0), radiance / dr.select(pdf_f > 0.0, pdf_f, 1.0), 0.0)
-        return d, dr.select(active, pdf_f, 0.0), value, total
+        ds.pdf = dr.select(active, pdf_f, 0.0)
+        ds.delta = mi.Bool(False)
+        return ds, value, total
 
     # --- the density of a hit (MIS) ----------------------------------------------------------------
 
