@@ -19,7 +19,7 @@ independent; the independent units are:
 A compiled ``f`` (a numba ``@njit`` function of one direction, ``f(x, y, z)`` or ``f(w)``
 with w of shape (3,), or an integrand of :mod:`symsphere.integrands`) is evaluated inside
 the parallel kernel: directions are never stored, orbit sums stay in registers.  Same
-estimator, same error bar (to rounding); see ``docs/integration.md``.
+estimator, same error bar (to rounding); see ``docs/explanation/fused-integration.md``.
 
 To a tolerance (``atol=``, ``rtol=``, ``n_max=``, scipy's names): n doubles (``'stratified'``:
 quadruples, the grid's side doubles; ``'random'``: jumps by the power of 2 that the n**-0.5
