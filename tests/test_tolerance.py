@@ -132,7 +132,8 @@ def test_cli_rtol(capsys):
     [
         ([], "--n is required unless --rtol or --atol is given"),
         (["--n", "480", "--n-max", "960"], "--n-max is only valid with --rtol or --atol"),
-        (["--rtol", "-1"], "'rtol' must be >= 0"),
+        (["--rtol", "-1"], "'--rtol' must be >= 0"),
+        (["--rtol", "1e-300"], "'--rtol'=1e-300 is below what float64 resolves"),
     ],
 )
 def test_cli_tolerance_errors(capsys, argv, message):

@@ -78,6 +78,8 @@ __all__ = [
     "Compiled",
     "compiled_integrand",
     "fused_partials",
+    "NonFiniteBlock",
+    "vectorised",
     "call_xyz",
     "call_vector",
     "specialised_kernels",
@@ -142,6 +144,34 @@ def compiled_integrand(f: object) -> Compiled | None:
     if not isinstance(value, (float, int, np.floating, np.integer)) or isinstance(value, (bool, np.bool_)):
         raise TypeError(f"a compiled 'f' must return one real number, got {type(value).__name__}")
     return kernel, (call_xyz if arity == 3 else call_vector), None
+
+
+class NonFiniteBlock(ValueError):
+    """A block's statistics are not finite; *block* says which (the numpy path then finds the direction)."""
+
+    def __init__(self, message: str, block: int) -> None:
+        super().__init__(message)
+        self.block = block
+
+
+def vectorised(compiled: Compiled) -> Any:
+    """A numpy f for a compiled one: (m, 3) directions to (m,) values, f called row by row in a numba loop."""
+    f, caller, _ = compiled
+
+    def apply(directions: Float64Array) -> Float64Array:
+        directions = np.ascontiguousarray(directions, dtype=np.float64)
+        out = np.empty(len(directions))
+        _apply_rows(f, caller, directions, out)
+        return out
+
+    return apply
+
+
+@njit(**_OPTIONS)
+def _apply_rows(f, caller, directions, out):
+    buffer = np.empty(3)
+    for i in range(len(directions)):
+        out[i] = caller(f, directions[i, 0], directions[i, 1], directions[i, 2], buffer)
 
 
 _ARGUMENT = -1  # the kind of a user's f: an argument of the kernel, called as f(x, y, z) or f(w) (the *vector* cell)
@@ -327,6 +357,7 @@ def fused_partials(
         blocks = np.empty(((m + BLOCK - 1) // BLOCK, 3))
         _merge_chunks(chunks, BLOCK // CHUNK, blocks)
         if not np.all(np.isfinite(blocks)):
-            raise ValueError("'f' returned non-finite values")
+            bad = int(np.flatnonzero(~np.all(np.isfinite(blocks), axis=1))[0])
+            raise NonFiniteBlock("'f' returned non-finite values, or values whose sum overflows", segment + bad)
         partials += [(int(row[0]), row[1:2].copy(), row[2:3].copy()) for row in blocks]
     return partials

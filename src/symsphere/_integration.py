@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from . import frames
 from ._blocks import fill_range, warn_at_caller
-from ._fused import Compiled, compiled_integrand, fused_partials
+from ._fused import Compiled, NonFiniteBlock, compiled_integrand, fused_partials, vectorised
 from ._kernels import fill_orbits
 from ._typing import Float64Array, MapMethod, PointsLike, RNGLike
 from ._validation import (
@@ -29,6 +29,7 @@ from ._validation import (
     check_normal,
     check_real_values,
     check_rng,
+    check_rtol,
     short_repr,
 )
 from .points import BLOCK, BasePoints, check_points
@@ -55,6 +56,8 @@ __all__ = [
     "Compute",
     "compute_here",
     "to_tolerance",
+    "stage_result",
+    "check_sums",
 ]
 
 DEFAULT_REPLICATES = 8
@@ -83,10 +86,12 @@ class IntegrationResult:
     domain : str
         ``'sphere'`` or ``'hemisphere'``.
     method : str
-        The map onto T0 (``'equal_area'``, ``'paper1'`` or ``'paper2'``).
+        The map onto T0 (``'equal_area'``, ``'paper1'`` or ``'paper2'``), or the rule family
+        (``'lebedev'``, ``'fibonacci'``); with ``method='auto'`` the family it chose.
     points : str
-        The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, or the
-        class name of the ``QMCEngine`` given.
+        The base points: ``'random'``, ``'stratified'``, ``'sobol'``, ``'halton'``, ``'sobol_interlaced2'``,
+        ``'sobol_interlaced3'``, the class name of the ``QMCEngine`` given, or ``'haar_rotations'``
+        (a rotated rule family).
     tolerance : float or None
         With ``atol``/``rtol``: the target ``max(atol, rtol * |integral|)`` the interval's
         half-width was compared with (None for a fixed n).
@@ -95,6 +100,12 @@ class IntegrationResult:
         ``1 - (1 - requested level) / (n_stages (n_stages + 1))``); 1 for a fixed n.
     converged : bool
         Whether the half-width reached the tolerance (always True for a fixed n).
+    history : tuple of dict
+        With ``method`` ``'auto'``, ``'lebedev'`` or ``'fibonacci'`` to a tolerance: one dict per stage
+        run, in order: ``method`` (the family), ``size`` (points per replicate), ``evaluations`` (new),
+        ``total_evaluations``, ``integral``, ``standard_error``, ``half_width``, ``tolerance``, ``level``
+        and ``reason`` (why this family ran this stage: the pilot, or the predicted costs of all
+        families).  Empty otherwise.
 
     Examples
     --------
@@ -127,6 +138,7 @@ class IntegrationResult:
     tolerance: float | None = field(default=None, repr=False)
     n_stages: int = field(default=1, repr=False)
     converged: bool = field(default=True, repr=False)
+    history: tuple[dict[str, Any], ...] = field(default=(), repr=False, compare=False)
 
     def __str__(self) -> str:
         low, high = self.confidence_interval
@@ -199,13 +211,14 @@ def plan(
     domain: str,
     n: int,
     method: MapMethod,
-    points: PointsLike,
+    points: PointsLike | None,
     normal: npt.ArrayLike | None,
     rng: RNGLike,
     replicates: int | None,
     confidence_level: float,
 ) -> Plan:
     """Validate every argument of :func:`symsphere.integrate` and fix the run: sources, blocks, unit."""
+    points = "random" if points is None else points  # integrate's default (distributed passes None on)
     if not callable(f):
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
     compiled = compiled_integrand(f)
@@ -258,17 +271,22 @@ def plan(
 def block_partials(plan: Plan, replicate: int, first: int, stop: int) -> list[Partial]:
     """The partials of blocks ``first ... stop - 1`` of a replicate (fused: in one parallel kernel call)."""
     if plan.compiled is not None:
-        return fused_partials(
-            plan.compiled,
-            plan.sources[replicate],
-            plan.orbits_per_replicate,
-            first,
-            stop,
-            plan.method,
-            plan.count,
-            plan.basis,
-            triangle_warp(plan.method).uniform,
-        )
+        try:
+            return fused_partials(
+                plan.compiled,
+                plan.sources[replicate],
+                plan.orbits_per_replicate,
+                first,
+                stop,
+                plan.method,
+                plan.count,
+                plan.basis,
+                triangle_warp(plan.method).uniform,
+            )
+        except NonFiniteBlock as error:  # the numpy path on that block names the first offending direction
+            numpy_plan = dataclasses.replace(plan, f=vectorised(plan.compiled), compiled=None)
+            block_partial(numpy_plan, replicate, error.block)
+            raise ValueError(str(error)) from None  # to rounding, the numpy path found nothing to name
     return [block_partial(plan, replicate, block) for block in range(first, stop)]
 
 
@@ -291,22 +309,58 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
         with np.errstate(divide="ignore"):
             weight = plan.count / triangle_map.densities(triangle_map.points(uv))
     values = evaluate(plan.f, directions)
-    estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
-    mean = estimates.mean(axis=0)
-    return stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
+        estimates = values.reshape(stop - start, plan.count, -1).mean(axis=1) * weight[:, None]
+        mean = estimates.mean(axis=0)
+        partial = stop - start, estimates.sum(axis=0), ((estimates - mean) ** 2).sum(axis=0)
+    if not (np.all(np.isfinite(partial[1])) and np.all(np.isfinite(partial[2]))):
+        check_sums(values, directions)
+    return partial
 
 
 def evaluate(f: Integrand, directions: Float64Array) -> Float64Array:
-    """f at *directions*, as an (m, k) float64 array; ValueError for a wrong shape or a non-finite value."""
-    values = check_real_values(f(directions), "f")  # complex: TypeError, not a dropped imaginary part
+    """f at *directions*, as an (m, k) float64 array.
+
+    ValueError naming ``f`` and the first offending direction for a wrong shape, a non-finite value,
+    or an exception raised by f (chained); TypeError for complex values.
+    """
     m = len(directions)
+    try:
+        returned = f(directions)
+    except Exception as error:  # the user's error, told once with where it happened; KeyboardInterrupt passes
+        raise ValueError(
+            f"'f' raised {type(error).__name__}: {error} (on {m} directions, the first {_direction(directions, 0)})"
+        ) from error
+    values = check_real_values(returned, "f", finite=False)  # complex: TypeError, not a dropped imaginary part
     if not (values.shape == (m,) or (values.ndim == 2 and values.shape[0] == m and values.shape[1] >= 1)):
         raise ValueError(
-            f"'f' must return shape (m,) or (m, k) with k >= 1 for directions of shape ({m}, 3), got {values.shape}"
+            f"'f' must return shape (m,) or (m, k) with k >= 1 for directions of shape ({m}, 3), got {values.shape} "
+            f"(the first direction {_direction(directions, 0)})"
         )
+    values = values.reshape(m, -1)
     if not np.all(np.isfinite(values)):
-        raise ValueError("'f' returned non-finite values")
-    return values.reshape(m, -1)
+        row = int(np.flatnonzero(~np.all(np.isfinite(values), axis=1))[0])
+        bad = values[row][~np.isfinite(values[row])][0]
+        raise ValueError(
+            f"'f' returned non-finite values ({bad} at direction {_direction(directions, row)}, the first)"
+        )
+    return values
+
+
+def check_sums(values: Float64Array, directions: Float64Array) -> None:
+    """ValueError naming ``f`` if finite *values* overflow float64 when summed (or their squares are)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        running = np.cumsum(values, axis=0)
+        overflow = ~np.all(np.isfinite(running), axis=1)
+    row = int(np.flatnonzero(overflow)[0]) if np.any(overflow) else int(np.argmax(np.max(np.abs(values), axis=1)))
+    raise ValueError(
+        f"'f' returned values whose sum (or its variance) overflows float64 (f = {np.max(np.abs(values[row])):.3g} "
+        f"at direction {_direction(directions, row)}, the first where the running sum overflows); scale f down"
+    )
+
+
+def _direction(directions: Float64Array, row: int) -> str:
+    return "[" + ", ".join(f"{float(c):.17g}" for c in directions[row]) + "]"
 
 
 def combine(partials: Sequence[Partial]) -> Partial:
@@ -321,6 +375,11 @@ def combine(partials: Sequence[Partial]) -> Partial:
 
 def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResult:
     """Reduce per-block partials (a list per replicate, in block order) to the result."""
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
+        return _finish(plan, partials)
+
+
+def _finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResult:
     per_replicate = [combine(blocks) for blocks in partials]
     if plan.unit == "orbit":
         count, total, m2 = per_replicate[0]
@@ -332,6 +391,11 @@ def finish(plan: Plan, partials: Sequence[Sequence[Partial]]) -> IntegrationResu
         integral = estimates.mean(axis=0)
         units = len(estimates)
         variance = estimates.var(axis=0, ddof=1) if units > 1 else np.full_like(integral, np.nan)
+    if not (np.all(np.isfinite(integral)) and np.all(np.isfinite(variance) | np.isnan(variance) & (units < 2))):
+        raise ValueError(  # the blocks were finite, their reduction is not: far-apart huge values
+            f"'f' returned values whose sum (or its variance) overflows float64 (integral {np.ravel(integral)[0]:.3g}, "
+            f"variance {np.ravel(variance)[0]:.3g}); scale f down"
+        )
     standard_error = np.sqrt(variance / units)
     if units > 1:
         from scipy import special  # not at import; scipy.stats (whose t.ppf is this function) costs 2x more
@@ -364,7 +428,7 @@ def to_tolerance(
     domain: str,
     n: int | None,
     method: MapMethod,
-    points: PointsLike,
+    points: PointsLike | None,
     normal: npt.ArrayLike | None,
     rng: RNGLike,
     replicates: int | None,
@@ -381,8 +445,9 @@ def to_tolerance(
     :func:`symsphere.distributed.integrate` passes one that runs them as Dask tasks).  The stages,
     the reuse and so the result do not depend on it.
     """
+    points = "random" if points is None else points  # integrate's default (distributed passes None on)
     atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
-    rtol = 0.0 if rtol is None else check_nonnegative(rtol, "rtol")
+    rtol = 0.0 if rtol is None else check_rtol(rtol, "rtol")
     if atol == 0 and rtol == 0:
         raise ValueError("'atol' or 'rtol' must be positive")
     count = 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
@@ -423,7 +488,7 @@ def to_tolerance(
             work = dataclasses.replace(
                 largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK), confidence_level=level
             )
-        result = _stage_result(work, kept, stage, atol, rtol, compute or compute_here)
+        result = stage_result(work, kept, stage, atol, rtol, compute or compute_here)
         if result.converged or n_stage == largest_n:
             break
         factor = growth
@@ -453,10 +518,10 @@ def _predicted_factor(result: IntegrationResult, next_alpha: float) -> int:
     ratio = float(np.max(t * np.asarray(result.standard_error))) / result.tolerance if result.tolerance > 0 else np.inf
     if not np.isfinite(ratio):
         return 2
-    return int(2 ** max(1, int(np.ceil(np.log2(max(ratio * ratio, 1.0))))))
+    return int(2 ** min(62, max(1, int(np.ceil(2 * np.log2(max(ratio, 1.0)))))))  # capped: n_max bounds it anyway
 
 
-def _stage_result(
+def stage_result(
     work: Plan, kept: dict[tuple[int, int], Partial], stage: int, atol: float, rtol: float, compute: Compute
 ) -> IntegrationResult:
     """The result at one stage: whole blocks from *kept*, the rest summed now (and whole ones kept)."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
+from . import _auto as auto
 from . import _blocks as blocks
 from . import _compile_ahead as compile_ahead
 from . import _fused as fused
@@ -28,6 +29,7 @@ from .render import _random as render_random
 from .warps import _triangle as warps_triangle
 
 __all__ = [
+    "auto",
     "blocks",
     "compile_ahead",
     "fused",

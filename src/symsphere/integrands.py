@@ -318,7 +318,14 @@ def orbit_average(
     expected = (int(np.prod(images.shape[:-1])),)
     if values.shape != expected:
         raise ValueError(f"'f' must return one value per direction, shape {expected}, got {values.shape}")
-    mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
+        mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    if not np.all(np.isfinite(mean)):
+        row = int(np.flatnonzero(~np.isfinite(mean.ravel()))[0])
+        raise ValueError(
+            f"'f' returned values whose sum overflows float64 (the images of base point {row}, the first "
+            f"{images.reshape(-1, count, 3)[row, 0].tolist()}); scale f down"
+        )
     return mean
 
 

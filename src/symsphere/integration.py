@@ -30,6 +30,9 @@ the returned one included, covers the integral with probability at least
 ``confidence_level`` (a union bound), so stopping when an interval happens to be narrow
 cannot make it lie.
 
+``method='auto'``, ``'lebedev'``, ``'fibonacci'``: randomly rotated rule families and the choice
+among them by a pilot on f (:mod:`symsphere._auto`; ``docs/explanation/fused-integration.md``).
+
 Work is done in blocks of ``symsphere.points.BLOCK`` orbits: f sees one block of
 directions at a time, so memory stays bounded for any n, and block results are
 combined in block order, so the result does not depend on how the work is split
@@ -38,10 +41,15 @@ combined in block order, so the result does not depend on how the work is split
 
 from __future__ import annotations
 
+from typing import Literal, cast
+
 import numpy.typing as npt
 
+from ._auto import RULE_METHODS, integrate_rules
 from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
+from ._validation import check_choice
+from .warps import METHODS
 
 __all__ = ["IntegrationResult", "integrate"]
 
@@ -51,8 +59,8 @@ def integrate(
     *,
     domain: Domain = "sphere",
     n: int | None = None,
-    method: MapMethod = "equal_area",
-    points: PointsLike = "random",
+    method: MapMethod | Literal["auto", "fibonacci", "lebedev"] = "equal_area",
+    points: PointsLike | None = None,
     normal: npt.ArrayLike | None = None,
     rng: RNGLike = None,
     replicates: int | None = None,
@@ -75,13 +83,23 @@ def integrate(
         Evaluations of f in all: a multiple of 48 (hemisphere: 24), and of
         48 * replicates (24 * replicates) when replicates are used.  Required unless
         ``atol`` or ``rtol`` is given; then it is the first stage's n (default: 256 orbits
-        per replicate; 'stratified': a 16 x 16 grid).
-    method : {'equal_area', 'paper1', 'paper2'}
-        Map onto T0; the paper's maps are weighted by 1/pdf, so the estimate
-        stays unbiased.
-    points : {'random', 'stratified', 'sobol', 'halton'} or scipy.stats.qmc.QMCEngine
+        per replicate; 'stratified': a 16 x 16 grid).  ``'lebedev'``, ``'fibonacci'``: replicates x
+        the points of one of the family's stages (a Lebedev rule's size or r x 5810; 16 x 2**k), and
+        only without a tolerance (to a tolerance they start at their smallest stage).
+    method : {'equal_area', 'paper1', 'paper2', 'auto', 'fibonacci', 'lebedev'}
+        The scheme's map onto T0 (the paper's maps are weighted by 1/pdf, so the estimate
+        stays unbiased); or a family of randomly rotated rules, ``'lebedev'`` (Lebedev rules of
+        increasing order) or ``'fibonacci'`` (spherical Fibonacci sets), each replicate under its own
+        uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
+        (needs ``atol`` or ``rtol``): a pilot of every family on f itself, then the family predicted
+        to reach the tolerance with the fewest evaluations (``result.method`` says which,
+        ``result.history`` why).  See ``docs/explanation/fused-integration.md``.
+    points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
+or scipy.stats.qmc.QMCEngine, optional
         The base points of the unit square (as in :func:`symsphere.sample_sphere`); they decide
-        the independent units of the standard error (see the module's description).
+        the independent units of the standard error (see the module's description).  Default
+        ``'random'``; with ``method='auto'`` the scheme's family uses ``'sobol_interlaced3'``; not
+        valid with ``'lebedev'`` and ``'fibonacci'``.
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (``domain='hemisphere'`` only).  For the
         rendering equation, integrate ``L(w) * f_r * max(0, w . normal)``.
@@ -89,8 +107,8 @@ def integrate(
         Seeds the points (or their randomisations).  The same seed gives the same result, however
         the work is split.
     replicates : int, optional
-        Independent randomisations for stratified and QMC points (default 8);
-        must be None or 1 for random points and for a QMCEngine.
+        Independent randomisations for stratified and QMC points and for the rotated rule
+        families (default 8); must be None or 1 for random points and for a QMCEngine.
     confidence_level : float
         Of the returned confidence interval, in (0, 1).  With a tolerance: of all stages'
         intervals at once (see the module's description).
@@ -100,7 +118,9 @@ def integrate(
         at least 2 replicates for stratified and QMC points.
     n_max : int, optional
         With a tolerance: the largest n to try (default 48 * 2**24, hemisphere 24 * 2**24);
-        if the tolerance is not reached there, a warning gives the half-width reached.
+        if the tolerance is not reached there, a warning gives the half-width reached.  With
+        ``'auto'``, ``'lebedev'``, ``'fibonacci'``: a bound on every evaluation of every stage (and
+        family), the best interval is returned.
 
     Returns
     -------
@@ -135,13 +155,28 @@ def integrate(
     >>> low, high = result.confidence_interval
     >>> bool((high - low) / 2 <= result.tolerance), result.n_evaluations, result.n_stages
     (True, 393216, 3)
+
+    Let a pilot on f choose the rule (``result.history`` says why, stage by stage):
+
+    >>> result = integrate(lambda w: np.exp(w[:, 0]), rtol=1e-9, method="auto", rng=4)
+    >>> result.method, result.converged, result.n_evaluations
+    ('lebedev', True, 1536)
+    >>> bool(abs(result.integral - exact) <= 1e-9 * exact), result.history[0]["reason"][:5]
+    (True, 'pilot')
     """
+    check_choice(method, "method", tuple(sorted((*METHODS, *RULE_METHODS))))
+    if method in RULE_METHODS:
+        return integrate_rules(
+            f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max
+        )
+    points = "random" if points is None else points
+    map_method = cast(MapMethod, method)  # a map (plan checks it)
     if atol is None and rtol is None:
         if n_max is not None:
             raise ValueError("'n_max' is only valid with 'atol' or 'rtol'")
         if n is None:
             raise TypeError("integrate() missing required keyword argument 'n' (or give 'atol' or 'rtol')")
-        work = plan(f, domain, n, method, points, normal, rng, replicates, confidence_level)
+        work = plan(f, domain, n, map_method, points, normal, rng, replicates, confidence_level)
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
-    return to_tolerance(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
+    return to_tolerance(f, domain, n, map_method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)

@@ -514,8 +514,8 @@ def sample_arvo(
     return orbit(base).reshape(n, 3).astype(dtype)
 
 
-def fibonacci_points(n: int) -> Float64Array:
-    """The n spherical Fibonacci points (Keinert et al. 2015), deterministic.
+def fibonacci_points(n: int, *, start: int = 0, stop: int | None = None) -> Float64Array:
+    """The n spherical Fibonacci points (Keinert et al. 2015), deterministic; rows *start* to *stop* - 1.
 
     ``z_i = 1 - (2 i + 1)/n`` and ``phi_i = 2 pi frac(i (Phi - 1))`` for
     i = 0, ..., n - 1 (1/Phi = Phi - 1).  The fractional part is computed in
@@ -527,21 +527,32 @@ def fibonacci_points(n: int) -> Float64Array:
     Parameters
     ----------
     n : int
+    start, stop : int, optional
+        A range of the points (default all): a large set in bounded memory, piece by piece.
 
     Returns
     -------
-    ndarray, shape (n, 3), float64
+    ndarray, shape (stop - start, 3), float64
 
     Examples
     --------
     >>> from symsphere.peers import fibonacci_points
+    >>> bool((fibonacci_points(4, start=2) == fibonacci_points(4)[2:]).all())
+    True
     >>> fibonacci_points(4).round(6)
     array([[ 0.661438,  0.      ,  0.75    ],
            [-0.713954, -0.654041,  0.25    ],
            [ 0.08465 ,  0.964538, -0.25    ],
            [ 0.402444, -0.524918, -0.75    ]])
     """
-    return _fibonacci(check_count(n, "n"))
+    n = check_count(n, "n")
+    stop = n if stop is None else stop
+    for value, name in ((start, "start"), (stop, "stop")):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= value <= n:
+            raise ValueError(f"'{name}' must be an integer with 0 <= {name} <= n = {n}; got {short_repr(value)}")
+    if start > stop:
+        raise ValueError(f"'start' must be at most 'stop'; got start={start}, stop={stop}")
+    return np.stack(_fibonacci_point(np.arange(start, stop, dtype=np.int64), n), axis=-1).reshape(-1, 3)
 
 
 # =============================================================================

@@ -38,9 +38,10 @@ __all__ = [
 _DTYPES = (np.dtype(np.float64), np.dtype(np.float32))
 
 
-def check_real_values(values: object, name: str = "f") -> Float64Array:
+def check_real_values(values: object, name: str = "f", *, finite: bool = True) -> Float64Array:
     """What a user's function returned, as a finite float64 array; TypeError for complex or non-numeric
-    values (converting would drop the imaginary part), ValueError for NaN or inf.
+    values (converting would drop the imaginary part), ValueError for NaN or inf (``finite=False``: the
+    caller checks, to say where).
 
     Examples
     --------
@@ -63,7 +64,7 @@ def check_real_values(values: object, name: str = "f") -> Float64Array:
     if arr.dtype.kind not in "biuf":
         raise TypeError(f"'{name}' must return real numbers, got dtype {arr.dtype}")
     out: Float64Array = arr.astype(np.float64)
-    if not np.all(np.isfinite(out)):
+    if finite and not np.all(np.isfinite(out)):
         raise ValueError(f"'{name}' returned non-finite values (NaN or inf)")
     return out
 

@@ -26,6 +26,8 @@ __all__ = [
     "MAX_POLYNOMIAL_DEGREE",
     "MAX_QUADRATURE_ORDER",
     "MAX_SH_DEGREE",
+    "RTOL_FLOOR",
+    "check_rtol",
     "MAX_SOBOL_POINTS",
     "MAX_TASKS",
     "check_bins",
@@ -354,6 +356,29 @@ def check_nonnegative(value: object, name: str) -> float:
     result = _finite_real(value, name)
     if result < 0:
         raise ValueError(f"'{name}' must be >= 0, got {value}")
+    return result
+
+
+RTOL_FLOOR = float(np.finfo(np.float64).eps)
+"""The smallest positive relative tolerance: the relative spacing of float64 numbers (2.2e-16); below it
+a half-width relative to a value cannot be resolved, so such a tolerance could never be met."""
+
+
+def check_rtol(value: object, name: str = "rtol") -> float:
+    """*value* as a float, 0 or at least :data:`RTOL_FLOOR`; ValueError naming *name* otherwise.
+
+    Examples
+    --------
+    >>> check_rtol(1e-300, "--rtol")
+    Traceback (most recent call last):
+        ...
+    ValueError: '--rtol'=1e-300 is below what float64 resolves: use 0 (with atol) or at least 2.22e-16
+    """
+    result = check_nonnegative(value, name)
+    if 0 < result < RTOL_FLOOR:
+        raise ValueError(
+            f"'{name}'={result:.3g} is below what float64 resolves: use 0 (with atol) or at least {RTOL_FLOOR:.3g}"
+        )
     return result
 
 

@@ -50,6 +50,7 @@ from .._validation import (
     check_count,
     check_nonnegative,
     check_output_path,
+    check_rtol,
     check_seed,
     check_size,
     file_kind,
@@ -282,10 +283,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="evaluations: a multiple of 48 (hemisphere: 24); with --rtol/--atol the first stage's (optional)",
     )
     integrate.add_argument(
-        "--method", choices=METHODS, default="equal_area",
-        help="map onto the triangle; every map is unbiased (weighted by 1/pdf) (default: %(default)s)",
+        "--method", choices=(*METHODS, "auto", "fibonacci", "lebedev"), default="equal_area",
+        help="map onto the triangle (every map unbiased), or rotated-rule families; auto: a pilot picks (default: %(default)s)",
     )  # fmt: skip
-    integrate.add_argument("--points", choices=POINT_SETS, default="random", help="default: %(default)s")
+    integrate.add_argument("--points", choices=POINT_SETS, help="default: random (auto: sobol_interlaced3)")
     integrate.add_argument(
         "--replicates", type=int, default=None,
         help="independent randomisations of stratified and QMC points; the error bar needs 2 or more (default 8)",
@@ -634,9 +635,8 @@ def _run_integrate(args: argparse.Namespace) -> int:
     )
     to_tolerance = args.rtol is not None or args.atol is not None
     if to_tolerance:
-        for name in ("rtol", "atol"):  # before the time estimate, which runs a pilot without them
-            if getattr(args, name) is not None:
-                check_nonnegative(getattr(args, name), name)
+        check_rtol(0.0 if args.rtol is None else args.rtol, "--rtol")  # before the time estimate's pilot
+        check_nonnegative(0.0 if args.atol is None else args.atol, "--atol")
         kwargs.update(rtol=args.rtol, atol=args.atol, n_max=args.n_max)
     elif args.n is None:
         raise _UsageError("--n is required unless --rtol or --atol is given")
@@ -667,7 +667,7 @@ def _run_integrate(args: argparse.Namespace) -> int:
         )
         print(f"  {result.confidence_level:.0%} interval [{low:.12g}, {high:.12g}]")
     print(f"  exact     {integrand.exact:.12g}  (error {error:.3g})")
-    print(f"  {result.n_evaluations} evaluations ({args.method}, {args.points}, seed {seed}) in {elapsed:.3f} s")
+    print(f"  {result.n_evaluations} evaluations ({result.method}, {result.points}, seed {seed}) in {elapsed:.3f} s")
     if to_tolerance:
         state = "reached" if result.converged else "NOT reached (n_max)"
         print(
@@ -695,7 +695,7 @@ def _print_estimate(f: Integrand, kwargs: dict[str, Any], args: argparse.Namespa
         return
     _check_duration(n / _FASTEST_EVALUATIONS_PER_SECOND, f"{n} evaluations", args)  # before the pilot
     pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
-    pilot.update(n=48 * 2**14, points="random", replicates=None, rng=0)
+    pilot.update(n=48 * 2**14, method="equal_area", points="random", replicates=None, rng=0)
     start = time.perf_counter()
     integrate(f, **pilot)  # the arguments are checked at the real call: errors appear there, at once
     rate = pilot["n"] / max(time.perf_counter() - start, 1e-9)

@@ -1,0 +1,112 @@
+"""Hostile integrands and tolerances: one error naming f (and where), never inf, nan or a run to n_max."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+from numba import njit
+from references import one_line_error
+
+import symsphere
+from symsphere import distributed
+from symsphere.apps.cli import main
+from symsphere.integrands import orbit_average
+
+DIRECTION = r"\[-?[0-9.e-]+, -?[0-9.e-]+, -?[0-9.e-]+\]"
+
+
+def huge(w):
+    return np.full(len(w), 1e308)
+
+
+@njit
+def huge_compiled(x, y, z):
+    return 1e308
+
+
+@njit
+def nan_right(x, y, z):
+    return np.nan if x > 0.5 else 1.0
+
+
+def raising(w):
+    raise ZeroDivisionError("division by zero")
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(n=96, rng=1),
+        dict(atol=1e-3, rng=1),
+        dict(n=384, points="sobol", rng=1),
+        dict(rtol=1e-3, method="auto", rng=1),
+    ],
+    ids=["fixed-n", "atol", "sobol", "auto"],
+)
+@pytest.mark.parametrize("f", [huge, huge_compiled], ids=["numpy", "compiled"])
+def test_overflowing_sums_are_one_error_naming_f(f, kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no numpy RuntimeWarning, no "tolerance nan was not reached"
+        with pytest.raises(ValueError, match=f"'f' returned .*overflows float64.*{DIRECTION}"):
+            symsphere.integrate(f, **kwargs)
+
+
+def test_huge_values_whose_sums_fit_are_integrated():
+    result = symsphere.integrate(lambda w: np.full(len(w), 1e200), n=96, rng=1)
+    assert result.integral == pytest.approx(4 * np.pi * 1e200, rel=1e-14)
+
+
+@pytest.mark.parametrize("f", [lambda w: np.where(w[:, 0] > 0.5, np.nan, 1.0), nan_right], ids=["numpy", "compiled"])
+def test_nan_names_f_and_the_first_offending_direction(f):
+    with pytest.raises(ValueError, match=f"'f' returned non-finite values \\(nan at direction {DIRECTION}") as info:
+        symsphere.integrate(f, n=48 * 64, rng=2)
+    x = float(re.search(r"direction \[(-?[0-9.e-]+)", str(info.value)).group(1))
+    assert x > 0.5  # the direction named is one where f is NaN
+
+
+def test_raising_f_names_f_and_the_directions():
+    with pytest.raises(ValueError, match=f"'f' raised ZeroDivisionError: division by zero .*first {DIRECTION}") as info:
+        symsphere.integrate(raising, n=96, rng=1)
+    assert isinstance(info.value.__cause__, ZeroDivisionError)
+
+
+def test_wrong_shape_names_f_and_a_direction():
+    with pytest.raises(ValueError, match=f"'f' must return shape .*{DIRECTION}"):
+        symsphere.integrate(lambda w: np.ones(len(w) + 1), n=96, rng=1)
+
+
+def test_orbit_average_overflow_names_f():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="'f' returned values whose sum overflows float64"):
+            orbit_average(huge, [0.3, 0.2, 0.9])
+
+
+def test_distributed_integrate_overflow_names_f():
+    client = distributed.local_client(1)
+    try:
+        with pytest.raises(ValueError, match="'f' returned .*overflows float64"):
+            distributed.integrate(huge, client=client, n=96, rng=1)
+    finally:
+        distributed.close_client(client)
+
+
+@pytest.mark.parametrize("rtol", [1e-300, 1e-17, -1e-3])
+def test_rtol_that_float64_cannot_resolve_is_refused(rtol):
+    with pytest.raises(ValueError, match="'rtol'"):
+        symsphere.integrate(huge, rtol=rtol, rng=1)
+
+
+def test_tiny_atol_does_not_overflow_the_stage_prediction():
+    with pytest.warns(UserWarning, match="the tolerance 1e-300 was not reached"):
+        result = symsphere.integrate(lambda w: np.exp(w[:, 0]), atol=1e-300, n_max=48 * 2**10, rng=1)
+    assert not result.converged
+
+
+def test_cli_rtol_below_float64_is_one_line_naming_it(capsys):
+    assert main(["integrate", "--integrand", "exp", "--seed", "1", "--rtol", "1e-300"]) == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert "'--rtol'=1e-300" in line
