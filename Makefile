@@ -47,7 +47,7 @@ libllvm: $(STAMP)
 		echo "for Mitsuba's LLVM variants run 'sudo apt-get install libllvm19' (or set DRJIT_LIBLLVM_PATH to a libLLVM >= 16)"; \
 	fi
 
-# make bench: the speed benchmarks (docs/benchmarks.md), then the tables written from their results.  Mitsuba 3 (the optional extra "bench") is
+# make bench: the speed benchmarks (docs/results/bench-sample.md and the other benchmark pages of docs/results/), then the tables written from their results.  Mitsuba 3 (the optional extra "bench") is
 # a peer in the comparison; its LLVM backend needs libLLVM >= 16 (the target libllvm).  Both are optional:
 # if either cannot be installed, bench_sample.py says why and skips the Mitsuba cases.
 bench: $(STAMP) libllvm

@@ -24,7 +24,7 @@ polynomial exp, so the batch loop vectorises); and the polynomial as f(w) of a (
 numba's thread pool is started through symsphere (passive OpenMP waiting, as ``integrate`` does)
 before anything else asks numba for its threads: before 2026-11-30 12:00 this script called
 ``numba.get_num_threads()`` first, which started the pool with libgomp's default (spinning) wait and
-slowed the numpy path 1.5-2x (``--early-threads`` reproduces that; see docs/benchmarks.md).
+slowed the numpy path 1.5-2x (``--early-threads`` reproduces that; see docs/results/bench-integrate.md).
 
     python benchmarks/bench_integrate.py [--log2-orbits 20] [--rounds 5] [--json PATH] [--early-threads]
 """

@@ -32,7 +32,7 @@ Usage (from the repository root, package installed)::
     the efficiency 1 / (MSE * time).  Writes ``docs/images/render_convergence.png``,
     ``docs/images/render_cornell_<sampler>.png`` (all at the same spp),
     ``docs/images/render_translucent_<sampler>.png`` and prints Markdown tables for
-    docs/rendering.md.
+    docs/results/render-convergence.md.
 ``paths-vs-mitsuba``
     Paths per second only: ours (``--samplers``, default cosine, with each
     integrator) and Mitsuba 3's ``path`` on ``--scenes`` at ``--spp``, taking
@@ -811,7 +811,7 @@ def main():
         "--integrator",
         choices=("path", "bsdf"),
         default="bsdf",
-        help="bsdf (default) reproduces the tables of docs/rendering.md made before NEE",
+        help="bsdf (default) reproduces the tables of docs/results/render-convergence.md made before NEE",
     )
     p.set_defaults(run=speed)
     c = verbs.add_parser("convergence")
@@ -825,7 +825,7 @@ def main():
         "--integrator",
         choices=("path", "bsdf"),
         default="bsdf",
-        help="bsdf (default) reproduces the tables and images of docs/rendering.md made before NEE",
+        help="bsdf (default) reproduces the tables and images of docs/results/render-convergence.md made before NEE",
     )
     c.add_argument(
         "--replot", action="store_true", help="redraw the figure and tables from docs/images/render_convergence.json"

@@ -12,7 +12,7 @@ The breakdown runs the same child with ``time.perf_counter`` around
 ``import symsphere``, the first call and a second call, and
 ``python -X importtime -c "import symsphere"`` shows which imports take the time.
 
-``--cold-start`` measures instead what a new install pays (docs/benchmarks.md, "Cold start"):
+``--cold-start`` measures instead what a new install pays (docs/results/cold-start.md):
 with an empty numba cache, in one new process, the first ``sample_sphere`` and then each
 further variant (dtype, point set, domain, frame, map), the first ``integrate`` with a numpy
 f, the first ``render`` (its kernel, with the functions LLVM inlines into it); in new processes

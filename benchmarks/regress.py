@@ -1,6 +1,6 @@
 """Regression guard: the headline rows of this checkout against a base revision, interleaved.
 
-Run it before resolving any change to a kernel or the code around it (docs/testing.md)::
+Run it before resolving any change to a kernel or the code around it (docs/explanation/testing.md)::
 
     python benchmarks/regress.py                    # this working tree against HEAD (uncommitted changes)
     python benchmarks/regress.py --base 5d0170b     # against any git revision

@@ -25,10 +25,10 @@ name the files (``--stale`` does), so that further changes leave a stale table's
 
 Usage::
 
-    python benchmarks/tables.py                  # rewrite every block in docs/*.md, README.md, benchmarks/*.md
+    python benchmarks/tables.py                  # rewrite every block in README.md, docs/, benchmarks/*.md
     python benchmarks/tables.py --check          # exit 1 (and show the difference) if a block is not as generated
     python benchmarks/tables.py --stale          # which measured files changed since each stale block's results
-    python benchmarks/tables.py docs/benchmarks.md
+    python benchmarks/tables.py docs/results/bench-sample.md
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ BLOCK = re.compile(
     r"(?P<close><!-- /table -->)",
     re.S,
 )
-DEFAULT_FILES = ("README.md", "docs/*.md", "benchmarks/*.md")
+DEFAULT_FILES = ("README.md", "docs/*.md", "docs/*/*.md", "benchmarks/*.md")
 
 # What each kind measures: a change to these paths (under the repository) makes its results stale.
 SAMPLING_CODE = (
@@ -238,7 +238,7 @@ def _sentence(loaded):
         f"({table[id(sphere)]['vs_fill']:.2f}× numpy's own `fill` of the same bytes; float64 "
         f"{table[id(sphere64)]['vs_fill']:.2f}×), and the hemisphere about a normal "
         f"{table[id(normal)]['vs_fill']:.2f}× (medians of {meta['repeats']} interleaved rounds, "
-        f"[docs/benchmarks.md](docs/benchmarks.md); `{name}`)."
+        f"[docs/results/bench-sample.md](docs/results/bench-sample.md); `{name}`)."
     )
 
 
@@ -293,7 +293,7 @@ def rewrite(text: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("files", nargs="*", type=Path, help="Markdown files (default: README.md, docs/*.md, "
+    parser.add_argument("files", nargs="*", type=Path, help="Markdown files (default: README.md, docs/, "
                         "benchmarks/*.md)")  # fmt: skip
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if a block differs")
     parser.add_argument("--stale", action="store_true", help="list the changed files of every stale block")

@@ -1,4 +1,4 @@
-"""The reliability audit of docs/reliability.md, rerunnable: hostile inputs, files that are not ours,
+"""The reliability audit of docs/results/reliability.md, rerunnable: hostile inputs, files that are not ours,
 signals, absurd sizes.  Prints one markdown table (and, with --verbose, every finding).
 
     .venv/bin/python scripts/audit_reliability.py            # about 5 minutes on 2 shared cores

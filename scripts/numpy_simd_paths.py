@@ -1,10 +1,10 @@
 """Which of numpy's elementary functions give other bits when its SIMD dispatch is limited.
 
-numpy picks a ufunc's loop at run time by CPU (docs/testing.md, "Comparing two implementations").
+numpy picks a ufunc's loop at run time by CPU (docs/explanation/testing.md, "Comparing two implementations").
 This runs the same ufuncs on the same 10**6 random arguments in two new processes, one with numpy's
 dispatch as it is and one with ``NPY_DISABLE_CPU_FEATURES`` set, and prints for each ufunc and dtype
 the fraction of results whose bits differ: whether ``NPY_DISABLE_CPU_FEATURES`` makes this machine run
-other code, as when the suite is run as an AVX2 machine (docs/testing.md).
+other code, as when the suite is run as an AVX2 machine (docs/results/test-times.md).
 
     python scripts/numpy_simd_paths.py                                  # X86_V4 AVX512_ICL AVX512_SPR off
     python scripts/numpy_simd_paths.py --disable "X86_V3 X86_V4 AVX512_ICL AVX512_SPR"

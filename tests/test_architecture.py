@@ -6,7 +6,7 @@
 - by importing: no library module loads the applications; each public name has one home (a name
   listed in a public module's ``__all__`` is defined there, or in a private module behind exactly
   one public module; package ``__init__``s gather names for their documented namespaces);
-- the tests reach private modules only through ``symsphere._testing`` (docs/testing.md);
+- the tests reach private modules only through ``symsphere._testing`` (docs/explanation/testing.md);
 - the tests' seeds are fixed: none comes from ``hash()``, ``id()``, the clock or the process id.
 """
 
@@ -279,7 +279,7 @@ def test_no_issue_numbers_in_code_tests_or_docs():
 
 
 # --- the tests' seeds are fixed -------------------------------------------------------------
-# A statistical test draws the same numbers in every run (docs/testing.md): no seed comes from what
+# A statistical test draws the same numbers in every run (docs/explanation/testing.md): no seed comes from what
 # changes between processes or runs (hash() of a str, id(), the clock, the process id).
 
 _SEEDED = {"default_rng", "SeedSequence", "PCG64", "Generator", "RandomState", "seed"}

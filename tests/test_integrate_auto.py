@@ -115,7 +115,7 @@ def test_auto_within_2x_of_the_best_family(name, rtol):
     # Evaluations, not time: the fewest of the families alone (the same stages), against auto with its pilot
     # and every stage of every family.  Two cells where the best family needs 6e4 and 5e5 evaluations (the
     # benchmark, benchmarks/bench_integrate_auto.py, covers the suite; below ~1e4 the pilot of three
-    # families can cost more than 2x, see docs/integration.md).
+    # families can cost more than 2x, see docs/results/integration.md).
     f = INTEGRANDS[name]
     count = 48 if f.domain == "sphere" else 24
     alone = {}

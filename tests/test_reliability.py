@@ -1,5 +1,5 @@
 """Reliability regression tests (the first review): one or more per defect, each failing on the code
-before the fix.  docs/reliability.md states the guarantees these tests check.
+before the fix.  docs/reference/reliability.md states the guarantees these tests check.
 
 Subprocess tests run the real command (``python -m symsphere``) so that signals, resource limits and
 exit statuses are those a user sees.

@@ -1,5 +1,5 @@
 """Reliability regression tests (the third round): one or more per defect, each
-failing on the code before the fix (docs/reliability.md lists which, and how that was run).
+failing on the code before the fix (docs/results/reliability.md lists which, and how that was run).
 
 Calls that could hang on the old code (a FIFO) run in a subprocess with a timeout, so that a hang is a
 failure, not a stuck suite.

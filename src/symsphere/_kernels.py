@@ -18,7 +18,7 @@ and compiles it lazily per output dtype, cached on disk (``cache=True``).  A cal
 compiles only its own case: ~1-2 s on an empty cache instead of one kernel holding
 every map and store.  The parts run on the threads of :mod:`symsphere._threads`
 (the kernels release the GIL), not in a numba ``prange``, whose parallel
-lowering more than doubled each kernel's compile time.  docs/benchmarks.md has
+lowering more than doubled each kernel's compile time.  docs/results/cold-start.md has
 the measurements.
 """
 

@@ -1,4 +1,4 @@
-"""The tests' one door into the library's internals (docs/testing.md).
+"""The tests' one door into the library's internals (docs/explanation/testing.md).
 
 Tests use the public API; where a test must reach a private module (a kernel's parts, the probes
 that compile the renderer's scalar functions, the stale-cache guard), it imports it from here and

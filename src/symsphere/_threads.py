@@ -6,7 +6,7 @@ numba's own (OpenMP) worker threads wait: passively, unless the user chose other
 ``numba.config.NUMBA_NUM_THREADS - 1`` threads, made at the first call with more than one part
 (nothing at import) and made again in a forked child.  The kernels are serial numba functions that
 release the GIL (``nogil=True``), so the parts run at once; a serial kernel compiles in well under
-half the time of the same loop in a numba ``prange`` (docs/benchmarks.md).  The number of parts of a
+half the time of the same loop in a numba ``prange`` (docs/results/cold-start.md).  The number of parts of a
 call is ``numba.get_num_threads()`` (so ``numba.set_num_threads`` and ``NUMBA_NUM_THREADS`` apply);
 results never depend on it.
 

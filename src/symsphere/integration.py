@@ -19,7 +19,7 @@ independent; the independent units are:
 A compiled ``f`` (a numba ``@njit`` function of one direction, ``f(x, y, z)`` or ``f(w)``
 with w of shape (3,), or an integrand of :mod:`symsphere.integrands`) is evaluated inside
 the parallel kernel: directions are never stored, orbit sums stay in registers.  Same
-estimator, same error bar (to rounding); see ``docs/integration.md``.
+estimator, same error bar (to rounding); see ``docs/explanation/fused-integration.md``.
 
 To a tolerance (``atol=``, ``rtol=``, ``n_max=``, scipy's names): n doubles (``'stratified'``:
 quadruples, the grid's side doubles; ``'random'``: jumps by the power of 2 that the n**-0.5
@@ -31,7 +31,7 @@ the returned one included, covers the integral with probability at least
 cannot make it lie.
 
 ``method='auto'``, ``'lebedev'``, ``'fibonacci'``: randomly rotated rule families and the choice
-among them by a pilot on f (:mod:`symsphere._auto`; ``docs/integration.md``).
+among them by a pilot on f (:mod:`symsphere._auto`; ``docs/explanation/fused-integration.md``).
 
 Work is done in blocks of ``symsphere.points.BLOCK`` orbits: f sees one block of
 directions at a time, so memory stays bounded for any n, and block results are
@@ -93,7 +93,7 @@ def integrate(
         uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
         (needs ``atol`` or ``rtol``): a pilot of every family on f itself, then the family predicted
         to reach the tolerance with the fewest evaluations (``result.method`` says which,
-        ``result.history`` why).  See ``docs/integration.md``.
+        ``result.history`` why).  See ``docs/explanation/fused-integration.md``.
     points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
 or scipy.stats.qmc.QMCEngine, optional
         The base points of the unit square (as in :func:`symsphere.sample_sphere`); they decide

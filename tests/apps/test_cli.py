@@ -233,7 +233,7 @@ def test_unreachable_scheduler_is_a_clear_error(capsys):
 
 def test_cli_start_imports_no_heavy_scipy():
     """Starting the command line imports what ``import symsphere`` does of scipy, not scipy.integrate,
-    scipy.special or scipy.spatial (~0.5 s of every start; docs/benchmarks.md, "No scipy at command-line start")."""
+    scipy.special or scipy.spatial (~0.5 s of every start; docs/results/cold-start.md, "No scipy at command-line start")."""
     code = (
         "import sys, symsphere.apps.cli\n"
         "print(sorted(m for m in ('scipy.integrate', 'scipy.special', 'scipy.spatial') if m in sys.modules))"

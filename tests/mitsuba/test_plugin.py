@@ -211,7 +211,7 @@ def test_an_error_inside_mi_render_keeps_its_message(llvm):
 
 
 def _reference_rows():
-    text = (ROOT / "docs" / "mitsuba_plugin.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "reference" / "mitsuba-plugin.md").read_text(encoding="utf-8")
     rows = {}
     for line in text.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
@@ -221,7 +221,7 @@ def _reference_rows():
 
 
 def test_reference_page_documents_every_parameter_and_its_default(llvm):
-    """docs/mitsuba_plugin.md's Parameter / Type / Description / Default / Flags table: every parameter the
+    """docs/reference/mitsuba-plugin.md's Parameter / Type / Description / Default / Flags table: every parameter the
     plugin reads (the names of its to_string()), each default the plugin's (loading it explicitly changes
     nothing), each set of choices the plugin's, and the page in the docs' toctree."""
     mi = llvm

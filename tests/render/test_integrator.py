@@ -85,7 +85,7 @@ from symsphere.warps import WEDGE_MAPS, square_to_triangle_pdf
 METHOD_CODES = kernels.METHOD_CODES
 
 FAMILY_SIGNIFICANCE = 0.01
-# The interlaced samplers' pairs last: the seeds of the others (from their index) stay those of docs/rendering.md.
+# The interlaced samplers' pairs last: the seeds of the others (from their index) stay those of docs/results/render-validation.md.
 _PAIRS = sorted(((i, s) for i in INTEGRATORS for s in SAMPLERS), key=lambda pair: "interlaced" in pair[1])
 _COSINE_SAMPLERS = (
     "cosine", "symmetric_cosine", "symmetric_cosine_sobol", "symmetric_cosine_sobol_interlaced2",
@@ -739,7 +739,7 @@ def test_a_cold_kernel_compiled_in_the_background_is_loaded_for_kernel_parts_typ
 
 
 def test_the_two_groups_of_parts_are_kernel_parts():
-    # compile_ahead's split (compiled here / in the second process; measured cold by docs/benchmarks.md):
+    # compile_ahead's split (compiled here / in the second process; measured cold by docs/results/cold-start.md):
     # every part in exactly one group, no unknown name (the second process would fail on it, and this one
     # would then compile the part itself: slower, not wrong, so no image shows it).
     here, there = set(K.COMPILE_HERE), set(K.COMPILE_THERE)

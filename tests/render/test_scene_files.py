@@ -162,9 +162,9 @@ def test_the_documented_scene_file_loads_and_renders(tmp_path):
     import pathlib
     import re
 
-    doc = pathlib.Path(__file__).resolve().parents[2] / "docs" / "rendering.md"
+    doc = pathlib.Path(__file__).resolve().parents[2] / "docs" / "reference" / "renderer.md"
     if not doc.exists():
-        pytest.skip("docs/rendering.md not present")
+        pytest.skip("docs/reference/renderer.md not present")
     block = re.search(r"```toml\n(.*?)```", doc.read_text(encoding="utf-8"), re.S).group(1)
     path = tmp_path / "example.toml"
     path.write_text(block)

@@ -123,9 +123,9 @@ def _identity(path: Path) -> tuple[int, int] | None:
 
 
 _LONG_SECONDS = 86400.0  # work estimated beyond a day needs --allow-long
-_FASTEST_DIRECTIONS_PER_SECOND = 1e9  # sample: 40x the 2.3e7/s measured to a file (docs/reliability.md)
-_FASTEST_EVALUATIONS_PER_SECOND = 1e9  # integrate: 17x the 59 M/s measured (docs/integration.md); then a pilot
-_FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread measured (docs/rendering.md)
+_FASTEST_DIRECTIONS_PER_SECOND = 1e9  # sample: 40x the 2.3e7/s measured to a file (docs/results/reliability.md)
+_FASTEST_EVALUATIONS_PER_SECOND = 1e9  # integrate: 17x the 59 M/s measured (docs/results/bench-integrate.md); a pilot
+_FASTEST_PATHS_PER_THREAD = 1e7  # render: 4x the best 2.5 Mpaths/s per thread (docs/results/render-performance.md)
 
 
 def _check_duration(seconds: float, what: str, args: argparse.Namespace) -> None:

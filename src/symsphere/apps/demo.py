@@ -262,7 +262,7 @@ def _render(path: Path, seed: int) -> str:
             f"per pixel, directions at diffuse vertices by the paper's scheme (`symmetric_sobol`: groups of 24 paths "
             f"share a base point per bounce, from an Owen-scrambled Sobol' sequence, and take its 24 orbit members; "
             f"equal-area map; seed {seed}).  "
-            "`symsphere render --help` for more; docs/rendering.md for the samplers and their validation.",
+            "`symsphere render --help` for more; docs/reference/renderer.md for the samplers.",
             "",
         ]
     )

@@ -6,12 +6,12 @@
   and the cosine wedge map, in Mitsuba's ``warp.h`` form; they run in every variant.
 - The integrator ``symsphere_path`` (:func:`integrator_class`): Mitsuba's ``path`` estimator
   whose direction at Lambertian vertices comes from the chosen ``strategy``, differentiable as
-  ``prb`` (path replay; docs/mitsuba_plugin.md); registered with
+  ``prb`` (path replay; docs/reference/mitsuba-plugin.md); registered with
   Mitsuba (:func:`register`) when this module is imported, for the variant set then and for
   every variant set later (a Mitsuba variant callback).
 - The scene files shipped with the package (:func:`scene_path`, :data:`SCENES`).
 
-``import symsphere`` never imports this module (nor Mitsuba).  See docs/rendering.md.
+``import symsphere`` never imports this module (nor Mitsuba).  See docs/reference/mitsuba-plugin.md.
 """
 
 from __future__ import annotations

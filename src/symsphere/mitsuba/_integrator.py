@@ -113,7 +113,7 @@ def lambertian_codes(bsdf: Any) -> int:
 
 
 class _PathMethods:
-    """The ``symsphere_path`` plugin (see the module docstring and docs/mitsuba_plugin.md); its methods
+    """The ``symsphere_path`` plugin (see the module docstring and docs/reference/mitsuba-plugin.md); its methods
     become a subclass of each variant's ``RBIntegrator`` (:func:`integrator_class`)."""
 
     hide_emitters: bool  # the C++ base's, read from the properties

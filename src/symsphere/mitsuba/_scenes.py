@@ -13,7 +13,7 @@ from .._validation import check_choice
 __all__ = ["SCENES", "scene_path"]
 
 SCENES = ("cornell_box", "veach_mis", "door_room", "textured", "smallpt_cornell", "gap")
-"""tuple of str: the shipped scenes (docs/rendering.md shows them)."""
+"""tuple of str: the shipped scenes (docs/reference/mitsuba-plugin.md shows them)."""
 
 _FOLDER = Path(__file__).resolve().parent / "scenes"
 

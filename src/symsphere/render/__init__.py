@@ -15,7 +15,7 @@ unbiased and converges to the same image.
 >>> result = render("cornell", width=64, height=48, spp=24, seed=1)   # doctest: +SKIP
 >>> write_outputs(result, "cornell.png")                              # doctest: +SKIP
 
-See docs/rendering.md.
+See docs/explanation/renderer.md and docs/reference/renderer.md.
 """
 
 from .image import linear_to_srgb, load_pfm, save_image, save_image_set, save_npy, save_pfm, save_png, tonemap

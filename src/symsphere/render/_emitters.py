@@ -3,7 +3,7 @@
 Scalar numba functions, called by the path-tracing kernel of
 :mod:`symsphere.render._integrator`: :func:`choose_light`, :func:`sample_emitter`,
 :func:`emitter_pdf` and :func:`power_heuristic`.  Speed against compile time, measured
-(docs/benchmarks.md, "Cold start"): the functions of the hot path that take the scene's
+(docs/results/cold-start.md): the functions of the hot path that take the scene's
 tables (these three, and the integrator's ``intersect``, NEE's light sample and the specular
 directions) are numba functions of their own, typed and compiled once each (``INLINED``:
 cached, no reference counting, ``forceinline``), which LLVM then inlines into the kernel.  As

@@ -680,7 +680,7 @@ def render_pass(
 
 
 # The kernel's parts that numba compiles on their own, split in two groups of about equal compile
-# time (measured: docs/benchmarks.md, cold start) for symsphere._compile_ahead
+# time (measured: docs/results/cold-start.md) for symsphere._compile_ahead
 COMPILE_HERE = ("_light_sample", "intersect", "emitter_pdf", "_film_offset")
 COMPILE_THERE = ("sample_local", "bsdf_pdf", "_specular_direction")
 

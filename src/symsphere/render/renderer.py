@@ -61,7 +61,7 @@ SAMPLERS = (
     "symmetric_cosine_sobol_interlaced2",
     "symmetric_cosine_sobol_interlaced3",
 )
-"""Direction samplers at diffuse vertices (see docs/rendering.md):
+"""Direction samplers at diffuse vertices (see docs/reference/renderer.md):
 
 ``symmetric``        the paper's scheme inside a pixel: groups of 24 (48 through
                      transmission) samples share a random base point per vertex and

@@ -4,7 +4,7 @@ their parsed structure (:func:`scene_from_dict`).
 Errors name the file and the field, e.g. ``scene file 'x.toml': spheres[2].radius
 must be positive, got -1.0`` (:class:`~symsphere.render.SceneError`, a ``ValueError``).
 
-File format (TOML or JSON, the same structure; see ``docs/rendering.md``)::
+File format (TOML or JSON, the same structure; see ``docs/reference/renderer.md``)::
 
     name = "example"                       # optional (default: the file name)
 
@@ -80,7 +80,7 @@ _QUAD_KEYS = {"corner", "edge1", "edge2", "material"}
 
 
 def load_scene(path: str | os.PathLike[str]) -> Scene:
-    r"""Read a scene from a ``.toml`` or ``.json`` file (format: this module's docstring, docs/rendering.md).
+    r"""Read a scene from a ``.toml`` or ``.json`` file (format: this module's docstring, docs/reference/renderer.md).
 
     Raises
     ------

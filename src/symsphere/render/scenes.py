@@ -46,7 +46,7 @@ def cornell() -> Scene:
     part of it that can be seen from inside the room.  Every ray that starts
     inside the room hits exactly what it hits in smallpt (tested); only the
     rays that smallpt starts above the ceiling (the top ~0.5 % of the image,
-    see docs/rendering.md) can tell the difference.  Next-event estimation
+    see docs/reference/renderer.md) can tell the difference.  Next-event estimation
     samples the light by area on the cap, where it can be seen.
 
     Camera at (50, 52, 295.6) looking along (0, -0.042612, -1), the image
