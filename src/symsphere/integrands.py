@@ -314,12 +314,34 @@ def orbit_average(
         raise TypeError(f"'f' must be callable, got {type(f).__name__}")
     count = orbit_size(domain)
     images = orbit(p, domain)
-    values = check_real_values(f(images.reshape(-1, 3)), "f")  # NaN, inf, complex: an error, not a silent mean
+    raw = f(images.reshape(-1, 3))
+    try:
+        values = check_real_values(raw, "f")  # NaN, inf, complex: an error, not a silent mean
+    except ValueError:
+        norms = _safe_norms(images[..., 0, :])
+        if not np.all(np.abs(norms - 1.0) <= 1e-3):  # the images of p were no directions: say so, not only f
+            worst = float(norms.flat[int(np.argmax(np.abs(norms - 1.0)))])
+            raise ValueError(
+                f"'f' returned NaN or inf at the images of 'p', whose rows are not unit directions (a norm of "
+                f"{worst:.3g}); pass directions as 'p'"
+            ) from None
+        raise
     expected = (int(np.prod(images.shape[:-1])),)
     if values.shape != expected:
         raise ValueError(f"'f' must return one value per direction, shape {expected}, got {values.shape}")
-    mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    # Each value divided first: the mean of finite values stays finite (a sum of 48 values near 1e308 would not).
+    mean: Float64Array = (values.reshape(images.shape[:-2] + (count,)) / count).sum(axis=-1)
     return mean
+
+
+def _safe_norms(p: FloatArray) -> Float64Array:
+    """Euclidean norms of the rows of *p* without overflow (rows of 1e308 have norm 1.7e308, not inf)."""
+    points = np.asarray(p, dtype=np.float64)
+    scale = np.max(np.abs(points), axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scaled = np.where(scale > 0, points / np.where(scale > 0, scale, 1.0), 0.0)
+    norms: Float64Array = scale[..., 0] * np.sqrt(np.sum(scaled * scaled, axis=-1))
+    return norms
 
 
 # =============================================================================

@@ -29,6 +29,7 @@ distributed code cut their work.
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from typing import TYPE_CHECKING, Any
 
@@ -47,6 +48,7 @@ from ._validation import (
     check_size,
     check_sobol_size,
     check_square_count,
+    short_repr,
 )
 
 if TYPE_CHECKING:
@@ -175,6 +177,10 @@ or scipy.stats.qmc.QMCEngine
 
     def take(self, start: int, stop: int) -> Float64Array:
         """Points ``start ... stop - 1`` of the run, shape (stop - start, 2), float64."""
+        for name, value in (("start", start), ("stop", stop)):
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+                raise TypeError(f"'{name}' must be an integer index; got {type(value).__name__} {short_repr(value)}")
+        start, stop = int(start), int(stop)
         if not 0 <= start <= stop <= self.total:
             raise ValueError(f"'start'={start} and 'stop'={stop} must satisfy 0 <= start <= stop <= {self.total}")
         if self._engine is not None:

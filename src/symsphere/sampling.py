@@ -22,13 +22,14 @@ seed; multiples of 48 take exactly the path they always took.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from . import _blocks, frames
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
-from ._validation import check_count, check_normal, check_out, check_unit_directions
+from ._validation import check_count, check_normal, check_out, check_unit_directions, machine_memory
 from .warps._scheme import scheme_pdf
 
 __all__ = ["sample_sphere", "sample_hemisphere", "iter_sphere", "iter_hemisphere", "sphere_pdf", "hemisphere_pdf"]
@@ -306,10 +307,29 @@ def _sample(
 ) -> FloatArray:
     n, dtype, method, source, basis = _blocks.prepare(n, count, normal, method, points, rng, dtype, any_size=True)
     if out is None:
-        out = np.empty((n, 3), dtype=dtype)
+        out = _allocate(n, np.dtype(dtype))
     else:
         check_out(out, (n, 3), dtype)
     return _blocks.fill_rows(source, 0, method, count, basis, out)
+
+
+def _allocate(n: int, dtype: np.dtype[Any]) -> FloatArray:
+    """An empty (n, 3) array; ValueError naming 'n' if it cannot fit in the machine's memory (numpy's
+    MemoryError named neither the argument nor what to do)."""
+    need = 3 * n * dtype.itemsize
+    memory = machine_memory()
+    hint = "stream them with iter_sphere / iter_hemisphere (chunk=...) or symsphere.io.stream_directions"
+    if memory is not None and need > memory:
+        raise ValueError(
+            f"'n'={n} directions need {need / 2**30:.3g} GiB as {dtype} but this machine has "
+            f"{memory / 2**30:.3g} GiB; {hint}, or pass a smaller n"
+        )
+    try:
+        return np.empty((n, 3), dtype=dtype)
+    except MemoryError:
+        raise ValueError(
+            f"'n'={n} directions ({need / 2**30:.3g} GiB as {dtype}) do not fit in free memory; {hint}"
+        ) from None
 
 
 def _iterate(
