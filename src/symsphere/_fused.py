@@ -69,7 +69,7 @@ from ._kernels import (
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
-from ._threads import run_kernel
+from ._threads import route_compiles, run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 
@@ -330,3 +330,6 @@ def fused_partials(
             raise ValueError("'f' returned non-finite values")
         partials += [(int(row[0]), row[1:2].copy(), row[2:3].copy()) for row in blocks]
     return partials
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -42,6 +42,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._integrand_kernels import CAP, EXP, PHONG, POLYGON_LIGHT, POLYNOMIAL, SPHERE_LIGHT, Z, integrand_kernel
+from ._threads import route_compiles
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
 from ._validation import (
     check_choice,
@@ -681,3 +682,6 @@ def _build_integrands() -> dict[str, Integrand]:
 
 INTEGRANDS = _build_integrands()
 """dict name -> :class:`Integrand`."""
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -41,6 +41,7 @@ from __future__ import annotations
 import numpy.typing as npt
 
 from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
+from ._threads import route_compiles
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 
 __all__ = ["IntegrationResult", "integrate"]
@@ -145,3 +146,6 @@ def integrate(
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
     return to_tolerance(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

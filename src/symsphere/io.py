@@ -45,6 +45,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from ._threads import route_compiles
 from ._typing import FloatArray
 from ._validation import (
     TEMPORARY_KINDS,
@@ -815,3 +816,6 @@ class _PageDropper:
         os.fdatasync(self.descriptor)
         os.posix_fadvise(self.descriptor, self.dropped, position - self.dropped, os.POSIX_FADV_DONTNEED)
         self.dropped = position
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

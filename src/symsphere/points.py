@@ -37,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit, prange
 
-from ._threads import start_threads
+from ._threads import route_compiles, start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
 from ._validation import (
     MAX_COUNT,
@@ -343,3 +343,6 @@ def check_points(points: object) -> QMCEngine | None:
 'sobol_interlaced2', 'sobol_interlaced3'}
     """
     return check_point_set(points, POINT_SETS)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

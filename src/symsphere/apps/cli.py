@@ -50,7 +50,6 @@ from ._process import (
     FASTEST_DIRECTIONS_PER_SECOND,
     FASTEST_EVALUATIONS_PER_SECOND,
     Outputs,
-    Terminated,
     UsageError,
     add_allow_long,
     add_cluster_options,
@@ -277,18 +276,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             ignore_signals()  # now must not turn a written output into a death by signal
         return status
     except KeyboardInterrupt as exc:
-        name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
-        if argv is None:  # the program is about to exit: no second signal may turn this into a death by signal
-            ignore_signals()
-        if args.outputs.complete():  # the renames had begun: the output is whole, and it stays
-            shown = ", ".join(str(p) for p in args.outputs.paths)
-            print(f"{prog}: {name} arrived after the output was complete; kept {shown}", file=sys.stderr)
-            return 0
-        if isinstance(exc, Terminated):
-            print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
-            return exit_now(128 + exc.signum, argv)
-        print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
-        return exit_now(130, argv)
+        return _interrupted(getattr(exc, "signum", signal.SIGINT), args, prog, argv)
     except (UsageError, ValueError, TypeError) as exc:
         # The library's validators name the argument; a traceback would add nothing.
         print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
@@ -300,6 +288,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{prog}: error: out of memory{': ' + one_line(exc) if str(exc) else ''}", file=sys.stderr)
         return 1
     except Exception as exc:  # a bug, or a library below failing in a new way: still one line
+        if args.pending:  # a signal whose exception a C callback dropped made the work fail: it is the signal
+            return _interrupted(args.pending[0], args, prog, argv)
         if os.environ.get("SYMSPHERE_TRACEBACK"):
             raise
         print(
@@ -308,6 +298,23 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _interrupted(signum: int, args: argparse.Namespace, prog: str, argv: Sequence[str] | None) -> int:
+    """The end of a run stopped by *signum*: one line, and 130 (SIGINT) or 128 + the signal; 0 if the
+    output was already complete."""
+    name = signal.Signals(signum).name
+    if argv is None:  # the program is about to exit: no second signal may turn this into a death by signal
+        ignore_signals()
+    if args.outputs.complete():  # the renames had begun: the output is whole, and it stays
+        shown = ", ".join(str(p) for p in args.outputs.paths)
+        print(f"{prog}: {name} arrived after the output was complete; kept {shown}", file=sys.stderr)
+        return 0
+    if signum != signal.SIGINT:
+        print(f"{prog}: terminated ({name}); nothing was written", file=sys.stderr)
+        return exit_now(128 + signum, argv)
+    print(f"{prog}: interrupted; nothing was written", file=sys.stderr)
+    return exit_now(130, argv)
 
 
 def _with_notes(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace, prog: str) -> int:
