@@ -145,7 +145,7 @@ def _film_size(path: Path, defaults: dict[str, str]) -> tuple[int, int] | None:
     return None
 
 
-def select_variant(variant: str) -> Any:
+def select_variant(variant: str, where: str = "") -> Any:
     """Set Mitsuba's *variant* (and register ``symsphere_path`` there); return the ``mitsuba`` module.
 
     ValueError naming ``--variant`` (one line) for a Mitsuba that is missing, a variant it does not
@@ -155,7 +155,9 @@ def select_variant(variant: str) -> Any:
         import drjit as dr
         import mitsuba as mi
     except ImportError as error:
-        raise ValueError(f"Mitsuba scene files need Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})") from None
+        raise ValueError(
+            f"{where}Mitsuba scene files need Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})"
+        ) from None
     offered = sorted(mi.variants())
     if variant not in offered:
         raise ValueError(f"--variant {variant!r} is not a variant of this Mitsuba; use one of {offered}")
@@ -271,7 +273,7 @@ def render_scene_file(
         params.update(width=width, height=height)  # type: ignore[arg-type]
     if spp is not None and "spp" in defaults:
         params["spp"] = spp
-    mi = select_variant(variant)
+    mi = select_variant(variant, f"--scene {str(path)!r}: ")
     import drjit as dr
 
     previous = dr.thread_count()
