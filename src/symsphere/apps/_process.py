@@ -32,10 +32,12 @@ __all__ = [
     "Outputs",
     "Terminated",
     "UsageError",
+    "abandoned_work",
     "add_allow_long",
     "add_cluster_options",
     "check_duration",
     "check_pending",
+    "deferred_signals",
     "close_client",
     "cluster_client",
     "describe_os_error",
@@ -264,7 +266,7 @@ def wait_interruptibly(work: Callable[[], _T], poll: float = 0.05) -> _T:
         except BaseException as error:  # handed to the waiting thread
             outcome.append((False, error))
 
-    thread = threading.Thread(target=run, name="symsphere-wait", daemon=True)
+    thread = threading.Thread(target=run, name=_WAIT_THREAD, daemon=True)
     thread.start()
     while thread.is_alive():
         thread.join(poll)
@@ -272,3 +274,34 @@ def wait_interruptibly(work: Callable[[], _T], poll: float = 0.05) -> _T:
     if not ok:
         raise value
     return value  # type: ignore[no-any-return]
+
+
+_WAIT_THREAD = "symsphere-wait"
+
+
+def abandoned_work() -> bool:
+    """Whether a call of :func:`wait_interruptibly` is still running in its thread (abandoned on a signal)."""
+    return any(thread.name == _WAIT_THREAD and thread.is_alive() for thread in threading.enumerate())
+
+
+@contextlib.contextmanager
+def deferred_signals() -> Iterator[None]:
+    """Within the block (main thread): SIGINT, SIGTERM and SIGHUP are recorded, not handled; after it, each
+    goes to its handler (the CLI's raises).  For code a Python exception must not cross: importing Mitsuba
+    runs Python from inside nanobind's module initialisation, where a KeyboardInterrupt ended the process
+    with "terminate called after throwing an instance of 'nanobind::python_error'" (SIGABRT) or SIGSEGV."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    arrived: list[int] = []
+    kinds = (signal.SIGINT, *CLEAN_EXIT_SIGNALS)
+    previous = {signum: signal.signal(signum, lambda signum, frame: arrived.append(signum)) for signum in kinds}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(arrived):  # also after an error in the block: the signal is what ended it
+            handler = previous[signum]
+            if callable(handler):
+                handler(signum, None)

@@ -51,6 +51,7 @@ from ._process import (
     FASTEST_EVALUATIONS_PER_SECOND,
     Outputs,
     UsageError,
+    abandoned_work,
     add_allow_long,
     add_cluster_options,
     check_duration,
@@ -264,6 +265,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.verb is None:
         parser.print_help(sys.stderr)
         return 2
+    status = _run(args, argv)
+    if argv is None and abandoned_work():  # a Mitsuba call still running in its thread: the interpreter's
+        return exit_now(status, argv)  # finalization would meet it (a fatal "GIL is released" abort)
+    return status
+
+
+def _run(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     prog = f"symsphere {args.verb}"
     args.outputs = Outputs()
     args.pending = []
@@ -277,27 +285,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         return status
     except KeyboardInterrupt as exc:
         return _interrupted(getattr(exc, "signum", signal.SIGINT), args, prog, argv)
-    except (UsageError, ValueError, TypeError) as exc:
+    except Exception as exc:
+        if args.pending:  # a signal whose exception a C callback dropped made the work fail: it is the signal
+            return _interrupted(args.pending[0], args, prog, argv)
+        return _report(exc, prog)
+
+
+def _report(exc: Exception, prog: str) -> int:
+    """One line on stderr for an error, and the exit status: 2 invalid arguments, 1 anything else."""
+    if isinstance(exc, (UsageError, ValueError, TypeError)):
         # The library's validators name the argument; a traceback would add nothing.
         print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
         return 2
-    except OSError as exc:
+    if isinstance(exc, OSError):
         print(f"{prog}: error: {one_line(describe_os_error(exc))}", file=sys.stderr)
         return 1
-    except MemoryError as exc:
+    if isinstance(exc, MemoryError):
         print(f"{prog}: error: out of memory{': ' + one_line(exc) if str(exc) else ''}", file=sys.stderr)
         return 1
-    except Exception as exc:  # a bug, or a library below failing in a new way: still one line
-        if args.pending:  # a signal whose exception a C callback dropped made the work fail: it is the signal
-            return _interrupted(args.pending[0], args, prog, argv)
-        if os.environ.get("SYMSPHERE_TRACEBACK"):
-            raise
-        print(
-            f"{prog}: internal error: {type(exc).__name__}: {one_line(exc)} "
-            "(set SYMSPHERE_TRACEBACK=1 for the traceback)",
-            file=sys.stderr,
-        )
-        return 1
+    if os.environ.get("SYMSPHERE_TRACEBACK"):  # a bug, or a library below failing in a new way
+        raise exc
+    print(
+        f"{prog}: internal error: {type(exc).__name__}: {one_line(exc)} (set SYMSPHERE_TRACEBACK=1 for the traceback)",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def _interrupted(signum: int, args: argparse.Namespace, prog: str, argv: Sequence[str] | None) -> int:

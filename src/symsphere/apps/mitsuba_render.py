@@ -36,7 +36,7 @@ from xml.parsers import expat
 import numpy as np
 
 from .._validation import MAX_PATHS, check_count, memory_pixel_limit, read_regular_file
-from ._process import wait_interruptibly
+from ._process import deferred_signals, wait_interruptibly
 
 __all__ = [
     "DEFAULT_VARIANT",
@@ -151,6 +151,11 @@ def select_variant(variant: str, where: str = "") -> Any:
     ValueError naming ``--variant`` (one line) for a Mitsuba that is missing, a variant it does not
     offer (the message lists those it does, sorted), or a CUDA variant on a machine without a CUDA device.
     """
+    with deferred_signals():  # a signal inside nanobind's module initialisation aborts the process
+        return _select_variant(variant, where)
+
+
+def _select_variant(variant: str, where: str) -> Any:
     try:
         import drjit as dr
         import mitsuba as mi
@@ -344,7 +349,8 @@ def _render(
     level = mi.log_level()
     mi.set_log_level(mi.LogLevel.Error)  # the plugin's refusal of a scalar variant is the one line to show
     try:
-        integrator = mi.load_dict(options)
+        with deferred_signals():  # Python's __init__ of the plugin runs inside Mitsuba's C++ constructor
+            integrator = mi.load_dict(options)
     except Exception as error:
         raise ValueError(f"--variant {variant!r}: {_last_line(error).removeprefix('ValueError: ')}") from None
     finally:
