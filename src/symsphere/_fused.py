@@ -69,7 +69,7 @@ from ._kernels import (
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
-from ._threads import route_compiles, run_kernel
+from ._threads import route, route_compiles, run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 
@@ -233,7 +233,7 @@ def _chunk_kernel(kind, params, chain, code, vector, cache):
             out[c, 1] = total
             out[c, 2] = m2
 
-    return chunk_statistics
+    return route(chunk_statistics)  # made per integrand: its first compile interruptible too (_threads)
 
 
 _kernels_lock = threading.Lock()

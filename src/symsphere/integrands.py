@@ -320,11 +320,12 @@ def orbit_average(
         values = check_real_values(raw, "f")  # NaN, inf, complex: an error, not a silent mean
     except ValueError:
         norms = _safe_norms(images[..., 0, :])
-        if not np.all(np.abs(norms - 1.0) <= 1e-3):  # the images of p were no directions: say so, not only f
-            worst = float(norms.flat[int(np.argmax(np.abs(norms - 1.0)))])
+        far = ~((norms > 1e-100) & (norms < 1e100))  # rows no direction is near: p is to blame, not only f
+        if np.any(far):
+            worst = float(norms[far].flat[0])
             raise ValueError(
-                f"'f' returned NaN or inf at the images of 'p', whose rows are not unit directions (a norm of "
-                f"{worst:.3g}); pass directions as 'p'"
+                f"'f' returned non-finite values at the images of 'p', whose rows are far from unit directions "
+                f"(a norm of {worst:.3g}); pass directions as 'p'"
             ) from None
         raise
     expected = (int(np.prod(images.shape[:-1])),)

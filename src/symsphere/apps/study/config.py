@@ -132,7 +132,7 @@ class StudyConfig:
     >>> config.replace(repetitions=1)
     Traceback (most recent call last):
         ...
-    ValueError: 'repetitions' must be >= 2 (an RMSE needs repeated estimates), got 1
+    ValueError: 'repetitions' must be in [2, 1048576] (an RMSE needs repeated estimates; each is an integration of every cell), got 1
     """
 
     name: str = "custom"
