@@ -22,7 +22,15 @@ What it counts (a finding is anything but the last column's "0"):
 - signals: ``sample`` (the target exists) and ``render`` sent SIGINT or SIGTERM at several times; after
   each run nothing of ours (``.NAME.<hex>.tmp``, ``.old``, ``.probe``) may be left, the exit status must
   be 0 (the output complete and new) or 130/143 (the target as before), with no traceback.
-- absurd sizes: commands that must exit 2 within 20 s naming the argument (or asking for --allow-long).
+- absurd sizes: commands that must exit 2 within 20 s naming the argument (or asking for --allow-long),
+  and library calls that must raise ValueError naming it at once (``sample_sphere(48 * 2**31)``).
+- Mitsuba files (skipped, with the reason, without Mitsuba): nested BSDFs, no sensor, an empty film, a
+  NaN or 1e39 radiance, a directory, FIFO or /dev/zero link named .xml, options that cannot apply: exit
+  2 with one line naming the file or option, nothing written.
+- signals during a Mitsuba render: SIGINT/SIGTERM at 1.5, 3 and 6 s: exit 130/143 within 1 s, nothing
+  written.
+- SIGKILL: sample (.npy, .csv), render (numba, Mitsuba), demo and study killed while they work, then run
+  again: the kill may leave no file (Linux: unnamed temporaries); the rerun leaves nothing of ours.
 """
 
 from __future__ import annotations
@@ -41,7 +49,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 CLI = [sys.executable, "-m", "symsphere"]
-OURS = re.compile(r"^\..+\.[0-9a-f]{8}\.(tmp|old|probe)$")
+OURS = re.compile(r"^\..+\.(?:[0-9]+-)?[0-9a-f]{8}\.(tmp|old|probe)$")
 
 
 # --- bad inputs (run in a child process: a crash is counted, not suffered) ---------------------------
@@ -278,6 +286,23 @@ def blocking_files(verbose: bool) -> dict[str, int]:
 # --- signals ----------------------------------------------------------------------------------------------
 
 
+def _writing_in(pid: int, folder: Path, min_size: int = 0) -> bool:
+    """Whether process *pid* has a file open in *folder*: its output's temporary (unnamed on Linux)."""
+    try:
+        descriptors = os.listdir(f"/proc/{pid}/fd")
+    except OSError:
+        return False
+    for descriptor in descriptors:
+        try:
+            target = os.readlink(f"/proc/{pid}/fd/{descriptor}").removesuffix(" (deleted)")
+            size = os.stat(f"/proc/{pid}/fd/{descriptor}").st_size
+        except OSError:
+            continue
+        if os.path.dirname(target) == os.path.realpath(folder) and size >= min_size:
+            return True
+    return False
+
+
 def _ours(folder: Path) -> list[str]:
     return [p.name for p in folder.iterdir() if OURS.match(p.name)]
 
@@ -307,7 +332,7 @@ def signals(verbose: bool) -> dict[str, int]:
             process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             deadline = time.monotonic() + 300
             while verb == "sample" and process.poll() is None and time.monotonic() < deadline:
-                if any(p.name.endswith(".tmp") for p in folder.iterdir()):
+                if _writing_in(process.pid, folder):
                     break
                 time.sleep(0.002)
             time.sleep(delay)
@@ -359,6 +384,16 @@ ABSURD = [
     (["integrate", "--integrand", "exp", "--n", str(48 * 10**13)], "--allow-long"),
     (["sample", "--n", str(48 * 10**13), "--out", "x.npy"], "--allow-long"),
     (["sample", "--n", str(48 * 2**64), "--out", "x.npy"], "'n'"),
+    (["study", "--repetitions", "1000000000", "--out", "s"], "--repetitions"),
+    (["study", "--repetitions", str(2**70), "--out", "s"], "--repetitions"),
+    (["study", "--repetitions", "100000", "--out", "s"], "--allow-long"),
+]
+
+# Library calls that must raise ValueError naming the argument at once (not run on, not MemoryError).
+ABSURD_API = [
+    ("symsphere.sample_sphere(48 * 2**31)", "'n'"),
+    ("symsphere.sample_hemisphere(24 * 2**33)", "'n'"),
+    ("symsphere.render.render('furnace', width=10**7, height=10**7, spp=1)", "'width * height'"),
 ]
 
 
@@ -381,6 +416,217 @@ def absurd_sizes(verbose: bool) -> dict[str, int]:
                 print(f"  {' '.join(arguments)}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
             elif verbose:
                 print(f"  {' '.join(arguments)}: {run.stderr.strip()}", file=sys.stderr)
+        for call, named in ABSURD_API:
+            counts["cases"] += 1
+            code = (
+                "import symsphere, symsphere.render\n"
+                f"try:\n    {call}\n    print('ran')\n"
+                "except ValueError as error:\n    print('ValueError', error)\n"
+                "except BaseException as error:\n    print(type(error).__name__, error)\n"
+            )
+            try:
+                run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+            except subprocess.TimeoutExpired:
+                counts["slow"] += 1
+                print(f"  slow: {call}", file=sys.stderr)
+                continue
+            if not run.stdout.startswith("ValueError") or named not in run.stdout:
+                counts["unnamed"] += 1
+                print(f"  {call}: {run.stdout.strip()[-200:]!r}", file=sys.stderr)
+            elif verbose:
+                print(f"  {call}: {run.stdout.strip()}", file=sys.stderr)
+    return counts
+
+
+# --- Mitsuba scene files ------------------------------------------------------------------------------
+
+
+def _mitsuba_missing() -> str | None:
+    run = subprocess.run([sys.executable, "-c", "import mitsuba as mi; mi.set_variant('llvm_ad_rgb')"],
+                         capture_output=True, text=True)  # fmt: skip
+    return None if run.returncode == 0 else (run.stderr.strip().splitlines() or ["?"])[-1]
+
+
+def _cornell_copy(folder: Path) -> Path:
+    import shutil
+
+    source = ROOT / "src" / "symsphere" / "mitsuba" / "scenes"
+    for path in source.glob("cornell_box*"):
+        shutil.copy(path, folder / path.name)
+    return folder / "cornell_box.xml"
+
+
+def mitsuba_files(verbose: bool) -> dict[str, int]:
+    """Hostile and unrenderable Mitsuba scene files, and options that cannot apply: each must exit 2 within
+    60 s with one line naming the file or the option, nothing written."""
+    counts = dict(cases=0, slow=0, unclear=0, written=0)
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        scene = _cornell_copy(folder)
+        text = scene.read_text()
+        cases: list[tuple[list[str], str]] = []
+        for depth in (100, 1000, 20000):
+            nest = '<bsdf type="twosided">' * depth + '<bsdf type="diffuse"/>' + "</bsdf>" * depth
+            path = folder / f"nested{depth}.xml"
+            path.write_text(f'<scene version="3.0.0"><shape type="sphere">{nest}</shape></scene>')
+            cases.append(([str(path)], "nested more than"))
+        variants = {
+            "nosensor": (re.sub(r"<sensor.*?</sensor>", "", text, flags=re.S), "has no <sensor>"),
+            "zero": (re.sub(r'name="(width|height)" value="256"', r'name="\1" value="0"', text), "0 x 0 pixels"),
+            "nan": (re.sub(r'(<emitter type="area">\s*<rgb name="radiance" value=")[^"]*"', r'\g<1>nan, nan, nan"',
+                           text), "is nan"),
+            "huge": (re.sub(r'(<emitter type="area">\s*<rgb name="radiance" value=")[^"]*"', r'\g<1>1e39, 1e39, 1e39"',
+                            text), "is inf"),
+        }  # fmt: skip
+        for stem, (content, words) in variants.items():
+            (folder / f"{stem}.xml").write_text(content)
+            cases.append(([str(folder / f"{stem}.xml")], words))
+        (folder / "dir.xml").mkdir()
+        os.mkfifo(folder / "fifo.xml")
+        (folder / "zero-link.xml").symlink_to("/dev/zero")
+        cases += [([str(folder / "dir.xml")], "is a directory"), ([str(folder / "fifo.xml")], "is a FIFO"),
+                  ([str(folder / "zero-link.xml")], "is a character device")]  # fmt: skip
+        for option in (["--workers", "2"], ["--filter", "tent"], ["--integrator", "bsdf"], ["--variant", "nosuch"]):
+            cases.append(([str(scene), *option], option[0]))
+        out = folder / "out" / "img.png"
+        out.parent.mkdir()
+        for arguments, words in cases:
+            counts["cases"] += 1
+            command = CLI + ["render", "--scene", *arguments, "--out", str(out), "--no-progress"]
+            start = time.monotonic()
+            try:
+                run = subprocess.run(command, capture_output=True, text=True, timeout=60)
+            except subprocess.TimeoutExpired:
+                counts["slow"] += 1
+                print(f"  slow: {' '.join(arguments)}", file=sys.stderr)
+                continue
+            lines = [line for line in run.stderr.splitlines() if line.strip() and "WARN" not in line]
+            if time.monotonic() - start > 30:
+                counts["slow"] += 1
+            if run.returncode != 2 or len(lines) != 1 or words not in lines[0] or "internal error" in lines[0]:
+                counts["unclear"] += 1
+                print(f"  render --scene {' '.join(arguments)}: exit {run.returncode}: {run.stderr[-200:]!r}",
+                      file=sys.stderr)  # fmt: skip
+            elif verbose:
+                print(f"  render --scene {' '.join(arguments)}: {lines[0]}", file=sys.stderr)
+            if list(out.parent.iterdir()):
+                counts["written"] += 1
+    return counts
+
+
+def _mitsuba_loaded(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/maps") as maps:
+            return "libmitsuba" in maps.read()
+    except OSError:
+        return False
+
+
+def mitsuba_signals(verbose: bool) -> dict[str, int]:
+    """SIGINT and SIGTERM at several times during a Mitsuba render that would take minutes (counted from
+    Mitsuba's loading, so that a loaded machine's slow start-up is not what is signalled): exit 130/143
+    within a second of the signal, nothing written."""
+    counts = dict(runs=0, late=0, wrong_status=0, written=0, worst_ms=0)
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        scene = _cornell_copy(folder)
+        out = folder / "out" / "img.png"
+        out.parent.mkdir()
+        command = CLI + ["render", "--scene", str(scene), "--width", "256", "--height", "192", "--spp", "4800",
+                         "--seed", "1", "--no-progress", "--out", str(out)]  # fmt: skip
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            for delay in (1.5, 3.0, 6.0):
+                counts["runs"] += 1
+                process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                deadline = time.monotonic() + 120
+                while not _mitsuba_loaded(process.pid) and process.poll() is None and time.monotonic() < deadline:
+                    time.sleep(0.05)  # main() runs once Mitsuba loads: the delay counts from there, not start-up
+                time.sleep(delay)
+                sent = time.monotonic()
+                process.send_signal(signum)
+                try:
+                    _, stderr = process.communicate(timeout=30)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    _, stderr = process.communicate()
+                waited = time.monotonic() - sent
+                counts["worst_ms"] = max(counts["worst_ms"], round(waited * 1000))
+                if waited > 1.0:
+                    counts["late"] += 1
+                    print(f"  {signal.Signals(signum).name} at {delay} s: exit after {waited:.2f} s", file=sys.stderr)
+                if process.returncode != 128 + signum or "nothing was written" not in stderr:
+                    counts["wrong_status"] += 1
+                    print(f"  {signal.Signals(signum).name} at {delay} s: exit {process.returncode}: {stderr[-200:]!r}",
+                          file=sys.stderr)  # fmt: skip
+                elif verbose:
+                    print(f"  {signal.Signals(signum).name} at {delay} s: exit {process.returncode} after "
+                          f"{waited:.3f} s", file=sys.stderr)  # fmt: skip
+                if list(out.parent.iterdir()):
+                    counts["written"] += 1
+                    for path in out.parent.iterdir():
+                        path.unlink()
+    return counts
+
+
+# --- SIGKILL ------------------------------------------------------------------------------------------------
+
+
+def sigkill(verbose: bool, mitsuba: bool) -> dict[str, int]:
+    """Each writing command SIGKILLed while it writes (or works), then run again to completion: what the
+    kill left (files: nothing, on Linux) and what the successful rerun left (nothing of ours)."""
+    counts = dict(runs=0, files_left_by_kill=0, left_after_rerun=0, rerun_failed=0)
+    jobs: list[tuple[str, list[str], list[str], str]] = [
+        ("sample .npy", ["sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", "d.npy"],
+         ["sample", "--n", "96", "--seed", "1", "--out", "d.npy"], "file"),
+        ("sample .csv", ["sample", "--n", str(48 * 2**18), "--out", "d.csv"],
+         ["sample", "--n", "96", "--seed", "1", "--out", "d.csv"], "file"),
+        ("render", ["render", "--width", "512", "--height", "384", "--spp", "4800", "--no-progress", "--out", "i.png"],
+         ["render", "--width", "8", "--height", "6", "--spp", "24", "--no-progress", "--out", "i.png"], "work"),
+        ("demo", ["demo", "--n", "48000", "--no-progress", "--out", "demo"],
+         ["demo", "--n", "4800", "--no-progress", "--out", "demo"], "directory"),
+        ("study", ["study", "--config", "small", "--no-progress", "--out", "study"],
+         ["study", "--config", "small", "--k-max", "4", "--repetitions", "2", "--no-progress", "--out", "study"],
+         "directory"),
+    ]  # fmt: skip
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        if mitsuba:
+            scene = str(_cornell_copy(folder))
+            jobs.append(("Mitsuba render", ["render", "--scene", scene, "--spp", "4800", "--no-progress", "--out", "m.png"],
+                         ["render", "--scene", scene, "--width", "16", "--spp", "24", "--no-progress", "--out", "m.png"],
+                         "work"))  # fmt: skip
+        for label, killed, rerun, kind in jobs:
+            counts["runs"] += 1
+            before = set(os.listdir(folder))
+            process = subprocess.Popen(CLI + killed, cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            deadline = time.monotonic() + 120
+            if kind == "file":  # while its temporary holds data
+                while (
+                    not _writing_in(process.pid, folder, 1) and process.poll() is None and time.monotonic() < deadline
+                ):
+                    time.sleep(0.01)
+            elif kind == "directory":  # once its temporary directory exists
+                while not _ours(folder) and process.poll() is None and time.monotonic() < deadline:
+                    time.sleep(0.05)
+                time.sleep(1.0)
+            else:
+                time.sleep(4.0)
+            process.kill()
+            process.wait()
+            left = sorted(set(os.listdir(folder)) - before)
+            if kind != "directory" and left:
+                counts["files_left_by_kill"] += 1
+                print(f"  {label}: SIGKILL left {left}", file=sys.stderr)
+            run = subprocess.run(CLI + rerun, cwd=folder, capture_output=True, text=True, timeout=600)
+            if run.returncode != 0:
+                counts["rerun_failed"] += 1
+                print(f"  {label}: the rerun failed: {run.stderr[-200:]!r}", file=sys.stderr)
+            if _ours(folder):
+                counts["left_after_rerun"] += 1
+                print(f"  {label}: after the rerun: {_ours(folder)}", file=sys.stderr)
+            elif verbose:
+                said = [line for line in run.stderr.splitlines() if "removed" in line]
+                print(f"  {label}: killed left {left or 'nothing'}; rerun {said or 'said nothing'}", file=sys.stderr)
     return counts
 
 
@@ -425,7 +671,22 @@ def main() -> int:
             )
         )
         c = absurd_sizes(args.verbose)
-        rows.append(("absurd sizes", f"{c['cases']} commands", f"slow {c['slow']}, unnamed {c['unnamed']}"))
+        rows.append(("absurd sizes", f"{c['cases']} commands and calls", f"slow {c['slow']}, unnamed {c['unnamed']}"))
+        missing = _mitsuba_missing()
+        if missing is None:
+            c = mitsuba_files(args.verbose)
+            rows.append(("Mitsuba files", f"{c['cases']} hostile scene files and options",
+                         f"slow {c['slow']}, unclear {c['unclear']}, written {c['written']}"))  # fmt: skip
+            c = mitsuba_signals(args.verbose)
+            rows.append(("signals during a Mitsuba render", f"{c['runs']} runs sent SIGINT/SIGTERM 1.5-6 s into it",
+                         f"late (> 1 s) {c['late']}, wrong status {c['wrong_status']}, written {c['written']} "
+                         f"(slowest exit {c['worst_ms']} ms)"))  # fmt: skip
+        else:
+            rows.append(("Mitsuba", "skipped", f"Mitsuba cannot run here: {missing}"))
+        c = sigkill(args.verbose, mitsuba=missing is None)
+        rows.append(("SIGKILL", f"{c['runs']} commands killed while writing, then rerun",
+                     f"files left by the kill {c['files_left_by_kill']}, left after the rerun "
+                     f"{c['left_after_rerun']}, reruns failed {c['rerun_failed']}"))  # fmt: skip
     print("| part | cases | findings |")
     print("|------|-------|----------|")
     for row in rows:

@@ -192,3 +192,25 @@ def one_line_error(stderr: str) -> str:
     assert "Traceback" not in stderr, stderr
     assert len(lines) == 1, stderr
     return lines[0]
+
+
+def writing_in(pid: int, directory, min_size: int = 0) -> bool:
+    """Whether process *pid* has a file of at least *min_size* bytes open in *directory*: its output's
+    temporary, which on Linux is unnamed (``O_TMPFILE``: /proc shows ``DIR/#inode (deleted)``) and so
+    cannot be seen in the directory's listing."""
+    import os
+
+    folder = os.path.realpath(directory)
+    try:
+        descriptors = os.listdir(f"/proc/{pid}/fd")
+    except OSError:
+        return False
+    for descriptor in descriptors:
+        try:
+            target = os.readlink(f"/proc/{pid}/fd/{descriptor}")
+            size = os.stat(f"/proc/{pid}/fd/{descriptor}").st_size
+        except OSError:
+            continue
+        if os.path.dirname(target.removesuffix(" (deleted)")) == folder and size >= min_size:
+            return True
+    return False

@@ -166,3 +166,18 @@ def test_worker_killed_inside_a_sample_sphere_task(client, tmp_path):
     result = _run_while_killing(client, tmp_path / "started", lambda: client.compute(watched).result())
     assert np.array_equal(result, symsphere.sample_sphere(n, rng=12, dtype=np.float32))
     assert np.array_equal(client.compute(array).result(), result)
+
+
+def _exits_the_worker(directions):
+    os._exit(3)  # the integrand ends its process: a crash, the OOM killer, a library calling exit()
+
+
+def test_a_worker_dying_inside_f_is_a_clear_error():
+    # Dask reported "FutureCancelledError: ... cancelled for reason: already forgotten" (the plan scattered
+    # to the dead worker went with it), naming neither the cause nor f.
+    client = ss_distributed.local_client(1)
+    try:
+        with pytest.raises(RuntimeError, match=r"^a Dask worker's process ended while evaluating 'f' \(os._exit"):
+            ss_distributed.integrate(_exits_the_worker, n=48 * 64, rng=1, client=client)
+    finally:
+        ss_distributed.close_client(client)

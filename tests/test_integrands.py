@@ -350,3 +350,15 @@ def test_an_int_beyond_float64_is_a_value_error_naming_the_argument(call, name, 
     # A number, only too large: ValueError (not the OverflowError of float(10**400)), its message short.
     with pytest.raises(ValueError, match=f"'{name}' must be a finite real number, got an integer of 401 digits"):
         call(value)
+
+
+def test_orbit_average_names_p_when_its_rows_are_not_directions():
+    with pytest.raises(
+        ValueError, match=r"images of 'p', whose rows are far from unit directions \(a norm of 1.73e\+308\)"
+    ):
+        with np.errstate(over="ignore"):
+            I.orbit_average(lambda d: np.exp(d[:, 0]), [[1e308] * 3])
+    with pytest.raises(ValueError, match=r"^'f'"):  # at directions, the integrand is to blame
+        I.orbit_average(lambda d: np.full(len(d), np.inf), [0.3, 0.2, 0.9])
+    # finite values near the largest float64: their mean is finite (the sum of 48 overflowed to NaN)
+    assert I.orbit_average(lambda d: np.full(len(d), 1e308), [[1e308] * 3])[0] == pytest.approx(1e308)

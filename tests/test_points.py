@@ -174,3 +174,13 @@ def test_interlaced_points_keep_the_scheme_unbiased():
             )
             z = (estimates.mean() - exact) / (estimates.std(ddof=1) / np.sqrt(seeds))
             assert abs(z) < threshold, (name, exact, z)
+
+
+@pytest.mark.parametrize("start", [1.5, None, "1"])
+def test_take_names_a_start_or_stop_that_is_not_an_integer(start):
+    points = BasePoints("random", 1, 64)
+    with pytest.raises(TypeError, match=r"^'start' must be an integer index; got "):
+        points.take(start=start, stop=8)
+    with pytest.raises(TypeError, match=r"^'stop' must be an integer index; got "):
+        points.take(start=0, stop=start)
+    assert points.take(start=np.int64(1), stop=8).shape == (7, 2)

@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 import pytest
-from references import one_line_error
+from references import one_line_error, writing_in
 
 import symsphere
 from symsphere import frames, harmonics, io, points, quality, warps
@@ -232,7 +232,10 @@ def test_sigint_just_after_the_temporary_is_created_leaves_nothing(tmp_path, mon
 
     out = tmp_path / "d.npy"
     out.write_bytes(b"old")
-    _inject_sigint(monkeypatch, fcntl, "flock", 1)  # right after the temporary's os.open
+    if hasattr(os, "O_TMPFILE"):  # Linux: the temporary is the unnamed file of the first os.open
+        _inject_sigint(monkeypatch, os, "open", 1)
+    else:
+        _inject_sigint(monkeypatch, fcntl, "flock", 1)  # right after the temporary's os.open
     with pytest.raises(KeyboardInterrupt):
         with atomic_path(out) as tmp:
             tmp.write_bytes(b"new")
@@ -269,7 +272,7 @@ def test_late_sigint_at_many_times(tmp_path):
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
         deadline = time.monotonic() + 120
         while process.poll() is None and time.monotonic() < deadline:
-            if any(name.endswith(".tmp") for name in os.listdir(tmp_path)):
+            if writing_in(process.pid, tmp_path):
                 break
             time.sleep(0.002)
         appeared = time.monotonic()
@@ -401,17 +404,21 @@ def test_image_temporaries_exist_only_while_writing(tmp_path, monkeypatch):
     assert seen == [[], [], []]
 
 
-def test_stale_temporaries_of_a_killed_sample_are_removed_by_the_next_run(tmp_path):
+def test_sigkill_during_a_write_leaves_nothing_and_stale_temporaries_are_removed(tmp_path):
     out = tmp_path / "big.npy"
     process = subprocess.Popen(CLI + ["sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", str(out)],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     deadline = time.monotonic() + 120
-    while not any(n.endswith(".tmp") for n in os.listdir(tmp_path)) and time.monotonic() < deadline:
+    while not writing_in(process.pid, tmp_path, min_size=1) and time.monotonic() < deadline:
         time.sleep(0.01)
     process.kill()
     process.wait(timeout=60)
-    left = [tmp_path / n for n in os.listdir(tmp_path)]
-    assert len(left) == 1 and left[0].name.startswith(".big.npy.")  # SIGKILL: the one thing nothing catches
+    if hasattr(os, "O_TMPFILE"):  # Linux: the temporary was unnamed; SIGKILL leaves nothing at all
+        assert _listing(tmp_path) == []
+    # What a killed process leaves where files cannot be unnamed (or in the instant of the rename): a
+    # temporary named after its process, which no longer exists (a pid beyond the kernel's maximum).
+    dead = tmp_path / ".big.npy.4194305-0123abcd.tmp"
+    dead.write_text("a killed run's partial output")
     live = tmp_path / ".big.npy.0123abcd.tmp"  # a writer still at work: locked, so never taken
     live.write_text("in use")
     import fcntl
@@ -419,14 +426,27 @@ def test_stale_temporaries_of_a_killed_sample_are_removed_by_the_next_run(tmp_pa
     with open(live) as handle:
         fcntl.flock(handle, fcntl.LOCK_EX)
         old = time.time() - 3600
-        for path in (left[0], live):
-            os.utime(path, (old, old))
+        os.utime(live, (old, old))
         (tmp_path / ".big.npy.notours.tmp").write_text("another pattern")
         os.utime(tmp_path / ".big.npy.notours.tmp", (old, old))
         run = subprocess.run(CLI + ["sample", "--n", "96", "--seed", "1", "--out", str(out)], capture_output=True,
                              text=True, timeout=120)  # fmt: skip
         assert run.returncode == 0, run.stderr
         assert _listing(tmp_path) == [".big.npy.0123abcd.tmp", ".big.npy.notours.tmp", "big.npy"]
+        assert "note: removed 1 temporary that a killed run left beside big.npy (.big.npy.4194305-0123abcd.tmp)" in (
+            run.stderr
+        )
+
+
+def test_a_killed_demo_or_study_directory_is_removed_by_the_next_write(tmp_path):
+    target = tmp_path / "report"
+    left = tmp_path / ".report.4194305-89abcdef.tmp"  # a pid beyond the kernel's maximum: no such process
+    left.mkdir()
+    (left / "figure.png").write_bytes(b"partial")
+    with pytest.warns(UserWarning, match=r"removed 1 temporary that a killed run left beside report"):
+        with io.atomic_directory(target) as build:
+            (build / "report.md").write_text("# done")
+    assert _listing(tmp_path) == ["report"]
 
 
 # --- 10. no zero, non-unit or NaN rows written; no negative weights ----------------------------------

@@ -224,3 +224,14 @@ def test_pdf_bad_input():
         hemisphere_pdf([np.nan, 0.0, 1.0])
     with pytest.raises(ValueError, match="not a valid method"):
         sphere_pdf([0, 0, 1.0], method="paper3")
+
+
+def test_an_array_larger_than_memory_is_a_value_error_naming_n(monkeypatch):
+    import symsphere.sampling
+
+    monkeypatch.setattr(symsphere.sampling, "machine_memory", lambda: 2**30)  # a 1 GiB machine
+    with pytest.raises(ValueError, match=r"^'n'=50331648 directions need 1.12 GiB as float64 .* iter_sphere"):
+        sample_sphere(48 * 2**20)  # 1.2e9 bytes: numpy raised MemoryError, naming neither n nor a remedy
+    with pytest.raises(ValueError, match=r"^'n'=103079215104 directions need"):
+        sample_sphere(48 * 2**31)
+    assert sample_sphere(48 * 2**10, rng=1).shape == (48 * 2**10, 3)  # what fits is sampled as before

@@ -70,7 +70,7 @@ from ._kernels import (
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
-from ._threads import run_kernel
+from ._threads import route, route_compiles, run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints
 from .symmetry import orbit_size
@@ -267,7 +267,7 @@ def _chunk_kernel(kind, params, chain, code, vector, cache):
             out[c, 1] = total
             out[c, 2] = m2
 
-    return chunk_statistics
+    return route(chunk_statistics)  # made per integrand: its first compile interruptible too (_threads)
 
 
 _kernels_lock = threading.Lock()
@@ -365,3 +365,6 @@ def fused_partials(
             raise NonFiniteBlock("'f' returned non-finite values, or values whose sum overflows", segment + bad)
         partials += [(int(row[0]), row[1:2].copy(), row[2:3].copy()) for row in blocks]
     return partials
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

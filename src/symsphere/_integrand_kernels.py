@@ -23,6 +23,8 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, register_jitable
 
+from ._threads import route_compiles
+
 __all__ = [
     "CAP",
     "EXP",
@@ -217,3 +219,6 @@ def value(kind, params, chain, x, y, z):  # pragma: no cover - compiled by numba
     if kind == POLYNOMIAL:
         return chain(x, y, z)
     return evaluate(kind, params, x, y, z)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

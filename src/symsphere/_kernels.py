@@ -37,7 +37,7 @@ from numba.extending import intrinsic, register_jitable
 
 from ._constants import TWO_POW_M53
 from ._numba_cache import invalidate_if_changed
-from ._threads import run_kernel, start_threads
+from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
 from .symmetry import SIGNS, SOURCES, orbit_size
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
@@ -669,3 +669,6 @@ def _store_kind(count, basis):
     if basis is None:
         return (_SPHERE if count == _SPHERE_ORBIT else _HEMISPHERE), _NO_WEIGHTS
     return _HEMISPHERE_ROTATED, _rotated_weights(np.ascontiguousarray(basis, dtype=np.float64), count)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -27,18 +27,29 @@ the setting has no effect (as with any OpenMP setting).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import threading
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor, wait
 from typing import Any, cast
 
 import numba
 import numpy as np
+from numba.core.dispatcher import Dispatcher
 
-__all__ = ["WAIT_POLICY", "start_threads", "run_parts", "run_kernel", "compile_interruptibly"]
+__all__ = [
+    "ROUTED",
+    "WAIT_POLICY",
+    "compile_interruptibly",
+    "route",
+    "route_compiles",
+    "run_kernel",
+    "run_parts",
+    "start_threads",
+]
 
 _typeof = cast(Callable[[Any], Any], numba.typeof)  # the type numba dispatches a value on (numba: untyped)
 try:  # the C fingerprint by which numba's dispatcher resolves argument types (private to numba; in 0.68)
@@ -166,39 +177,88 @@ def _faithful(value: Any) -> bool:
 
 
 def compile_interruptibly(kernel: Any, signature: tuple[Any, ...]) -> None:
-    """``kernel.compile(signature)``, with a SIGINT during it always ending as KeyboardInterrupt.
+    """``kernel.compile(signature)``, with a signal during it always ending as its exception.
 
     numba runs some of its compile steps as callbacks from LLVM's C code, which swallow Python
     exceptions: a KeyboardInterrupt raised there is lost and the compile fails later with
     ``RuntimeError: no compiled object yet`` (measured: 1 of ~10 first runs interrupted ~1 s into the
-    compile).  So while it compiles in the main thread, SIGINT is also recorded, and a recorded
-    SIGINT is raised again (through the previous handler) if the compile did not raise it itself.
+    compile).  So while it compiles in the main thread, SIGINT (and SIGTERM, SIGHUP where a Python
+    handler is set, as the command line sets one) is also recorded, and a recorded signal is raised
+    again (through its handler) if the compile did not raise it itself.  :func:`route_compiles` puts
+    the first compile of every other call of the package's numba functions on the same path.
     """
     if threading.current_thread() is not threading.main_thread():
         kernel.compile(signature)
         return
-    previous = signal.getsignal(signal.SIGINT)
-    if not callable(previous):  # SIG_IGN, SIG_DFL or a handler not set from Python: leave it alone
+    with _signals_kept():
         kernel.compile(signature)
-        return
-    arrived = []
+
+
+_KEPT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextlib.contextmanager
+def _signals_kept() -> Iterator[None]:
+    """Within the block (main thread): a signal with a Python handler is recorded as well as handled; if
+    the block then raises anything but the handler's exception, or nothing, the handler runs again."""
+    previous = {signum: signal.getsignal(signum) for signum in _KEPT_SIGNALS}
+    handlers = {signum: handler for signum, handler in previous.items() if callable(handler)}
+    arrived: list[int] = []
 
     def record(signum: int, frame: Any) -> None:
         arrived.append(signum)
-        previous(signum, frame)
+        handlers[signum](signum, frame)
 
-    signal.signal(signal.SIGINT, record)
+    for signum in handlers:
+        signal.signal(signum, record)
     try:
-        kernel.compile(signature)
-    except KeyboardInterrupt:
-        raise
-    except BaseException:
-        if not arrived:
-            raise
-        signal.signal(signal.SIGINT, previous)
-        previous(signal.SIGINT, None)  # the interrupt the compile lost (KeyboardInterrupt by default)
+        yield
+    except BaseException as error:
+        for signum in handlers:
+            signal.signal(signum, previous[signum])
+        if arrived and not isinstance(error, KeyboardInterrupt):
+            handlers[arrived[0]](arrived[0], None)  # the interrupt the compile lost, instead of its error
         raise
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for signum in handlers:
+            signal.signal(signum, previous[signum])
     if arrived:
-        previous(signal.SIGINT, None)
+        handlers[arrived[0]](arrived[0], None)
+
+
+ROUTED = "_symsphere_routed"
+"""The attribute :func:`route_compiles` sets on each numba dispatcher it has routed (the tests check it)."""
+
+
+def route_compiles(namespace: dict[str, Any]) -> None:
+    """Put the first compile of every numba function defined in the module of *namespace* (its
+    ``globals()``) on the interruptible path of :func:`compile_interruptibly`.
+
+    numba compiles a function at its first call with new argument types, through the dispatcher's
+    ``_compile_for_args`` (called from numba's C dispatcher, looked up on the instance); each of this
+    module's dispatchers gets a wrapper there that keeps a signal arriving during the compile (a
+    validation kernel's compile interrupted by Ctrl-C ended as "no compiled object yet", exit 1).
+    Calls with known types never reach it: nothing changes on the hot path.  Every module of the
+    package that defines numba functions calls this as its last line.
+    """
+    module = namespace.get("__name__")
+    for value in list(namespace.values()):
+        if isinstance(value, Dispatcher) and getattr(value.py_func, "__module__", None) == module:
+            route(value)
+
+
+def route(dispatcher: Any) -> Any:
+    """Route *dispatcher*'s compiles on first calls through the interruptible path (idempotent); return it."""
+    if getattr(dispatcher, ROUTED, False):
+        return dispatcher
+    original = dispatcher._compile_for_args
+
+    def compile_for_args(*args: Any, **kws: Any) -> Any:
+        if threading.current_thread() is not threading.main_thread():
+            return original(*args, **kws)
+        with _signals_kept():
+            return original(*args, **kws)
+
+    dispatcher._compile_for_args = compile_for_args
+    setattr(dispatcher, ROUTED, True)
+    return dispatcher

@@ -251,10 +251,26 @@ def _compute_on(
     index_of = {future.key: index for index, future in enumerate(futures)}
     results: dict[int, list[Partial]] = {}
     for future in _progress(as_completed(futures), len(futures), progress, "integrating"):
-        results[index_of[future.key]] = future.result()
+        results[index_of[future.key]] = _result(future, "evaluating 'f'")
     for number, task in enumerate(tasks):  # in task order: block order within each request
         partials[task[0]].extend(results[number])
     return partials
+
+
+def _result(future: Future[Any], doing: str) -> Any:
+    """``future.result()``; a task lost with its worker's process (``os._exit``, a crash, the OOM killer) raises
+    a RuntimeError saying so: Dask reports it as "cancelled ... already forgotten" (the data scattered to the
+    worker went with it) or ``KilledWorker``, naming neither the cause nor the task's work."""
+    from distributed.client import FutureCancelledError
+    from distributed.scheduler import KilledWorker
+
+    try:
+        return future.result()
+    except (FutureCancelledError, KilledWorker) as error:
+        raise RuntimeError(
+            f"a Dask worker's process ended while {doing} (os._exit, a crash or memory exhausted inside the "
+            f"task), and its task could not be finished: {type(error).__name__}: {error}"
+        ) from None
 
 
 def render(
@@ -322,7 +338,7 @@ def render(
         index_of = {future.key: index for index, future in enumerate(futures)}
         results: dict[int, list[Float64Array]] = {}
         for future in _progress(as_completed(futures), len(futures), progress, f"rendering {plan.scene.name}"):
-            results[index_of[future.key]] = future.result()
+            results[index_of[future.key]] = _result(future, f"rendering {plan.scene.name!r}")
         workers = len(active.scheduler_info()["workers"])
     accum = np.zeros((plan.height, plan.width, 3))
     for index in range(len(tasks)):

@@ -43,6 +43,7 @@ import numpy.typing as npt
 
 from ._constants import HEMISPHERE_AREA, SPHERE_AREA
 from ._integrand_kernels import CAP, EXP, PHONG, POLYGON_LIGHT, POLYNOMIAL, SPHERE_LIGHT, Z, integrand_kernel
+from ._threads import route_compiles
 from ._typing import BoolArray, Domain, Float64Array, FloatArray
 from ._validation import (
     check_choice,
@@ -315,12 +316,27 @@ def orbit_average(
         raise TypeError(f"'f' must be callable, got {type(f).__name__}")
     count = orbit_size(domain)
     images = orbit(p, domain)
-    values = check_real_values(f(images.reshape(-1, 3)), "f")  # NaN, inf, complex: an error, not a silent mean
+    raw = f(images.reshape(-1, 3))
+    try:
+        values = check_real_values(raw, "f")  # NaN, inf, complex: an error, not a silent mean
+    except ValueError:
+        norms = _safe_norms(images[..., 0, :])
+        far = ~((norms > 1e-100) & (norms < 1e100))  # rows no direction is near: p is to blame, not only f
+        if np.any(far):
+            worst = float(norms[far].flat[0])
+            raise ValueError(
+                f"'f' returned non-finite values at the images of 'p', whose rows are far from unit directions "
+                f"(a norm of {worst:.3g}); pass directions as 'p'"
+            ) from None
+        raise
     expected = (int(np.prod(images.shape[:-1])),)
     if values.shape != expected:
         raise ValueError(f"'f' must return one value per direction, shape {expected}, got {values.shape}")
-    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming f
-        mean: Float64Array = values.reshape(images.shape[:-2] + (count,)).mean(axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is handled below, naming f
+        grouped = values.reshape(images.shape[:-2] + (count,))
+        mean: Float64Array = grouped.mean(axis=-1)
+        if not np.all(np.isfinite(mean)):  # each value divided first: finite values near 1e308 average finitely
+            mean = (grouped / count).sum(axis=-1)
     if not np.all(np.isfinite(mean)):
         row = int(np.flatnonzero(~np.isfinite(mean.ravel()))[0])
         raise ValueError(
@@ -328,6 +344,16 @@ def orbit_average(
             f"{images.reshape(-1, count, 3)[row, 0].tolist()}); scale f down"
         )
     return mean
+
+
+def _safe_norms(p: FloatArray) -> Float64Array:
+    """Euclidean norms of the rows of *p* without overflow (rows of 1e308 have norm 1.7e308, not inf)."""
+    points = np.asarray(p, dtype=np.float64)
+    scale = np.max(np.abs(points), axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scaled = np.where(scale > 0, points / np.where(scale > 0, scale, 1.0), 0.0)
+    norms: Float64Array = scale[..., 0] * np.sqrt(np.sum(scaled * scaled, axis=-1))
+    return norms
 
 
 # =============================================================================
@@ -667,3 +693,6 @@ def _build_integrands() -> dict[str, Integrand]:
 
 INTEGRANDS = _build_integrands()
 """dict name -> :class:`Integrand`."""
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

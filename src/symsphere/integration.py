@@ -47,6 +47,7 @@ import numpy.typing as npt
 
 from ._auto import RULE_METHODS, integrate_rules
 from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
+from ._threads import route_compiles
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 from ._validation import check_choice
 from .warps import METHODS
@@ -180,3 +181,6 @@ or scipy.stats.qmc.QMCEngine, optional
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
     return to_tolerance(f, domain, n, map_method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -14,8 +14,10 @@ replaced and the link is kept.  Only regular files (or names that do not exist y
 are replaced: a target that is, or links to, a directory, a character or block
 device, a FIFO or a socket is refused with an ``OSError`` naming it, before any
 temporary is made (``/dev/null`` is never renamed over, nor a FIFO blocked on).
-Temporaries that a killed run (SIGKILL) left are removed by the next write to the
-same target (:func:`remove_stale_temporaries`).  Large outputs are written with ordinary writes
+On Linux a file's temporary is an unnamed file (``O_TMPFILE``) until the commit, so a
+killed run (SIGKILL, the OOM killer) leaves nothing; temporary directories, and files
+elsewhere, carry their process id, and the next write to the same target removes those
+of processes that no longer exist, with a warning (:func:`remove_stale_temporaries`).  Large outputs are written with ordinary writes
 (no memory map), their space reserved first where the file system allows
 (``os.posix_fallocate``), so a full disk is an ``OSError`` (``ENOSPC``) at the
 start, never a ``SIGBUS`` part-way, and memory stays at one block.
@@ -34,6 +36,7 @@ import signal
 import stat
 import threading
 import time
+import warnings
 from collections.abc import Callable, Collection, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -42,6 +45,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from ._threads import route_compiles
 from ._typing import FloatArray
 from ._validation import (
     TEMPORARY_KINDS,
@@ -77,9 +81,10 @@ _CSV_FORMATS = {np.dtype(np.float64): "%.17g", np.dtype(np.float32): "%.9g"}  # 
 
 
 def _temporary_name(target: Path, kind: str) -> Path:
-    # Hidden, in the target's directory (so the rename stays on one file system),
-    # and recognisable if a hard crash (SIGKILL, power loss) ever leaves one behind.
-    return target.with_name(f".{target.name}.{secrets.token_hex(4)}.{kind}")
+    # Hidden, in the target's directory (so the rename stays on one file system), recognisable if a hard
+    # crash (SIGKILL, power loss) ever leaves one behind, and naming its process: the next run removes it
+    # as soon as that process no longer exists (remove_stale_temporaries).
+    return target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}.{kind}")
 
 
 @contextlib.contextmanager
@@ -195,18 +200,24 @@ def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
                 temporaries.append(temporary)
                 locks.append(lock)
         yield list(temporaries)
-        for path, temporary in zip(paths, temporaries, strict=False):
+        for path, lock in zip(paths, locks, strict=False):
             try:
-                with open(temporary, "rb+") as handle:
-                    os.fsync(handle.fileno())  # the data is on disk before the name points at it
+                os.fsync(lock)  # the data is on disk before the name points at it (any descriptor of the file)
             except OSError as exc:
                 raise OSError(exc.errno, exc.strerror, str(path)) from None
         with _signals_deferred():
+            for index, (target, path, lock) in enumerate(zip(targets, paths, locks, strict=False)):
+                if _is_unnamed(temporaries[index]):  # now it gets a name, for the rename
+                    try:
+                        temporaries[index] = _link_unnamed(lock, target)
+                    except OSError as exc:
+                        raise OSError(exc.errno, exc.strerror, str(path)) from None
             _replace_all(temporaries, targets, paths)
     except BaseException:
         for temporary in temporaries:
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(temporary)
+            if not _is_unnamed(temporary):  # an unnamed file goes with its last descriptor
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(temporary)
         raise
     finally:
         for lock in locks:
@@ -214,8 +225,8 @@ def _atomic_paths(paths: list[Path], name: str) -> Iterator[list[Path]]:
 
 
 STALE_SECONDS = 60.0
-"""How long a hidden temporary of ours must have been left unchanged, and unlocked, before a later write
-to the same target removes it (see :func:`remove_stale_temporaries`)."""
+"""How long a hidden temporary of ours whose process cannot be told dead must have been left unchanged, and
+unlocked, before a later write to the same target removes it (see :func:`remove_stale_temporaries`)."""
 
 
 def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
@@ -224,35 +235,42 @@ def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
     Parameters
     ----------
     path : str or os.PathLike
-        A target of :func:`atomic_path` or :func:`atomic_paths` (followed through symbolic links).
+        A target of :func:`atomic_path`, :func:`atomic_paths` or :func:`atomic_directory` (followed
+        through symbolic links).
 
     Returns
     -------
     list of pathlib.Path
-        The files removed.
+        The files and directories removed.  When there are any, a ``UserWarning`` says so (the
+        command line shows it as a note).
 
     Notes
     -----
-    Only an uncatchable end (SIGKILL, power loss) leaves a temporary behind.  A file is removed only
-    if all of these hold: its name is exactly ``.NAME.<8 hex digits>.tmp`` (or ``.old``, ``.probe``)
-    for this target's NAME; it is a regular file owned by this user; it has not changed for
-    :data:`STALE_SECONDS`; and no process holds its lock (a writer holds an exclusive ``flock`` on
-    its temporary for as long as it writes, so a running write's file is never taken).  Every write
-    through this module calls it first, so the next run over the same output cleans up.
+    Only an uncatchable end (SIGKILL, the OOM killer, power loss) leaves a temporary behind, and on
+    Linux a file's temporary has no name until its last instant (``O_TMPFILE``), so what is left is a
+    temporary directory, a file of a system without unnamed files, or one caught in the instant of
+    its renaming.  An entry is removed only if all of these hold: its name is exactly
+    ``.NAME.<pid>-<8 hex digits>.tmp`` (or ``.old``, ``.probe``; or the older ``.NAME.<8 hex>.tmp``)
+    for this target's NAME; it is a regular file or a directory owned by this user; no process holds
+    its lock (a writer holds an exclusive ``flock`` on its temporary for as long as it writes, so a
+    running write's file is never taken); and either the process *pid* no longer exists or the entry
+    has not changed for :data:`STALE_SECONDS`.  Every write through this module calls it first, so the
+    next run over the same output cleans up at once.
 
     Examples
     --------
-    >>> import os, tempfile
+    >>> import os, tempfile, warnings
     >>> from symsphere.io import remove_stale_temporaries
     >>> folder = tempfile.mkdtemp()
     >>> left = os.path.join(folder, ".out.npy.0123abcd.tmp")
     >>> _ = open(left, "w").write("a killed run's partial output")
     >>> os.utime(left, (0, 0))                      # unchanged since 1970
-    >>> [p.name for p in remove_stale_temporaries(os.path.join(folder, "out.npy"))]
+    >>> with warnings.catch_warnings(record=True):
+    ...     [p.name for p in remove_stale_temporaries(os.path.join(folder, "out.npy"))]
     ['.out.npy.0123abcd.tmp']
     """
     target = Path(os.path.realpath(check_path(path, "path")))
-    pattern = re.compile(rf"\.{re.escape(target.name)}\.[0-9a-f]{{8}}\.(?:{'|'.join(TEMPORARY_KINDS)})")
+    pattern = re.compile(rf"\.{re.escape(target.name)}\.(?:([0-9]+)-)?[0-9a-f]{{8}}\.(?:{'|'.join(TEMPORARY_KINDS)})")
     removed: list[Path] = []
     try:
         entries = os.scandir(target.parent)
@@ -261,39 +279,117 @@ def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
     now = time.time()
     with entries:
         for entry in entries:
-            if not pattern.fullmatch(entry.name):
+            match = pattern.fullmatch(entry.name)
+            if match is None:
                 continue
             candidate = Path(entry.path)
             try:
                 info = entry.stat(follow_symlinks=False)
-                if not stat.S_ISREG(info.st_mode) or info.st_uid != os.geteuid() or now - info.st_mtime < STALE_SECONDS:
-                    continue
-                descriptor = os.open(candidate, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
             except OSError:
                 continue
-            try:
-                fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)  # held by a live writer: not stale
-                os.unlink(candidate)
+            kind_ok = stat.S_ISREG(info.st_mode) or stat.S_ISDIR(info.st_mode)
+            dead = match.group(1) is not None and not _process_exists(int(match.group(1)))
+            if not kind_ok or info.st_uid != os.geteuid() or not (dead or now - info.st_mtime >= STALE_SECONDS):
+                continue
+            if _remove_unlocked(candidate, stat.S_ISDIR(info.st_mode)):
                 removed.append(candidate)
-            except OSError:
-                pass
-            finally:
-                os.close(descriptor)
+    if removed:
+        shown = ", ".join(p.name for p in removed[:3]) + (", ..." if len(removed) > 3 else "")
+        warnings.warn(
+            f"removed {len(removed)} temporar{'y' if len(removed) == 1 else 'ies'} that a killed run left "
+            f"beside {target.name} ({shown})",
+            UserWarning,
+            stacklevel=2,
+        )
     return removed
 
 
+def _process_exists(pid: int) -> bool:
+    """Whether a process *pid* exists here (another user's counts; pid 0 and ours are never stale)."""
+    if pid <= 0 or pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # EPERM: it exists, as another user's; anything else: assume it does
+        return True
+    return True
+
+
+def _remove_unlocked(candidate: Path, directory: bool) -> bool:
+    """Remove *candidate* if no process holds its lock; whether it was removed."""
+    try:
+        descriptor = os.open(candidate, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)  # held by a live writer: not stale
+        if directory:
+            shutil.rmtree(candidate)
+        else:
+            os.unlink(candidate)
+    except OSError:
+        return False
+    finally:
+        os.close(descriptor)
+    return True
+
+
+_UNNAMED = Path("/proc/self/fd")
+
+
+def _is_unnamed(temporary: Path) -> bool:
+    return temporary.parent == _UNNAMED
+
+
 def _create_temporary(target: Path) -> tuple[Path, int]:
-    """A new empty temporary beside *target*, and a descriptor holding its lock (close it when done)."""
+    """A new empty temporary for *target*, and a descriptor of it holding its lock (close it when done).
+
+    On Linux it is an unnamed file in the target's directory (``O_TMPFILE``), reached by the name
+    ``/proc/self/fd/N`` while it is written and linked under a hidden name only at commit: a process killed
+    before (SIGKILL, the OOM killer) leaves nothing.  Elsewhere, or on a file system without unnamed
+    files, it is the hidden file ``.NAME.<pid>-<8 hex>.tmp`` beside the target.
+    """
+    unnamed = getattr(os, "O_TMPFILE", 0)
+    if unnamed and _UNNAMED.is_dir():
+        try:
+            descriptor = os.open(target.parent, unnamed | os.O_RDWR, 0o666)  # the umask applies, as to a name
+        except OSError as exc:
+            if exc.errno not in (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT):
+                raise
+        else:
+            return _UNNAMED / str(descriptor), descriptor
     while True:
         temporary = _temporary_name(target, "tmp")
         try:
             # O_EXCL: never clobber an existing file; mode 0o666 lets the umask decide, unlike mkstemp's 0o600.
-            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            descriptor = os.open(temporary, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)
         except FileExistsError:
             continue
         with contextlib.suppress(OSError):  # a file system without flock: only the age protects it
             fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
         return temporary, descriptor
+
+
+def _link_unnamed(descriptor: int, target: Path) -> Path:
+    """Give the unnamed file of *descriptor* a hidden name beside *target* (``linkat`` through /proc)."""
+    # linkat(..., AT_SYMLINK_FOLLOW) through the magic link; os.link calls linkat (not link, which would
+    # try to link the /proc entry itself: EXDEV) only when it is given a directory descriptor.
+    folder = os.open(_UNNAMED, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        while True:
+            name = _temporary_name(target, "tmp")
+            try:
+                os.link(str(descriptor), name, src_dir_fd=folder, follow_symlinks=True)
+            except FileExistsError:
+                continue
+            break
+    finally:
+        os.close(folder)
+    with contextlib.suppress(OSError):
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    return name
 
 
 def _check_still_replaceable(target: Path, path: Path) -> None:
@@ -430,8 +526,12 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
     target = check_path(path, "path")
     allowed = check_file_names(replaceable, "replaceable")
     _check_replaceable(target, allowed)
+    remove_stale_temporaries(target)
     temporary = _temporary_name(target, "tmp")
     temporary.mkdir()
+    lock = os.open(temporary, os.O_RDONLY)
+    with contextlib.suppress(OSError):  # held while the directory is built: a live run's is never removed
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
     try:
         yield temporary
         _check_replaceable(target, allowed)  # it may have appeared or changed meanwhile
@@ -445,6 +545,8 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
     except BaseException:
         shutil.rmtree(temporary, ignore_errors=True)
         raise
+    finally:
+        os.close(lock)
 
 
 def _check_replaceable(target: Path, allowed: set[str]) -> None:
@@ -714,3 +816,6 @@ class _PageDropper:
         os.fdatasync(self.descriptor)
         os.posix_fadvise(self.descriptor, self.dropped, position - self.dropped, os.POSIX_FADV_DONTNEED)
         self.dropped = position
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -29,6 +29,7 @@ distributed code cut their work.
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from typing import TYPE_CHECKING, Any
 
@@ -36,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit, prange
 
-from ._threads import start_threads
+from ._threads import route_compiles, start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
 from ._validation import (
     MAX_COUNT,
@@ -47,6 +48,7 @@ from ._validation import (
     check_size,
     check_sobol_size,
     check_square_count,
+    short_repr,
 )
 
 if TYPE_CHECKING:
@@ -175,6 +177,10 @@ or scipy.stats.qmc.QMCEngine
 
     def take(self, start: int, stop: int) -> Float64Array:
         """Points ``start ... stop - 1`` of the run, shape (stop - start, 2), float64."""
+        for name, value in (("start", start), ("stop", stop)):
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+                raise TypeError(f"'{name}' must be an integer index; got {type(value).__name__} {short_repr(value)}")
+        start, stop = int(start), int(stop)
         if not 0 <= start <= stop <= self.total:
             raise ValueError(f"'start'={start} and 'stop'={stop} must satisfy 0 <= start <= stop <= {self.total}")
         if self._engine is not None:
@@ -337,3 +343,6 @@ def check_points(points: object) -> QMCEngine | None:
 'sobol_interlaced2', 'sobol_interlaced3'}
     """
     return check_point_set(points, POINT_SETS)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -20,7 +20,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from ._threads import start_threads
+from ._threads import route_compiles, start_threads
 from ._typing import Float64Array
 from ._validation import as_float_array, check_positive_real
 
@@ -281,3 +281,6 @@ def _finite(values: object, name: str) -> Float64Array:
     if not np.all(np.isfinite(array)):
         raise ValueError(f"'{name}' must be finite (no NaN or inf)")
     return array
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

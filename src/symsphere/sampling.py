@@ -42,6 +42,7 @@ from ._validation import (
     check_out,
     check_rng,
     check_unit_directions,
+    machine_memory,
 )
 from .points import check_points
 from .symmetry import DOMAINS, orbit_size
@@ -427,7 +428,7 @@ or scipy.stats.qmc.QMCEngine
         m = -(-n // count)
         plan = self._plan(self._position + m, n)
         if out is None:
-            out = np.empty((n, 3), dtype=self.dtype)
+            out = _allocate(n, self.dtype)
         else:
             check_out(out, (n, 3), self.dtype)
         start = self._position
@@ -536,3 +537,22 @@ or scipy.stats.qmc.QMCEngine
             self.points, copy.deepcopy(self._seed), total, self.orbit_size, None if self._position else n
         )
         return _kernels.Plan(source, self.method, self.orbit_size, self._basis)
+
+
+def _allocate(n: int, dtype: np.dtype[Any]) -> FloatArray:
+    """An empty (n, 3) array; ValueError naming 'n' if it cannot fit in the machine's memory (numpy's
+    MemoryError named neither the argument nor what to do)."""
+    need = 3 * n * dtype.itemsize
+    memory = machine_memory()
+    hint = "stream them with iter_sphere / iter_hemisphere (chunk=...) or symsphere.io.stream_directions"
+    if memory is not None and need > memory:
+        raise ValueError(
+            f"'n'={n} directions need {need / 2**30:.3g} GiB as {dtype} but this machine has "
+            f"{memory / 2**30:.3g} GiB; {hint}, or pass a smaller n"
+        )
+    try:
+        return np.empty((n, 3), dtype=dtype)
+    except MemoryError:
+        raise ValueError(
+            f"'n'={n} directions ({need / 2**30:.3g} GiB as {dtype}) do not fit in free memory; {hint}"
+        ) from None

@@ -240,3 +240,24 @@ def test_cli_start_imports_no_heavy_scipy():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert done.stdout.strip() == "[]", done.stdout
+
+
+def test_a_signal_dropped_in_a_callback_that_made_the_work_fail_ends_as_the_signal(tmp_path, monkeypatch, capsys):
+    # numba's compile drops a KeyboardInterrupt raised in an LLVM callback and then fails with
+    # "no compiled object yet": the run must end as interrupted (130), not as an internal error (1).
+    import signal
+
+    from symsphere.apps import cli
+
+    def fails_after_a_lost_interrupt(args):
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except KeyboardInterrupt:
+            pass  # lost, as inside a C callback
+        raise RuntimeError("no compiled object yet for <Library '_first_non_unit_row'>")
+
+    monkeypatch.setattr(cli, "_run_sample", fails_after_a_lost_interrupt)
+    assert main(["sample", "--n", "48", "--out", str(tmp_path / "d.npy")]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted; nothing was written" in err and "internal error" not in err
+    assert _leftovers(tmp_path) == []

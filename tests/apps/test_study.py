@@ -295,3 +295,21 @@ def test_report_html_converts_the_report_markdown():
     assert '<img alt="plot" src="a.png">' in page
     assert "<em>em</em>" in page and '<a href="b.html">link</a>' in page
     assert "<table>" in page and '<td style="text-align: right;">2</td>' in page
+
+
+@pytest.mark.parametrize(
+    "repetitions, words",
+    [("1000000000", "--repetitions must be at most 1048576"), (str(2**70), "--repetitions must be at most 1048576"),
+     ("100000", "is estimated to take at least")],
+)  # fmt: skip
+def test_absurd_repetitions_are_refused_before_any_work(tmp_path, repetitions, words):
+    parser = argparse.ArgumentParser(prog="symsphere")
+    add_study_parser(parser.add_subparsers(dest="verb"))
+    from symsphere.apps.study import run_study_command
+
+    args = parser.parse_args(["study", "--repetitions", repetitions, "--out", str(tmp_path / "r")])
+    with pytest.raises(ValueError, match=words):
+        run_study_command(args)
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match=r"'repetitions' must be in \[2, 1048576\]"):
+        CONFIGS["small"].replace(repetitions=2**70)

@@ -206,3 +206,13 @@ def test_samplers_listed():
     }  # fmt: skip
     assert INTEGRATORS == ("path", "bsdf")
     assert math.isclose(2 * math.tan(math.radians(cornell().camera.fov) / 2), 0.5135, rel_tol=1e-15)
+
+
+def test_an_image_larger_than_memory_is_refused_before_any_allocation(monkeypatch):
+    from symsphere._testing import validation
+    from symsphere.render import render
+
+    monkeypatch.setattr(validation.values, "machine_memory", lambda: 2**30)  # a 1 GiB machine: ~6.7 Mpixels
+    with pytest.raises(ValueError, match=r"'width \* height'=67108864 is too large .* on this machine"):
+        render("furnace", width=8192, height=8192, spp=1, sampler="cosine", seed=1)
+    assert validation.memory_pixel_limit(160) == 2**30 // 160

@@ -83,7 +83,7 @@ def check_file_suffix(path: object, allowed: Sequence[str], name: str = "path") 
 # ---------------------------------------------------------------------------
 
 TEMPORARY_KINDS = ("tmp", "old", "probe")
-"""The last suffix of the hidden files an atomic write makes beside its target, ``.NAME.<8 hex>.KIND``:
+"""The last suffix of the hidden files an atomic write makes beside its target, ``.NAME.<pid>-<8 hex>.KIND``:
 the temporary (``tmp``), the previous version kept during the renames of a set (``old``) and the
 file that :func:`check_output_path` creates and removes at once (``probe``)."""
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TypeVar, cast
 
@@ -23,6 +24,8 @@ __all__ = [
     "MAX_DIMENSIONS",
     "MAX_PATHS",
     "MAX_PIXELS",
+    "machine_memory",
+    "memory_pixel_limit",
     "MAX_POLYNOMIAL_DEGREE",
     "MAX_QUADRATURE_ORDER",
     "MAX_SH_DEGREE",
@@ -138,6 +141,34 @@ MAX_PIXELS = 2**28
 """Largest image (width * height pixels) of one render: 16384 x 16384.  The renderer holds the image in
 float64 RGB several times over (the sum, a pass, the mean: 24 bytes a pixel each, 6 GiB each at the
 limit); ``width = height = 2**31`` used to reach numpy's "array is too big", naming neither."""
+
+
+def machine_memory() -> int | None:
+    """Bytes of memory this process may use: the physical memory, or a smaller cgroup limit (containers,
+    batch jobs); None where neither can be read."""
+    sizes = []
+    try:
+        sizes.append(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, OSError, ValueError):  # not POSIX
+        pass
+    for limit_file in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            with open(limit_file) as handle:
+                text = handle.read().strip()
+        except OSError:
+            continue
+        if text.isdigit():
+            sizes.append(int(text))
+    return min(sizes) if sizes else None
+
+
+def memory_pixel_limit(bytes_per_pixel: int) -> int:
+    """The largest image (width * height) a render may hold at *bytes_per_pixel*: :data:`MAX_PIXELS`, or
+    fewer where :func:`machine_memory` is smaller (an image that would not fit is refused at once, not
+    after the machine has started swapping or the kernel's OOM killer has ended the run)."""
+    memory = machine_memory()
+    return MAX_PIXELS if memory is None else max(1, min(MAX_PIXELS, memory // bytes_per_pixel))
+
 
 MAX_SH_DEGREE = 85
 """Largest degree l of a real spherical harmonic (:mod:`symsphere.harmonics`): its unnormalised Legendre

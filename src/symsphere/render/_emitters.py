@@ -41,6 +41,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
+from .._threads import route_compiles
 from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
 from ._random import next_u64, u01
@@ -297,3 +298,6 @@ def power_heuristic(pdf, other):
         return 0.0
     ratio = other / pdf
     return 1.0 / (1.0 + ratio * ratio)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -89,7 +89,7 @@ from .._compile_ahead import compile_ahead, is_cached
 from .._kernels import orbit_member, triangle_density, triangle_point
 from .._numba_cache import invalidate_if_changed
 from .._splitmix import GOLDEN, ODD, mix64
-from .._threads import run_kernel, start_threads
+from .._threads import route_compiles, run_kernel, start_threads
 from ..frames import frame_rows
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
 from ._emitters import INLINED, INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
@@ -726,3 +726,6 @@ def prepare_kernels() -> None:
         invalidate_if_changed(sample_emitter)  # the emitters' own cached functions (they inline _random, frames)
         start_threads()
         _ready = True
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from .._numba_cache import invalidate_if_changed
+from .._threads import route_compiles
 from . import _integrator
 from ._emitters import emitter_pdf, sample_emitter
 from ._integrator import KERNEL_OPTIONS, bsdf_pdf, fixed_sampler, intersect, is_cosine, plain_spheres, sample_local
@@ -155,3 +156,6 @@ def prepare_kernels() -> None:
         _integrator.prepare_kernels()
         invalidate_if_changed(first_hits)
         _ready = True
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

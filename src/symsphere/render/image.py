@@ -7,6 +7,8 @@ Several files of one image (:func:`save_image_set`) appear together or not at al
 - PFM (Portable Float Map): ``PF``, ``width height``, scale ``-1.0`` (negative:
   little-endian), then float32 RGB rows from the *bottom* row up.
 - ``.npy``: the array as is (``numpy.save``), float64 unless given otherwise.
+- EXR (OpenEXR, float32 RGB): written with Mitsuba 3's ``Bitmap`` (the extra ``mitsuba``), for
+  readers that take HDR images in no other format.
 - PNG: ``exposure * radiance`` clamped to [0, 1], then the sRGB transfer
   function (``12.92 c`` below 0.0031308, else ``1.055 c^(1/2.4) - 0.055``),
   rounded to 8 bits; written as 8-bit RGB with Pillow (matplotlib's own PNG writer, without
@@ -50,7 +52,7 @@ __all__ = [
 ]
 
 HDR_SUFFIXES = (".pfm", ".npy")
-IMAGE_SUFFIXES = (".png", ".pfm", ".npy")
+IMAGE_SUFFIXES = (".png", ".pfm", ".npy", ".exr")
 """The suffixes (lower case; matched case-insensitively) :func:`save_image` and :func:`save_image_set` write."""
 
 
@@ -65,9 +67,24 @@ def _encode(suffix: str, image: FloatArray, exposure: float) -> bytes:
         height, width = image.shape[:2]
         buffer.write(f"PF\n{width} {height}\n-1.0\n".encode("ascii"))
         buffer.write(np.ascontiguousarray(image[::-1], dtype="<f4").tobytes())
+    elif suffix == ".exr":
+        return _encode_exr(image)
     else:
         np.save(buffer, image)
     return buffer.getvalue()
+
+
+def _encode_exr(image: FloatArray) -> bytes:
+    """OpenEXR bytes of *image* (float32 RGB), by Mitsuba 3's Bitmap; ValueError if Mitsuba is missing."""
+    try:
+        import mitsuba as mi  # function-level and optional: only EXR output needs it
+    except ImportError as error:
+        raise ValueError(f"'.exr' output needs Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})") from None
+    bitmap = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
+    stream = mi.MemoryStream()
+    bitmap.write(stream, mi.Bitmap.FileFormat.OpenEXR)
+    stream.seek(0)
+    return bytes(stream.read(stream.size()))
 
 
 def linear_to_srgb(c: npt.ArrayLike) -> Float64Array:
@@ -165,7 +182,8 @@ def save_image_set(paths: Iterable[str | os.PathLike[str]], image: npt.ArrayLike
     Parameters
     ----------
     paths : list of str or os.PathLike
-        Distinct files ending in ``.png`` (tone-mapped with *exposure*), ``.pfm`` or ``.npy``.
+        Distinct files ending in ``.png`` (tone-mapped with *exposure*), ``.pfm``, ``.npy`` or ``.exr``
+        (needs Mitsuba 3).
     image : array_like, shape (height, width, 3)
         Linear radiance.
     exposure : float
@@ -196,7 +214,7 @@ def save_image_set(paths: Iterable[str | os.PathLike[str]], image: npt.ArrayLike
     suffixes = [check_file_suffix(path, IMAGE_SUFFIXES, "paths") for path in targets]
     image = check_image(image)
     exposure = check_exposure(exposure)
-    if ".pfm" in suffixes:
+    if ".pfm" in suffixes or ".exr" in suffixes:
         check_float32_range(image)
     # Encoded first (tone mapping, PNG compression): the temporaries exist only while the bytes are written.
     encoded = [_encode(suffix, image, exposure) for suffix in suffixes]

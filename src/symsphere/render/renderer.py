@@ -25,6 +25,7 @@ from .._validation import (
     check_index,
     check_seed,
     check_size,
+    memory_pixel_limit,
     short_repr,
 )
 from . import _integrator as _k
@@ -45,6 +46,11 @@ __all__ = [
     "render_passes",
     "write_outputs",
 ]
+
+BYTES_PER_PIXEL = 160
+"""Memory a pixel of an image costs during a render, with room to spare over the ~147 bytes an audit measured
+(the sum, a pass and the mean in float64 RGB, the filter weights, the encoded outputs); images whose
+pixels would not fit in the machine's memory are refused before any allocation."""
 
 SAMPLERS = (
     "symmetric",
@@ -406,7 +412,11 @@ def plan_passes(
     height = check_count(height, "height")
     spp = check_count(spp, "spp")
     # The image first (else 'spp'=1 was "too large ... at most 0"), then the paths, before any allocation.
-    check_size(width * height, "width * height", MAX_PIXELS, f"({width} x {height} pixels, held in memory in float64)")
+    limit = memory_pixel_limit(BYTES_PER_PIXEL)
+    memory = "" if limit == MAX_PIXELS else f" on this machine (~{BYTES_PER_PIXEL} bytes a pixel)"
+    check_size(
+        width * height, "width * height", limit, f"({width} x {height} pixels, held in memory in float64){memory}"
+    )
     check_size(spp, "spp", MAX_PATHS // (width * height), f"for {width}x{height} pixels (paths are counted in int64)")
     if not isinstance(sampler, str) or sampler not in SAMPLERS:
         raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {short_repr(sampler)}")
@@ -500,7 +510,7 @@ def write_outputs(result: RenderResult, out: str | os.PathLike[str], exposure: f
     """
     if not isinstance(result, RenderResult):
         raise TypeError(f"'result' must be a RenderResult (from render()), got {type(result).__name__}")
-    check_file_suffix(out, IMAGE_SUFFIXES, "out")
+    check_file_suffix(out, IMAGE_SUFFIXES[:3], "out")  # .exr is not among the three written
     out = Path(out)
     # One set: all three files appear together or none does (symsphere.io.atomic_paths).
     return save_image_set([out.with_suffix(s) for s in (".png", ".pfm", ".npy")], result.image, exposure)

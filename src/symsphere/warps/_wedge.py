@@ -61,6 +61,7 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import overload
 
+from .._threads import route_compiles
 from .._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
 from ..symmetry import HEMISPHERE_MAPS
 
@@ -364,3 +365,6 @@ def _cosine_wedge_density_in_kernels(x: Any, y: Any, z: Any) -> Any:
 @overload(cosine_wedge_uv, jit_options={}, inline="never", strict=False)
 def _cosine_wedge_uv_in_kernels(x: Any, y: Any, z: Any) -> Any:
     return _uv
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 import errno
+import sys
 import time
 from pathlib import Path
 
-from ..._validation import check_seed
-from .config import CONFIGS
+from ..._validation import check_seed, short_repr
+from .config import CONFIGS, MAX_REPETITIONS, StudyConfig
 from .run import run_study
 
 __all__ = ["add_study_parser", "run_study_command"]
@@ -68,8 +69,25 @@ def add_study_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentPar
         help="largest size n = 48*2^K (default: 14 for full and qmc, 6 for small)",
     )
     study.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    study.add_argument(
+        "--allow-long", action="store_true",
+        help="run even if the work is estimated to take more than a day (refused otherwise, before any work)",
+    )  # fmt: skip
     study.set_defaults(handler=run_study_command)
     return study
+
+
+_LONG_SECONDS = 86400.0
+# What each configuration took on 2 cores (docs/study.md: full about 13 minutes, qmc about 15, small well
+# under one), divided by 4 for a faster machine: a lower bound for the estimate, which scales it by the
+# repetitions and the largest size asked for.
+_FASTEST_SECONDS = {"full": 13 * 60 / 4, "qmc": 15 * 60 / 4, "small": 60 / 4}
+
+
+def _estimated_seconds(name: str, config: StudyConfig) -> float:
+    base = CONFIGS[name]
+    scale = config.repetitions / base.repetitions * 2.0 ** (config.k_max - base.k_max)
+    return _FASTEST_SECONDS.get(name, 60.0) * max(1.0, scale)
 
 
 def run_study_command(args: argparse.Namespace) -> int:
@@ -117,6 +135,8 @@ def run_study_command(args: argparse.Namespace) -> int:
     if args.repetitions is not None:
         if args.repetitions < 2:
             raise ValueError(f"--repetitions must be >= 2, got {args.repetitions}")
+        if args.repetitions > MAX_REPETITIONS:
+            raise ValueError(f"--repetitions must be at most {MAX_REPETITIONS}, got {short_repr(args.repetitions)}")
         changes["repetitions"] = args.repetitions
     if args.k_max is not None:
         if args.k_max < config.k_min + 2 or args.k_max > 20:
@@ -126,6 +146,14 @@ def run_study_command(args: argparse.Namespace) -> int:
         config = config.replace(
             name=f"{config.name} (" + ", ".join(f"{k}={v}" for k, v in changes.items()) + ")", **changes
         )
+    seconds = _estimated_seconds(args.config, config)
+    if seconds > _LONG_SECONDS and not getattr(args, "allow_long", False):
+        raise ValueError(
+            f"--repetitions {config.repetitions} with --k-max {config.k_max} is estimated to take at least "
+            f"{seconds / 86400:.3g} days; add --allow-long to run it anyway"
+        )
+    if seconds > 600:
+        print(f"symsphere study: estimated at least {seconds / 3600:.3g} hours; Ctrl-C stops", file=sys.stderr)
     parent = Path(args.out).absolute().parent
     if not parent.is_dir():  # name the user's path, not the temporary folder next to it
         raise OSError(errno.ENOENT, "no such directory", str(parent))

@@ -17,7 +17,7 @@ from typing import Literal, TypedDict
 import numpy as np
 from numba import njit, prange
 
-from ..._threads import start_threads
+from ..._threads import route_compiles, start_threads
 from ..._typing import Float64Array, FloatArray, PointSet, RNGLike
 from ..._validation import check_rng
 from ...peers import Peer, fibonacci_point, lebedev_size, sample_lebedev
@@ -117,3 +117,6 @@ def compiled_sample(peer: Peer, n: int, rng: RNGLike, points: PointSet = "random
     else:
         raise ValueError(f"'peer' must be one of {COMPILED_PEERS}, got {peer.name!r}")
     return out
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..._typing import Domain
+from ..._validation import short_repr
 from ...integrands import INTEGRANDS
 from ...peers import PEERS
 from ...points import POINT_SETS
@@ -18,6 +19,7 @@ from ...warps import METHODS
 __all__ = [
     "BASELINE",
     "CONFIGS",
+    "MAX_REPETITIONS",
     "FAMILY_SIGNIFICANCE",
     "ROUNDING_LEVEL",
     "StudyConfig",
@@ -25,6 +27,10 @@ __all__ = [
     "domains",
     "resolve_config",
 ]
+
+MAX_REPETITIONS = 2**20
+"""Most repetitions per cell: a million integrations of every cell is already years of work at the
+full configuration's size (32 repetitions take about 13 minutes on 2 cores)."""
 
 ROUNDING_LEVEL = 1e-13
 """An RMSE at most this times max(1, |exact|) is rounding noise: flagged, and left out of slope fits."""
@@ -126,7 +132,7 @@ class StudyConfig:
     >>> config.replace(repetitions=1)
     Traceback (most recent call last):
         ...
-    ValueError: 'repetitions' must be >= 2 (an RMSE needs repeated estimates), got 1
+    ValueError: 'repetitions' must be in [2, 1048576] (an RMSE needs repeated estimates; each is an integration of every cell), got 1
     """
 
     name: str = "custom"
@@ -167,8 +173,11 @@ class StudyConfig:
             raise ValueError(
                 f"'k_max' must be at least k_min + 2 (three sizes for a slope) and at most 20, got {self.k_max}"
             )
-        if self.repetitions < 2:
-            raise ValueError(f"'repetitions' must be >= 2 (an RMSE needs repeated estimates), got {self.repetitions}")
+        if not 2 <= self.repetitions <= MAX_REPETITIONS:
+            raise ValueError(
+                f"'repetitions' must be in [2, {MAX_REPETITIONS}] (an RMSE needs repeated estimates; each is an "
+                f"integration of every cell), got {short_repr(self.repetitions)}"
+            )
         if not self.k_min <= self.discrepancy_k_max <= 9:
             raise ValueError(
                 f"'discrepancy_k_max' must be in [k_min, 9] (the O(N^2) sum; 48 * 2**9 = 24576), "
