@@ -78,11 +78,12 @@ def test_wrong_shape_names_f_and_a_direction():
         symsphere.integrate(lambda w: np.ones(len(w) + 1), n=96, rng=1)
 
 
-def test_orbit_average_overflow_names_f():
+def test_orbit_average_of_values_near_the_largest_float_is_their_mean():
+    # An orbit's mean of finite values is finite (each value divided first when the plain sum overflows),
+    # with no RuntimeWarning; integrate, whose 4 pi x mean does overflow, names f (above).
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match="'f' returned values whose sum overflows float64"):
-            orbit_average(huge, [0.3, 0.2, 0.9])
+        assert orbit_average(huge, [0.3, 0.2, 0.9]) == pytest.approx(1e308)
 
 
 def test_distributed_integrate_overflow_names_f():
@@ -110,3 +111,10 @@ def test_cli_rtol_below_float64_is_one_line_naming_it(capsys):
     assert main(["integrate", "--integrand", "exp", "--seed", "1", "--rtol", "1e-300"]) == 2
     line = one_line_error(capsys.readouterr().err)
     assert "'--rtol'=1e-300" in line
+
+
+@pytest.mark.parametrize("replicates, n", [(10**9, 48 * 1024), (4, 96)])
+def test_too_many_replicates_for_n_names_replicates(replicates, n):
+    # Each replicate needs one orbit of its own: the error names what cannot fit (it had named only n).
+    with pytest.raises(ValueError, match=r"^'replicates'=\d+ needs 'n' >= \d+"):
+        symsphere.integrate(lambda w: w[:, 0], points="sobol", replicates=replicates, n=n)
