@@ -497,6 +497,8 @@ EXCLUDED = {
     "symsphere.render.RenderSettings": "the settings record that RenderPlan and RenderResult share (test_renderer)",
     "symsphere.render.RenderPlan": "built by plan_passes (tested); render_passes gets one",
     "symsphere.render.SceneError": "the exception type itself",
+    "symsphere.Scheme": "the engine behind sample_sphere/sample_hemisphere/iter_* (property-tested through them: "
+    "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_engine.py",
 }
 # Whole modules left out: the applications.  Their contract (one line on stderr, exit status 2 for bad
 # arguments, never a traceback) is tested through symsphere.apps.cli.main in tests/test_reliability.py

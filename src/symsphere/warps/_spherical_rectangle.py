@@ -22,6 +22,7 @@ import numpy.typing as npt
 from numba import njit
 from numba.extending import register_jitable
 
+from .._threads import route_compiles
 from .._typing import Float64Array, FloatArray
 from .._validation import check_unit_directions, check_uv
 from .._validation.arrays import as_float_array
@@ -292,3 +293,6 @@ def spherical_rectangle_to_square(
     v = np.where(span > 0, (h - h0) / np.where(span > 0, span, 1.0), 0.0)
     uv: Float64Array = np.clip(np.stack([u, v], axis=-1), 0.0, 1.0)
     return uv.astype(d.dtype, copy=False)
+
+
+route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)
