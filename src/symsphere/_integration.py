@@ -241,8 +241,9 @@ def plan(
     if replicates > 1 and (n is None or (type(n) is int and 0 < n < count * replicates)):
         # the replicates, not n, are what cannot fit: each needs at least one orbit of its own
         raise ValueError(
-            f"'replicates'={short_repr(replicates)} needs 'n' >= {count * replicates} ({count} evaluations, "
-            f"one orbit, per replicate); got n={short_repr(n)}: pass a larger n or fewer replicates"
+            f"'n'={short_repr(n)} is not a multiple of {count * replicates}: 'replicates'={short_repr(replicates)} "
+            f"needs 'n' >= {count * replicates} ({count} evaluations, one orbit, per replicate); pass a larger n "
+            "or fewer replicates"
         )
     n = check_count(n, "n", multiple=count * replicates)
     root = np.random.SeedSequence(check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64).tolist())
