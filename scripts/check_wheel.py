@@ -59,8 +59,8 @@ def check(condition, message):
 
 def readme_example() -> str:
     text = (ROOT / "README.md").read_text(encoding="utf-8")
-    block = re.search(r"## Example\n+```python\n(.*?)```", text, re.S)
-    check(block is not None, "README.md has no '## Example' python block")
+    block = re.search(r"## Three examples\n.*?```python\n(.*?)```", text, re.S)  # the first: sampling
+    check(block is not None, "README.md has no python block under '## Three examples'")
     return block[1]
 
 
