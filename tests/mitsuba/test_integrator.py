@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mitsuba_scenes import scene_dict
 from scipy import stats
 
 STRATEGY_CASES = [
@@ -158,49 +159,6 @@ def test_scalar_variants_are_refused():
 # --- unbiasedness: every strategy against Mitsuba's path -------------------------------------------
 
 
-def _scene_dict(mi, name):
-    sensor_film = {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"}}
-    if name == "cornell":  # Mitsuba's Cornell box: one-sided diffuse walls, a rectangle light
-        scene = mi.cornell_box()
-        scene["sensor"]["film"] = sensor_film
-        scene["sensor"]["sampler"] = {"type": "independent"}
-        return scene
-    T = mi.ScalarTransform4f
-    white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}}}
-    checker = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
-        "type": "checkerboard", "color0": {"type": "rgb", "value": [0.8, 0.2, 0.1]}, "color1": {"type": "rgb", "value": [0.1, 0.3, 0.8]},
-        "to_uv": T().scale([4, 4, 1])}}}  # fmt: skip
-    return {
-        "type": "scene",
-        "sensor": {
-            "type": "perspective",
-            "fov": 50,
-            "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0]),
-            "film": sensor_film,
-            "sampler": {"type": "independent"},
-        },  # fmt: skip
-        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": checker},
-        "wall": {"type": "rectangle", "to_world": T().translate([0, 1.5, -1.5]).scale(3), "bsdf": white},
-        "ball": {
-            "type": "sphere",
-            "center": [-0.7, 0.5, 0.2],
-            "radius": 0.5,
-            "bsdf": {
-                "type": "roughplastic",
-                "alpha": 0.2,
-                "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]},
-            },
-        },  # fmt: skip
-        "glass": {"type": "sphere", "center": [0.8, 0.4, 0.6], "radius": 0.4, "bsdf": {"type": "dielectric"}},
-        "light": {
-            "type": "rectangle",
-            "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}},
-        },  # fmt: skip
-        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}},
-    }
-
-
 def _renders(mi, scene, integrator):
     return np.stack(
         [np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=seed))[..., :3] for seed in range(SEEDS)]
@@ -223,7 +181,7 @@ def test_mean_image_agrees_with_mitsubas_path(jit_variant, scene_name, case):
     mi = jit_variant
     import symsphere.mitsuba  # noqa: F401
 
-    scene = mi.load_dict(_scene_dict(mi, scene_name))
+    scene = mi.load_dict(scene_dict(mi, scene_name, SIZE))
     depth = {"max_depth": 6, "rr_depth": 3}
     key = (mi.variant(), scene_name)
     if key not in _REFERENCE:

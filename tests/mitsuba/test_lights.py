@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mitsuba_scenes import scene_dict
 from scipy import stats
 
 SIZE, SPP, SEEDS = 16, 32, 12
@@ -24,50 +25,6 @@ BLOCK = 4
 
 def _sidak(alpha, count):
     return 1.0 - (1.0 - alpha) ** (1.0 / count)
-
-
-# the scenes of tests/mitsuba/test_integrator.py
-def _scene_dict(mi, name):
-    sensor_film = {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"}}
-    if name == "cornell":  # Mitsuba's Cornell box: one-sided diffuse walls, a rectangle light
-        scene = mi.cornell_box()
-        scene["sensor"]["film"] = sensor_film
-        scene["sensor"]["sampler"] = {"type": "independent"}
-        return scene
-    T = mi.ScalarTransform4f
-    white = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.7, 0.7]}}}
-    checker = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
-        "type": "checkerboard", "color0": {"type": "rgb", "value": [0.8, 0.2, 0.1]}, "color1": {"type": "rgb", "value": [0.1, 0.3, 0.8]},
-        "to_uv": T().scale([4, 4, 1])}}}  # fmt: skip
-    return {
-        "type": "scene",
-        "sensor": {
-            "type": "perspective",
-            "fov": 50,
-            "to_world": T().look_at(origin=[0, 1.2, 4.5], target=[0, 0.6, 0], up=[0, 1, 0]),
-            "film": sensor_film,
-            "sampler": {"type": "independent"},
-        },  # fmt: skip
-        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": checker},
-        "wall": {"type": "rectangle", "to_world": T().translate([0, 1.5, -1.5]).scale(3), "bsdf": white},
-        "ball": {
-            "type": "sphere",
-            "center": [-0.7, 0.5, 0.2],
-            "radius": 0.5,
-            "bsdf": {
-                "type": "roughplastic",
-                "alpha": 0.2,
-                "diffuse_reflectance": {"type": "rgb", "value": [0.2, 0.6, 0.3]},
-            },
-        },  # fmt: skip
-        "glass": {"type": "sphere", "center": [0.8, 0.4, 0.6], "radius": 0.4, "bsdf": {"type": "dielectric"}},
-        "light": {
-            "type": "rectangle",
-            "to_world": T().translate([0.5, 2.8, 0.5]).rotate([1, 0, 0], 90).scale(0.6),
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12, 11, 10]}},
-        },  # fmt: skip
-        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}},
-    }
 
 
 def _blocks(images):
@@ -116,8 +73,8 @@ def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
 
 def _scene(mi, name, tmp_path, bare=False):
     if name != "mesh_light":
-        return mi.load_dict(_scene_dict(mi, name))
-    scene = _scene_dict(mi, "textured")
+        return mi.load_dict(scene_dict(mi, name, SIZE))
+    scene = scene_dict(mi, "textured", SIZE)
     del scene["light"], scene["sky"]
     if bare:  # the lights and the floor only: nothing between a point above the floor and the lights
         del scene["ball"], scene["glass"], scene["wall"]
@@ -260,7 +217,7 @@ def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path):
         "v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\nv 0 1.5 0\n"
         "f 1 3 2\nf 1 4 3\nf 1 1 2\nf 1 5 3\n"  # two faces down, a repeated vertex, a collinear one
     )
-    scene = _scene_dict(mi, "textured")
+    scene = scene_dict(mi, "textured", SIZE)
     del scene["light"], scene["sky"]
     scene["light"] = {
         "type": "obj",
@@ -317,7 +274,7 @@ def test_a_scene_without_rectangle_or_mesh_lights_renders_as_with_area(llvm):
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
-    scene = _scene_dict(mi, "textured")
+    scene = scene_dict(mi, "textured", SIZE)
     del scene["light"]
     lamp = {"type": "area", "radiance": {"type": "rgb", "value": [20, 20, 20]}}
     scene["lamp"] = {"type": "sphere", "center": [0.5, 2.5, 0.5], "radius": 0.2, "emitter": lamp}
