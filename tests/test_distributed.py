@@ -199,7 +199,7 @@ def test_render_on_cluster_equals_single_process(client):
     from symsphere.render import render
     from symsphere.render.renderer import plan_passes
 
-    options = dict(width=64, height=48, spp=200, sampler="symmetric_sobol", seed=3)
+    options = dict(width=64, height=48, spp=200, strategy="symmetric", points="sobol", seed=3)
     assert plan_passes("cornell", pixel_filter="box", method=None, **options).passes == 4
     single = render("cornell", **options).image
     for passes_per_task in (1, 3):

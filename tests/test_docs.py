@@ -44,7 +44,6 @@ API_INDEX = ROOT / "docs" / "api" / "index.rst"
 NOT_DOCUMENTED = {
     "symsphere.apps": "a package of applications without names of its own; its modules have pages",
     "symsphere.mitsuba": "needs Mitsuba 3 (the extra 'mitsuba', not in the docs build); docs/reference/mitsuba-plugin.md documents it",
-    "symsphere.apps.study.compiled": "the study's compiled peer samplers, an internal of the study; docs/results/study-qmc.md describes them",
     "symsphere.apps.mitsuba_render": "the render verb's Mitsuba scene files; symsphere render --help and docs/reference/mitsuba-plugin.md",
     "symsphere.apps.render_command": "the render verb of symsphere.apps.cli (its parser and handlers); symsphere render --help",
     "symsphere.render.image": "its public names are documented on the symsphere.render page",

@@ -227,7 +227,7 @@ def test_write_outputs_is_all_or_nothing_and_names_the_failing_file(tmp_path, mo
     from symsphere.render import image as image_module
     from symsphere.render import render, write_outputs
 
-    result = render("furnace", width=4, height=4, spp=2, sampler="cosine", seed=1)
+    result = render("furnace", width=4, height=4, spp=2, strategy="cosine", seed=1)
     write_outputs(result, tmp_path / "f.png")
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     real_encode, real_write_bytes = image_module._encode, pathlib.Path.write_bytes

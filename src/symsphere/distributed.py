@@ -282,11 +282,13 @@ def render(
     width: int = 256,
     height: int = 192,
     spp: int = 96,
-    sampler: str = "symmetric_sobol",
+    strategy: str = "symmetric",
+    points: str | None = None,
     method: str | None = None,
     pixel_filter: str = "box",
     seed: int | None = None,
     integrator: Literal["path", "bsdf"] = "path",
+    sampler: str | None = None,
 ) -> RenderResult:
     """:func:`symsphere.render.render` with its sample passes on a Dask cluster, the identical image.
 
@@ -298,8 +300,10 @@ def render(
 
     Parameters
     ----------
-    scene, width, height, spp, sampler, method, pixel_filter, seed, integrator
+    scene, width, height, spp, strategy, points, method, pixel_filter, seed, integrator
         As in :func:`symsphere.render.render`.
+    sampler : str, optional
+        Deprecated, as in :func:`symsphere.render.render`.
     client : distributed.Client, optional
         Default: a ``LocalCluster`` with one single-threaded worker per core,
         started for this call and closed after it.
@@ -323,9 +327,14 @@ def render(
     """
     from distributed import as_completed
 
+    from ._strategies import resolve
     from .render.renderer import plan_passes
 
-    plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
+    strategy, points, method = resolve(sampler, strategy, points, method, "render", stacklevel=2)
+    plan = plan_passes(
+        scene, width, height, spp, method=method, pixel_filter=pixel_filter, seed=seed, integrator=integrator,
+        strategy=strategy, points=points,
+    )  # fmt: skip
     passes_per_task = check_count(passes_per_task, "passes_per_task")
     check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
     check_bool(progress, "progress")

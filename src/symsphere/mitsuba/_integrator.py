@@ -27,7 +27,7 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
 as :mod:`symsphere.render`'s samplers; ``bsdf`` takes the scene sampler's points (choose a QMC sampler
 there), so it refuses ``points='sobol'``.  The grouping is the renderer's
-(``symsphere.render._integrator.sample_local``): with n = 24 (symmetric) or 8 (symmetric_cosine),
+(``symsphere.render._directions.sample_local``): with n = 24 (symmetric) or 8 (symmetric_cosine),
 sample s of a pixel is in group g = s // n; at vertex ``depth`` the group shares one base point
 B(g, depth) and one offset o(g, depth) uniform in 0..n-1, and sample s takes orbit member
 ``(s mod n + o) mod n``: the n samples of a group take all n images of B in turn, while each path on
@@ -57,6 +57,8 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
+from .._constants import BASE_U, BASE_V, INV_PI
+from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import check_choice
 from ..warps import METHODS
 from . import _lights, _random
@@ -72,16 +74,15 @@ __all__ = [
     "lambertian_codes",
 ]
 
-STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
-POINTS = ("random", "sobol")
-GROUP_SIZES = {"bsdf": 1, "cosine": 1, "symmetric": 24, "symmetric_cosine": 8}
+# the registry's words that symsphere_path takes (symsphere._strategies: the renderer's too)
+STRATEGIES = words("plugin")
+POINTS = tuple(dict.fromkeys(p for s in STRATEGIES for p in SAMPLING_STRATEGIES[s].plugin_points))
+GROUP_SIZES = {strategy: SAMPLING_STRATEGIES[strategy].group for strategy in STRATEGIES}
 # the strategies with groups; they, and cosine with Sobol' points, replace the BSDF's sample at Lambertian
 # vertices (bsdf, and cosine with random points, take the BSDF's own sample: see the module docstring)
 _SYMMETRIC_STRATEGIES = tuple(strategy for strategy, size in GROUP_SIZES.items() if size > 1)
 _COSINE_DENSITY = ("cosine", "symmetric_cosine")  # density |cos| / pi: the weight f cos / p is R
-_BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
-_BASE_V = 0x5851F42D4C957F2D
-_INV_PI = 1.0 / math.pi
+_INV_PI = INV_PI
 _REPLACE_GRAD: Any = dr.replace_grad  # its stub says it returns None
 
 
@@ -301,8 +302,8 @@ class _PathMethods:
         member = s - n * group + _random.below(h, n)  # (s mod n + offset) mod n
         member = dr.select(member >= n, member - n, member)
         if self.points == "random":
-            u = _random.u01(_random.mix64(h ^ _BASE_U))
-            v = _random.u01(_random.mix64(h ^ _BASE_V))
+            u = _random.u01(_random.mix64(h ^ BASE_U))
+            v = _random.u01(_random.mix64(h ^ BASE_V))
         else:
             fu, fv = _random.owen_sobol2(group, vertex_key)
             u, v = _random.fraction(fu), _random.fraction(fv)

@@ -1,8 +1,8 @@
 """Small kernels for the tests and the documentation: the integrator's scalar functions over arrays.
 
 Each runs one function of the path tracer (as the kernel, which LLVM inlines it into) -- the samplers
-(:func:`~symsphere.render._integrator.sample_local`,
-:func:`~symsphere.render._integrator.bsdf_pdf`), the intersection
+(:func:`~symsphere.render._directions.sample_local`,
+:func:`~symsphere.render._directions.bsdf_pdf`), the intersection
 (:func:`~symsphere.render._integrator.intersect`), the emitters
 (:func:`~symsphere.render._emitters.sample_emitter`,
 :func:`~symsphere.render._emitters.emitter_pdf`) and the Sobol' points
@@ -20,8 +20,9 @@ from numba import njit
 from .._numba_cache import invalidate_if_changed
 from .._threads import route_compiles
 from . import _integrator
+from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
 from ._emitters import emitter_pdf, sample_emitter
-from ._integrator import KERNEL_OPTIONS, bsdf_pdf, fixed_sampler, intersect, is_cosine, plain_spheres, sample_local
+from ._integrator import KERNEL_OPTIONS, intersect, plain_spheres
 from ._random import interlace_fractions, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, sobol_coordinate
 
 __all__ = [
@@ -40,7 +41,7 @@ __all__ = [
 def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
     """Local directions, weights and pdfs (columns x, y, z, weight, pdf) of samples 0..samples-1 of *pixel*.
 
-    The same :func:`~symsphere.render._integrator.sample_local` the integrator calls, with each sample's
+    The same :func:`~symsphere.render._directions.sample_local` the integrator calls, with each sample's
     own stream advanced as if its path had reached *depth* with no other
     random draws; for the symmetric samplers the stream is not used.
     """
@@ -61,7 +62,7 @@ def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
 
 @njit(**KERNEL_OPTIONS)
 def bsdf_pdfs(sampler, code, full, directions):
-    """:func:`~symsphere.render._integrator.bsdf_pdf` of each local unit direction (rows of *directions*)."""
+    """:func:`~symsphere.render._directions.bsdf_pdf` of each local unit direction (rows of *directions*)."""
     out = np.empty(directions.shape[0])
     for i in range(directions.shape[0]):
         out[i] = bsdf_pdf(
