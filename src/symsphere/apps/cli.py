@@ -7,7 +7,7 @@ Examples
     symsphere sample --n 4800 --seed 1 --out directions.npy
     symsphere sample --n 4800 --domain hemisphere --normal 0 1 0 --out hemi.csv
     symsphere demo --out symsphere-demo
-    symsphere render --scene cornell --width 256 --height 192 --spp 96 --sampler symmetric_sobol --out img.png
+    symsphere render --scene cornell --width 256 --height 192 --spp 96 --strategy symmetric --points sobol --out img.png
     symsphere --version
 
 Exit status: 0 on success, 2 for invalid arguments (the message names the

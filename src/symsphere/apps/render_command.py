@@ -77,7 +77,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
         help="path-trace a scene (built-in, .toml/.json, or Mitsuba 3 .xml) with a chosen direction sampler",
         description=(
             "Path-trace a built-in scene (cornell: smallpt's Cornell box; furnace; translucent) or a "
-            ".toml/.json scene file, sampling directions at diffuse vertices with SAMPLER, on all cores.  "
+            ".toml/.json scene file, sampling directions at diffuse vertices by STRATEGY and its POINTS, on all cores.  "
             "Writes the tone-mapped sRGB image to --out (.png) and the linear HDR mean radiance next to "
             "it (.pfm and .npy, same stem).  Every file appears only when complete."
         ),
@@ -89,7 +89,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
     render.add_argument("--height", type=int, default=None, help="default: 192")
     render.add_argument(
         "--spp", type=int, default=None,
-        help="samples (camera paths) per pixel; symmetric samplers form whole orbits for multiples of 24 "
+        help="samples (camera paths) per pixel; the symmetric strategy forms whole orbits for multiples of 24 "
         "(48 with translucent materials) (default: 96)",
     )  # fmt: skip
     render.add_argument(
