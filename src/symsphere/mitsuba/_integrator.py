@@ -50,14 +50,13 @@ consecutive lanes instead, keyed from the scene's sampler.
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
 import drjit as dr
 import mitsuba as mi
 
-from .._constants import BASE_U, BASE_V, INV_PI
+from .._constants import BASE_U, BASE_V, INV_2PI, INV_PI
 from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import check_choice
 from ..warps import METHODS
@@ -324,7 +323,7 @@ class _PathMethods:
         if self.strategy in _COSINE_DENSITY:  # density |cos| / pi
             return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
         if self.method == "equal_area":
-            return dr.select(same_side, 1.0 / (2.0 * math.pi), 0.0)
+            return dr.select(same_side, INV_2PI, 0.0)
         a, b, c = dr.abs(wo.x), dr.abs(wo.y), dr.abs(wo.z)
         lo_ab, hi_ab = dr.minimum(a, b), dr.maximum(a, b)
         base = (dr.maximum(lo_ab, dr.minimum(hi_ab, c)), dr.minimum(lo_ab, c), dr.maximum(hi_ab, c))
