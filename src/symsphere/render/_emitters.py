@@ -28,8 +28,8 @@ angle, ``p_w = d^2 / (|cos_l| A)``.  :func:`emitter_pdf` makes the same case
 analysis for a hit found by BSDF sampling.
 
 The local frame (:func:`rows_to_world`, the scalar twin of :func:`symsphere.frames.to_world`, in
-the frame of :func:`symsphere.frames.frame_rows`) and :data:`INV_2PI` are shared with the
-integrator, which imports them from here.
+the frame of :func:`symsphere.frames.frame_rows`) is shared with the integrator, which imports it
+from here; 1/(2 pi) is :data:`symsphere._constants.INV_2PI`.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
+from .._constants import INV_2PI
 from .._threads import route_compiles
 from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
@@ -48,7 +49,6 @@ from ._random import next_u64, u01
 
 __all__ = [
     "INLINED",
-    "INV_2PI",
     "choose_light",
     "disk_point",
     "emitter_pdf",
@@ -58,7 +58,6 @@ __all__ = [
     "spherical_rectangle",
 ]
 
-INV_2PI = 0.5 / math.pi
 # The numba options of the scalar functions that take the scene's tables (here and in the integrator):
 # compiled once each, cached, no reference counting of their array arguments (they allocate nothing),
 # and the kernels' error model (a division by zero gives inf or NaN, as in numpy, not an exception).
