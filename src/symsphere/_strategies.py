@@ -74,60 +74,23 @@ class Strategy:
     plugin_points: tuple[str, ...]
 
 
-_INTERLACED = ("sobol_interlaced2", "sobol_interlaced3")
+_SYMMETRIC_POINTS = ("sobol", "random", "sobol_interlaced2", "sobol_interlaced3")
+_ROWS = (  # name, group, takes_method, render_points, plugin_points, summary; sorted by name (every listing's order)
+    ("bsdf", 1, False, (), ("random",), "the BSDF samples itself (Mitsuba's own sampling)"),
+    ("cosine", 1, False, ("random",), ("random", "sobol"), "cosine-weighted, i.i.d. (Shirley-Chiu disk + Malley)"),
+    ("orbit", 1, True, ("random",), (), "a base point mapped onto T0, a uniformly random orbit member; i.i.d."),
+    ("symmetric", 24, True, _SYMMETRIC_POINTS, ("random", "sobol"), "the paper's scheme: the 24 orbit members of "
+     "a base point mapped onto T0, taken in turn by a group of samples"),
+    ("symmetric_cosine", 8, False, _SYMMETRIC_POINTS, ("random", "sobol"), "the 8 z-keeping images of a "
+     "cosine-weighted base point of the wedge 0 <= phi <= pi/4, taken in turn"),
+    ("uniform", 1, False, ("random",), (), "classic uniform directions, i.i.d."),
+)  # fmt: skip
 
 SAMPLING_STRATEGIES: dict[str, Strategy] = {
-    s.name: s
-    for s in (  # sorted by name: the order of every listing of choices
-        Strategy(
-            name="bsdf",
-            summary="the BSDF samples itself (Mitsuba's own sampling)",
-            group=1,
-            takes_method=False,
-            render_points=(),
-            plugin_points=("random",),
-        ),
-        Strategy(
-            name="cosine",
-            summary="cosine-weighted, i.i.d. (Shirley-Chiu concentric disk + Malley)",
-            group=1,
-            takes_method=False,
-            render_points=("random",),
-            plugin_points=("random", "sobol"),
-        ),
-        Strategy(
-            name="orbit",
-            summary="a base point mapped onto T0 and a uniformly random orbit member, i.i.d.",
-            group=1,
-            takes_method=True,
-            render_points=("random",),
-            plugin_points=(),
-        ),
-        Strategy(
-            name="symmetric",
-            summary="the paper's scheme: the 24 orbit members of a base point mapped onto T0",
-            group=24,
-            takes_method=True,
-            render_points=("sobol", "random", *_INTERLACED),
-            plugin_points=("random", "sobol"),
-        ),
-        Strategy(
-            name="symmetric_cosine",
-            summary="the 8 z-keeping images of a cosine-weighted base point of the wedge 0 <= phi <= pi/4",
-            group=8,
-            takes_method=False,
-            render_points=("sobol", "random", *_INTERLACED),
-            plugin_points=("random", "sobol"),
-        ),
-        Strategy(
-            name="uniform",
-            summary="classic uniform directions, i.i.d.",
-            group=1,
-            takes_method=False,
-            render_points=("random",),
-            plugin_points=(),
-        ),
-    )  # fmt: skip
+    row[0]: Strategy(
+        name=row[0], group=row[1], takes_method=row[2], render_points=row[3], plugin_points=row[4], summary=row[5]
+    )
+    for row in _ROWS
 }
 """dict: strategy name -> :class:`Strategy`, the one registry of the ways to sample at a vertex."""
 

@@ -92,31 +92,11 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
         help="samples (camera paths) per pixel; the symmetric strategy forms whole orbits for multiples of 24 "
         "(48 with translucent materials) (default: 96)",
     )  # fmt: skip
-    render.add_argument(
-        "--strategy", choices=words("render"), default=None,
-        help="direction sampling at diffuse vertices: the paper's scheme inside a pixel (symmetric: orbits of "
-        "24 on T0; symmetric_cosine: 8 images of a cosine-weighted base point), i.i.d. orbit members (orbit), "
-        "or the classic uniform and cosine references (default: symmetric)",
-    )  # fmt: skip
-    render.add_argument(
-        "--points", choices=_points("render"), default=None,
-        help="the strategy's base points: sobol (Owen-scrambled Sobol', the default of the symmetric strategies), "
-        "random (the default, and the only choice, of the others), sobol_interlaced2 or sobol_interlaced3 "
-        "(higher-order nets, symmetric strategies)",
-    )  # fmt: skip
-    render.add_argument(
-        "--sampler", choices=tuple(SAMPLER_SPELLINGS), default=None,
-        help="deprecated (one release): the earlier one-word spelling of --strategy and --points "
-        "(e.g. symmetric_cosine_sobol is --strategy symmetric_cosine --points sobol)",
-    )  # fmt: skip
+    _add_sampling_options(render, "render")
     render.add_argument(
         "--integrator", choices=("path", "bsdf"), default="path",
         help="path: next-event estimation and BSDF sampling combined by multiple importance sampling; "
         "bsdf: BSDF sampling only, smallpt's estimator (default: %(default)s)",
-    )  # fmt: skip
-    render.add_argument(
-        "--method", choices=METHODS, default=None,
-        help="map onto the triangle for the strategies symmetric and orbit (default: equal_area)",
     )  # fmt: skip
     render.add_argument("--filter", choices=("box", "tent"), default=None, help="pixel filter (default: box)")
     render.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
@@ -135,7 +115,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
 
 
 def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from .mitsuba_render import DEFAULT_VARIANT, SAMPLER_STRATEGIES  # (the registry's words: no Mitsuba import)
+    from .mitsuba_render import DEFAULT_VARIANT
 
     render = verbs.add_parser(
         "render",
@@ -159,24 +139,7 @@ def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParse
         "--spp", type=int, default=None,
         help="samples per pixel, rendered in passes of about 4 million paths (default: the file's sampler's)",
     )  # fmt: skip
-    render.add_argument(
-        "--strategy", choices=words("plugin"), default=None,
-        help="direction sampling at Lambertian vertices, symsphere_path's strategy; bsdf is Mitsuba's own "
-        "sampling (default: symmetric)",
-    )  # fmt: skip
-    render.add_argument(
-        "--points", choices=_points("plugin"), default=None,
-        help="the strategy's base points, symsphere_path's points: sobol (the default of the symmetric "
-        "strategies) or random (the default of the others; bsdf takes the file's sampler's points)",
-    )  # fmt: skip
-    render.add_argument(
-        "--sampler", choices=tuple(SAMPLER_STRATEGIES), default=None,
-        help="deprecated (one release): the earlier one-word spelling of --strategy and --points",
-    )  # fmt: skip
-    render.add_argument(
-        "--method", choices=METHODS, default=None,
-        help="map onto the triangle for the strategy symmetric (default: equal_area)",
-    )  # fmt: skip
+    _add_sampling_options(render, "plugin")
     render.add_argument(
         "--variant", default=DEFAULT_VARIANT,
         help="Mitsuba variant: an llvm_ad_* variant (rgb, mono, spectral), cuda_ad_* where a CUDA device "
@@ -198,6 +161,43 @@ def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParse
     render.add_argument("--scheduler", default=None, help=argparse.SUPPRESS)
     render.add_argument("--timeout", default=None, help=argparse.SUPPRESS)
     render.set_defaults(handler=_run_render)
+
+
+# --strategy, --points, --sampler (deprecated), --method: the help of each, for the numba renderer and the plugin
+_SAMPLING_HELP = {
+    "render": (
+        "direction sampling at diffuse vertices: the paper's scheme inside a pixel (symmetric: orbits of 24 on T0; "
+        "symmetric_cosine: 8 images of a cosine-weighted base point), i.i.d. orbit members (orbit), or the classic "
+        "uniform and cosine references (default: symmetric)",
+        "the strategy's base points: sobol (Owen-scrambled Sobol', the default of the symmetric strategies), random "
+        "(the default, and the only choice, of the others), sobol_interlaced2 or sobol_interlaced3 (higher-order "
+        "nets, symmetric strategies)",
+        "map onto the triangle for the strategies symmetric and orbit (default: equal_area)",
+    ),
+    "plugin": (
+        "direction sampling at Lambertian vertices, symsphere_path's strategy; bsdf is Mitsuba's own sampling "
+        "(default: symmetric)",
+        "the strategy's base points, symsphere_path's points: sobol (the default of the symmetric strategies) or "
+        "random (the default of the others; bsdf takes the file's sampler's points)",
+        "map onto the triangle for the strategy symmetric (default: equal_area)",
+    ),
+}
+
+
+def _add_sampling_options(render: argparse.ArgumentParser, program: str) -> None:
+    """The options of the direction sampling, in the words of :mod:`symsphere._strategies`."""
+    if program == "render":
+        old = tuple(SAMPLER_SPELLINGS)
+    else:
+        from .mitsuba_render import SAMPLER_STRATEGIES  # (the registry's words: no Mitsuba import)
+
+        old = tuple(SAMPLER_STRATEGIES)
+    strategy, points, method = _SAMPLING_HELP[program]
+    render.add_argument("--strategy", choices=words(program), default=None, help=strategy)
+    render.add_argument("--points", choices=_points(program), default=None, help=points)
+    render.add_argument("--method", choices=METHODS, default=None, help=method)
+    deprecated = "deprecated (one release): the earlier one-word spelling of --strategy and --points"
+    render.add_argument("--sampler", choices=old, default=None, help=deprecated)
 
 
 def _points(program: str) -> tuple[str, ...]:
