@@ -378,17 +378,8 @@ def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float6
     As ``scipy.stats.uniform_direction`` does (Muller 1959, Marsaglia 1972):
     the standard normal distribution in R^3 is rotation invariant, so its
     direction is uniform.  A zero vector (probability 0, but possible in
-    floating point) is drawn again.
-
-    Parameters
-    ----------
-    n : int
-    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
-    dtype : {numpy.float64, numpy.float32}
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
+    floating point) is drawn again.  Arguments and result as for :func:`sample_classic`, without
+    ``points`` (random only).
 
     Examples
     --------

@@ -191,16 +191,8 @@ def square_to_hemisphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") ->
 def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density (solid angle) of :func:`square_to_hemisphere` at directions *d*.
 
-    Parameters
-    ----------
-    d : array_like, shape (..., 3)
-        Unit directions.
-    method : {'equal_area', 'paper1', 'paper2'}
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``square_to_triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
+    Arguments as for :func:`square_to_sphere_pdf`; the density is ``square_to_triangle_pdf(base, method) / 24``
+    for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`), of shape ``d.shape[:-1]``.
 
     Examples
     --------

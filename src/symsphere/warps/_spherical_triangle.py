@@ -281,14 +281,7 @@ def _arvo_inverse(
 _T0_SETUP = _triangle_setup(T0_VERTICES)
 
 register(
-    Warp(
-        name="arvo_triangle",
-        domain="triangle",
-        uniform=True,
-        orbit_size=48,
-        forward=square_to_arvo_triangle,
-        pdf=square_to_arvo_triangle_pdf,
-        inverse=arvo_triangle_to_square,
-        reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995",
-    ),
-)
+    Warp(name="arvo_triangle", domain="triangle", uniform=True, orbit_size=48, forward=square_to_arvo_triangle,
+         pdf=square_to_arvo_triangle_pdf, inverse=arvo_triangle_to_square,
+         reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995"),
+)  # fmt: skip

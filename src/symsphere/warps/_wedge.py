@@ -349,19 +349,10 @@ _density = formula(cosine_wedge_density)
 _uv = formula(cosine_wedge_uv)
 
 register(
-    Warp(
-        name="cosine_wedge",
-        domain="wedge",
-        uniform=False,
-        orbit_size=8,
-        forward=square_to_cosine_wedge,
-        pdf=square_to_cosine_wedge_pdf,
-        inverse=cosine_wedge_to_square,
-        point=cosine_wedge_point,
-        density=cosine_wedge_density,
-        reference="Malley's method on the disk sector 0 <= phi <= pi/4",
-    ),
-)
+    Warp(name="cosine_wedge", domain="wedge", uniform=False, orbit_size=8, forward=square_to_cosine_wedge,
+         pdf=square_to_cosine_wedge_pdf, inverse=cosine_wedge_to_square, point=cosine_wedge_point,
+         density=cosine_wedge_density, reference="Malley's method on the disk sector 0 <= phi <= pi/4"),
+)  # fmt: skip
 
 
 route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)
