@@ -90,6 +90,10 @@ __all__ = [
 class Peer:
     """A registered peer sampler, so that a study can loop over `PEERS`.
 
+    A record of keyword fields; the defaults are a uniform sampler of the sphere with independent rows.
+    A peer built on a map of the square is a record over its warp, :meth:`Peer.over`, which takes the
+    sampler (:meth:`symsphere.warps.Warp.sample`), density, uniformity and reference from the warp.
+
     Attributes
     ----------
     name : str
@@ -106,7 +110,7 @@ class Peer:
     is_random : bool
         Whether the output depends on ``rng`` (False only for ``fibonacci``).
     is_map : bool
-        Whether the peer is built on a map of the unit square, so that
+        Whether the peer is built on a map of the unit square (``warp is not None``), so that
         :meth:`sample` accepts every ``points=`` (quasi-Monte Carlo too).
     independent_rows : bool
         Whether the rows of one call are independent samples (False for the

@@ -158,6 +158,13 @@ def _concentric_inverse(p: Float64Array) -> Float64Array:
     return np.clip(np.stack([0.5 * (a + 1.0), 0.5 * (b + 1.0)], axis=-1), 0.0, 1.0)
 
 
+register(
+    Warp(name="concentric_disk", domain="disk", uniform=True, forward=square_to_concentric_disk,
+         pdf=square_to_concentric_disk_pdf, inverse=concentric_disk_to_square, point=concentric_disk_point,
+         reference="Shirley & Chiu 1997"),
+)  # fmt: skip
+
+
 # --- the cosine-weighted hemisphere -------------------------------------------------------
 
 
@@ -231,9 +238,6 @@ def _cosine_hemisphere_inverse(d: Float64Array) -> Float64Array:
 
 
 register(
-    Warp(name="concentric_disk", domain="disk", uniform=True, forward=square_to_concentric_disk,
-         pdf=square_to_concentric_disk_pdf, inverse=concentric_disk_to_square, point=concentric_disk_point,
-         reference="Shirley & Chiu 1997"),
     Warp(name="cosine_hemisphere", domain="hemisphere", uniform=False, forward=square_to_cosine_hemisphere,
          pdf=square_to_cosine_hemisphere_pdf, inverse=cosine_hemisphere_to_square, point=cosine_hemisphere_point,
          reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere"),

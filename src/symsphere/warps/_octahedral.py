@@ -160,6 +160,13 @@ def _octahedral_sphere_inverse(d: Float64Array) -> Float64Array:
     return np.clip(np.stack([0.5 * (a + 1.0), 0.5 * (b + 1.0)], axis=-1), 0.0, 1.0)
 
 
+register(
+    Warp(name="octahedral_sphere", domain="sphere", uniform=True, forward=square_to_octahedral_sphere,
+         pdf=square_to_octahedral_sphere_pdf, inverse=octahedral_sphere_to_square, point=octahedral_sphere_point,
+         reference="Clarberg, Fast equal-area mapping of the (hemi)sphere using SIMD, JGT 2008"),
+)  # fmt: skip
+
+
 # --- the hemisphere -----------------------------------------------------------------------
 
 
@@ -226,9 +233,6 @@ def _octahedral_hemisphere_inverse(d: Float64Array) -> Float64Array:
 
 
 register(
-    Warp(name="octahedral_sphere", domain="sphere", uniform=True, forward=square_to_octahedral_sphere,
-         pdf=square_to_octahedral_sphere_pdf, inverse=octahedral_sphere_to_square, point=octahedral_sphere_point,
-         reference="Clarberg, Fast equal-area mapping of the (hemi)sphere using SIMD, JGT 2008"),
     Warp(name="octahedral_hemisphere", domain="hemisphere", uniform=True, forward=square_to_octahedral_hemisphere,
          pdf=square_to_octahedral_hemisphere_pdf, inverse=octahedral_hemisphere_to_square,
          reference="Clarberg, JGT 2008 (hemisphere variant)"),

@@ -137,6 +137,13 @@ def _uniform_sphere_inverse(d: Float64Array) -> Float64Array:
     return np.stack([np.clip(u, 0.0, 1.0), v], axis=-1)
 
 
+register(
+    Warp(name="uniform_sphere", domain="sphere", uniform=True, forward=square_to_uniform_sphere,
+         pdf=square_to_uniform_sphere_pdf, inverse=uniform_sphere_to_square, point=uniform_sphere_point,
+         reference="Archimedes' hat-box map; pbrt-v4 SampleUniformSphere, Mitsuba 3 square_to_uniform_sphere"),
+)  # fmt: skip
+
+
 # --- the hemisphere -----------------------------------------------------------------------
 
 
@@ -207,9 +214,6 @@ def _uniform_hemisphere_inverse(d: Float64Array) -> Float64Array:
 
 
 register(
-    Warp(name="uniform_sphere", domain="sphere", uniform=True, forward=square_to_uniform_sphere,
-         pdf=square_to_uniform_sphere_pdf, inverse=uniform_sphere_to_square, point=uniform_sphere_point,
-         reference="Archimedes' hat-box map; pbrt-v4 SampleUniformSphere, Mitsuba 3 square_to_uniform_sphere"),
     Warp(name="uniform_hemisphere", domain="hemisphere", uniform=True, forward=square_to_uniform_hemisphere,
          pdf=square_to_uniform_hemisphere_pdf, inverse=uniform_hemisphere_to_square, point=uniform_hemisphere_point,
          reference="pbrt-v4 SampleUniformHemisphere"),
