@@ -47,7 +47,8 @@ Examples
 # Each module below holds maps and registers their Warp records; the order of these lines is the order of
 # WARPS (and of the table above).  Adding a warp is its module and one line here.
 from ._record import Warp
-from ._registry import WARPS, get_warp, namespace
+from ._registry import WARPS, get_warp
+from ._registry import namespace as _namespace
 from ._triangle import *  # noqa: F403
 from ._spherical_triangle import *  # noqa: F403
 from ._scheme import *  # noqa: F403
@@ -58,4 +59,4 @@ from ._concentric import *  # noqa: F403
 from ._spherical_rectangle import *  # noqa: F403
 # isort: on
 
-__all__ = ["Warp", "WARPS", "get_warp", *namespace(__name__)]  # each module's names are listed once, in its __all__
+__all__ = ["Warp", "WARPS", "get_warp", *_namespace(__name__)]  # each module's names are listed once, in its __all__
