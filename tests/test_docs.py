@@ -83,7 +83,7 @@ def has_examples(doc):
 
 
 def doc_comment(module_name, name, _seen=None):
-    """The doc comment of constant *name* of a module, following ``from .x import name``; or None."""
+    """The doc comment of constant *name* of a module, following ``from .x import name`` (or ``*``); or None."""
     _seen = set() if _seen is None else _seen
     if (module_name, name) in _seen:
         return None
@@ -107,8 +107,12 @@ def doc_comment(module_name, name, _seen=None):
                     return following.value.value
         if isinstance(node, ast.ImportFrom):
             for alias in node.names:
-                if (alias.asname or alias.name) == name:
-                    source = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+                source = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+                if alias.name == "*" and name in getattr(importlib.import_module(source), "__all__", ()):
+                    found = doc_comment(source, name, _seen)
+                    if found:
+                        return found
+                elif (alias.asname or alias.name) == name:
                     found = doc_comment(source, alias.name, _seen)
                     if found:
                         return found

@@ -57,6 +57,8 @@ import numpy.typing as npt
 from .._typing import Domain, FloatArray, MapMethod
 from .._validation import check_choice, check_unit_directions, check_uv
 from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, base_point, fold
+from ._record import Warp
+from ._registry import register
 from ._triangle import METHODS, triangle_to_square, triangle_warp
 
 __all__ = [
@@ -189,16 +191,8 @@ def square_to_hemisphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") ->
 def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density (solid angle) of :func:`square_to_hemisphere` at directions *d*.
 
-    Parameters
-    ----------
-    d : array_like, shape (..., 3)
-        Unit directions.
-    method : {'equal_area', 'paper1', 'paper2'}
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``square_to_triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
+    Arguments as for :func:`square_to_sphere_pdf`; the density is ``square_to_triangle_pdf(base, method) / 24``
+    for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`), of shape ``d.shape[:-1]``.
 
     Examples
     --------
@@ -354,3 +348,24 @@ def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
     local_u = np.clip(local[..., 0], 0.0, 1.0)
     u = (j + np.where(j % 2 == 1, 1.0 - local_u, local_u)) / count
     return np.stack([u, local[..., 1]], axis=-1).astype(d.dtype, copy=False)
+
+
+def _scheme_warp(domain: Domain, method: MapMethod) -> Warp:
+    """The bijection onto *domain* through the scheme's triangles, each by *method*."""
+    forward, pdf, inverse = (
+        (square_to_sphere, square_to_sphere_pdf, sphere_to_square)
+        if domain == "sphere"
+        else (square_to_hemisphere, square_to_hemisphere_pdf, hemisphere_to_square)
+    )
+    return Warp(
+        name=f"{domain}_{method}",
+        domain=domain,
+        uniform=method == "equal_area",
+        forward=lambda uv: forward(uv, method),
+        pdf=lambda d: pdf(d, method),
+        inverse=lambda d: inverse(d, method),
+        reference=f"the scheme's triangles as strips of the square, each by {method!r}",
+    )
+
+
+register(*(_scheme_warp(domain, method) for method in METHODS for domain in DOMAINS))
