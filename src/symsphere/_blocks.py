@@ -20,7 +20,7 @@ import numpy as np
 
 from . import frames
 from ._kernels import Plan, fill
-from ._splitmix import GOLDEN, mix64_int
+from ._random.splitmix import GOLDEN, mix64_int
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import check_count, check_dtype
 from .points import BasePoints
@@ -128,7 +128,7 @@ def cut_offset(source: BasePoints, orbit_index: int, count: int) -> int:
     """Where a cut orbit's members start: rows ``(s + i) % count``, ``i < n % count``, are taken.
 
     The offset s is uniform on ``range(count)`` and independent of the base points:
-    SplitMix64's finaliser (:mod:`symsphere._splitmix`) of a key made from the source's root
+    SplitMix64's finaliser (:mod:`symsphere._random.splitmix`) of a key made from the source's root
     entropy, :data:`CUT_ORBIT_KEY` and the orbit's index.  So each row of a cut orbit is a
     uniformly chosen member (uniform on the sphere for a uniform map), no member is taken
     twice, and it costs about a microsecond: any n runs as fast as the nearest multiple of the

@@ -59,18 +59,18 @@ def _ids(case):
 
 def test_random_equals_the_renderers_bitwise(llvm):
     mi = llvm
+    from symsphere._testing import hashes, owen_sobol, splitmix
     from symsphere._testing import mitsuba_random as dj
-    from symsphere._testing import render_random as nb
 
     rng = np.random.default_rng(5)
     keys = rng.integers(0, 2**63, size=64, dtype=np.uint64) * np.uint64(2) + np.uint64(1)
     index = rng.integers(0, 2**32, size=64, dtype=np.uint64)
     index[:4] = [0, 1, 2, 2**32 - 1]
     with np.errstate(over="ignore"):  # numpy scalars warn on the wrap-around the hashes rely on
-        ref_mix = [int(nb.mix64(k)) for k in keys]
-        ref_key = [int(nb.pixel_key(k, int(i % 1000))) for k, i in zip(keys, index, strict=False)]
-        ref_below = [int(nb.below(k, 24)) for k in keys]
-        ref_sobol = [nb.owen_sobol2(i, k) for i, k in zip(index, keys, strict=False)]
+        ref_mix = [int(splitmix.mix64(k)) for k in keys]
+        ref_key = [int(hashes.pixel_key(k, int(i % 1000))) for k, i in zip(keys, index, strict=False)]
+        ref_below = [int(hashes.below(k, 24)) for k in keys]
+        ref_sobol = [owen_sobol.owen_sobol2(i, k) for i, k in zip(index, keys, strict=False)]
     k = mi.UInt64(keys)
     assert [int(v) for v in dj.mix64(k)] == ref_mix
     assert [int(v) for v in dj.pixel_key(k, mi.UInt32((index % 1000).astype(np.uint32)))] == ref_key

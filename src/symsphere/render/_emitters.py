@@ -41,10 +41,10 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
+from .._random.hashes import next_u64, u01
 from .._threads import route_compiles
 from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
-from ._random import next_u64, u01
 
 __all__ = [
     "INLINED",
