@@ -50,13 +50,13 @@ consecutive lanes instead, keyed from the scene's sampler.
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
 import drjit as dr
 import mitsuba as mi
 
+from .._constants import INV_2PI, INV_PI
 from .._validation import check_choice
 from ..warps import METHODS
 from . import _lights, _random
@@ -81,7 +81,6 @@ _SYMMETRIC_STRATEGIES = tuple(strategy for strategy, size in GROUP_SIZES.items()
 _COSINE_DENSITY = ("cosine", "symmetric_cosine")  # density |cos| / pi: the weight f cos / p is R
 _BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
 _BASE_V = 0x5851F42D4C957F2D
-_INV_PI = 1.0 / math.pi
 _REPLACE_GRAD: Any = dr.replace_grad  # its stub says it returns None
 
 
@@ -308,10 +307,10 @@ class _PathMethods:
             u, v = _random.fraction(fu), _random.fraction(fv)
         if self.strategy == "cosine":  # points='sobol' (random: the BSDF's own sample); n = 1, group = s
             wo = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u, v))
-            return wo, wo.z * _INV_PI
+            return wo, wo.z * INV_PI
         if self.strategy == "symmetric_cosine":
             x, y, z = orbit_member(*cosine_wedge_point(u, v), member, members=8)
-            return mi.Vector3f(x, y, z), z * _INV_PI
+            return mi.Vector3f(x, y, z), z * INV_PI
         bx, by, bz = triangle_point(u, v, self.method)
         density = triangle_density(bx, by, bz, self.method)
         x, y, z = orbit_member(bx, by, bz, member, members=24)
@@ -321,9 +320,9 @@ class _PathMethods:
         """The strategy's density of the local direction *wo* (on the side of wi), for MIS."""
         same_side = wo.z * wi_z > 0
         if self.strategy in _COSINE_DENSITY:  # density |cos| / pi
-            return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
+            return dr.select(same_side, dr.abs(wo.z) * INV_PI, 0.0)
         if self.method == "equal_area":
-            return dr.select(same_side, 1.0 / (2.0 * math.pi), 0.0)
+            return dr.select(same_side, INV_2PI, 0.0)
         a, b, c = dr.abs(wo.x), dr.abs(wo.y), dr.abs(wo.z)
         lo_ab, hi_ab = dr.minimum(a, b), dr.maximum(a, b)
         base = (dr.maximum(lo_ab, dr.minimum(hi_ab, c)), dr.minimum(lo_ab, c), dr.maximum(hi_ab, c))
@@ -440,9 +439,7 @@ class _PathMethods:
                 if dr.hint(self.strategy in _COSINE_DENSITY, mode="scalar"):
                     weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
                 else:
-                    weight_local = dr.select(
-                        pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * _INV_PI / pdf_local), 0.0
-                    )
+                    weight_local = dr.select(pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * INV_PI / pdf_local), 0.0)
                 bsdf_pdf = dr.select(lambertian, self._density(wo, si.wi.z), bsdf_pdf)
                 bsdf_sample.wo = dr.select(lambertian, local, bsdf_sample.wo)
                 bsdf_sample.pdf = dr.select(lambertian, pdf_local, bsdf_sample.pdf)
