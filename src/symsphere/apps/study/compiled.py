@@ -7,7 +7,7 @@ numba kernels too, parallel in the same way: the same base points (the library's
 rotations (scipy's ``Rotation.random`` from the same generator), and each map's own elementwise
 formula (:func:`symsphere.warps.octahedral_sphere_point`, :func:`symsphere.peers.fibonacci_point`, ...),
 compiled for one point at a time.  :func:`compiled_sample` returns what ``peer.sample`` returns, to rounding
-(tested in ``tests/apps/test_study_compiled.py``), for the peers of :data:`COMPILED_PEERS`.
+(tested in ``tests/apps/study/test_compiled.py``), for the peers of :data:`COMPILED_PEERS`.
 """
 
 from __future__ import annotations

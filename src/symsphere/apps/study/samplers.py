@@ -149,7 +149,7 @@ class Sampler:
         d = compiled_sample(peer, n, rng, self.points)
         if peer.rule_weights is not None:  # self.is_rule
             return float(np.sum(peer.rule_weights(n) * f(d)))
-        # These peers are uniform on the sphere (tested in tests/apps/test_study_compiled.py): weight 4 pi, as
+        # These peers are uniform on the sphere (tested in tests/apps/study/test_compiled.py): weight 4 pi, as
         # the scheme's estimator, which evaluates no pdf for a uniform map either.
         return float(4 * np.pi * np.mean(f(d)))
 
