@@ -51,6 +51,7 @@ from ._validation import (
     short_repr,
 )
 from .points import BLOCK, BasePoints
+from .symmetry import orbit_size
 from .warps import triangle_warp
 
 if TYPE_CHECKING:  # not at import: dask and the renderer load only when used
@@ -103,7 +104,7 @@ def sample_sphere(
     >>> bool(np.array_equal(d.compute(scheduler="threads"), symsphere.sample_sphere(48 * 5000, rng=3)))
     True
     """
-    return _dask_directions(n, chunks, 48, None, method, points, rng, dtype)
+    return _dask_directions(n, chunks, orbit_size("sphere"), None, method, points, rng, dtype)
 
 
 def sample_hemisphere(
@@ -145,7 +146,7 @@ def sample_hemisphere(
     >>> bool(np.array_equal(d.compute(scheduler="threads"), local))
     True
     """
-    return _dask_directions(n, chunks, 24, check_normal(normal), method, points, rng, dtype)
+    return _dask_directions(n, chunks, orbit_size("hemisphere"), check_normal(normal), method, points, rng, dtype)
 
 
 def integrate(

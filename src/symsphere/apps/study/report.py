@@ -119,32 +119,18 @@ def report_markdown(results: Results) -> str:
     for domain in domains(config):
         names = [g for g in config.integrands if INTEGRANDS[g].domain == domain]
         baseline = "/".join(BASELINE[domain])
-        lines += [
-            f"**{domain}** (1/(MSE·seconds) over that of `{baseline}`; above 1: better):",
-            "",
-            "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |",
-            "|---|" + "---:|" * len(names),
-        ]
-        for sampler in samplers(config, domain):
-            cells = [
-                _efficiency_text(find_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
-                for g in names
-            ]
-            lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
-        lines += [
-            "",
-            f"**{domain}: convergence slopes** (log RMSE vs log n; ± standard error):",
-            "",
-            "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |",
-            "|---|" + "---:|" * len(names),
-        ]
-        for sampler in samplers(config, domain):
-            cells = [
-                _slope_text(find_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
-                for g in names
-            ]
-            lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
-        lines.append("")
+        for title, cell in (
+            (f"**{domain}** (1/(MSE·seconds) over that of `{baseline}`; above 1: better):", _efficiency_text),
+            (f"**{domain}: convergence slopes** (log RMSE vs log n; ± standard error):", _slope_text),
+        ):
+            lines += [title, "", "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |"]
+            lines.append("|---|" + "---:|" * len(names))
+            for sampler in samplers(config, domain):
+                rows = [
+                    find_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points) for g in names
+                ]
+                lines.append(f"| {sampler.label} | " + " | ".join(cell(row) for row in rows) + " |")
+            lines.append("")
 
     comparisons, names = comparison_rows(results)
     if comparisons:
