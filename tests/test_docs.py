@@ -53,7 +53,7 @@ NOT_DOCUMENTED = {
     "symsphere.render.scenes": "its public names are documented on the symsphere.render page",
     **{
         f"symsphere.apps.study.{name}": "the study's internals; symsphere.apps.study documents its interface"
-        for name in ("command", "config", "figures", "report", "results", "run", "samplers")
+        for name in ("command", "config", "figures", "findings", "report", "results", "run", "samplers")
     },
 }
 

@@ -1,7 +1,7 @@
 """The peer samplers: registry, conventions, densities, and their distributions.
 
 The peers' maps of the unit square are tested in tests/warps/ (one file per module, and the contract
-every warp keeps in tests/warps/test_contract.py).
+every warp keeps in tests/warps/test_registry.py).
 
 Statistical tests use significance 0.01 with a Sidak correction over the
 CHI2_TESTS chi-square (and two-sample) tests of this file and of

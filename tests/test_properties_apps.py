@@ -498,7 +498,7 @@ EXCLUDED = {
     "symsphere.render.RenderPlan": "built by plan_passes (tested); render_passes gets one",
     "symsphere.render.SceneError": "the exception type itself",
     "symsphere.Scheme": "the engine behind sample_sphere/sample_hemisphere/iter_* (property-tested through them: "
-    "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_engine.py",
+    "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_sampling.py",
 }
 # Whole modules left out: the applications.  Their contract (one line on stderr, exit status 2 for bad
 # arguments, never a traceback) is tested through symsphere.apps.cli.main in tests/test_reliability.py

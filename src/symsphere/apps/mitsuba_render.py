@@ -36,9 +36,10 @@ from xml.parsers import expat
 
 import numpy as np
 
+from .._signals import deferred as deferred_signals
 from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import MAX_PATHS, check_count, memory_pixel_limit, read_regular_file
-from ._process import deferred_signals, wait_interruptibly
+from ._process import wait_interruptibly
 
 __all__ = [
     "DEFAULT_VARIANT",

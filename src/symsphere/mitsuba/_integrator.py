@@ -308,10 +308,10 @@ class _PathMethods:
             u, v = _random.fraction(fu), _random.fraction(fv)
         if self.strategy == "cosine":  # points='sobol' (random: the BSDF's own sample); n = 1, group = s
             wo = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u, v))
-            return wo, wo.z * _INV_PI
+            return wo, wo.z * INV_PI
         if self.strategy == "symmetric_cosine":
             x, y, z = orbit_member(*cosine_wedge_point(u, v), member, members=8)
-            return mi.Vector3f(x, y, z), z * _INV_PI
+            return mi.Vector3f(x, y, z), z * INV_PI
         bx, by, bz = triangle_point(u, v, self.method)
         density = triangle_density(bx, by, bz, self.method)
         x, y, z = orbit_member(bx, by, bz, member, members=24)
@@ -321,7 +321,7 @@ class _PathMethods:
         """The strategy's density of the local direction *wo* (on the side of wi), for MIS."""
         same_side = wo.z * wi_z > 0
         if self.strategy in _COSINE_DENSITY:  # density |cos| / pi
-            return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
+            return dr.select(same_side, dr.abs(wo.z) * INV_PI, 0.0)
         if self.method == "equal_area":
             return dr.select(same_side, INV_2PI, 0.0)
         a, b, c = dr.abs(wo.x), dr.abs(wo.y), dr.abs(wo.z)
@@ -440,9 +440,7 @@ class _PathMethods:
                 if dr.hint(self.strategy in _COSINE_DENSITY, mode="scalar"):
                     weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
                 else:
-                    weight_local = dr.select(
-                        pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * _INV_PI / pdf_local), 0.0
-                    )
+                    weight_local = dr.select(pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * INV_PI / pdf_local), 0.0)
                 bsdf_pdf = dr.select(lambertian, self._density(wo, si.wi.z), bsdf_pdf)
                 bsdf_sample.wo = dr.select(lambertian, local, bsdf_sample.wo)
                 bsdf_sample.pdf = dr.select(lambertian, pdf_local, bsdf_sample.pdf)

@@ -35,11 +35,12 @@ from numba.extending import register_jitable
 
 from .._constants import BASE_U, BASE_V, INV_2PI, INV_4PI, INV_PI
 from .._kernels import orbit_member, triangle_density, triangle_point
-from .._splitmix import GOLDEN, ODD, mix64
+from .._random.hashes import below, next_u64, u01
+from .._random.owen_sobol import owen_sobol2, owen_sobol_interlaced
+from .._random.splitmix import GOLDEN, ODD, mix64
 from .._threads import route_compiles
 from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
 from ._emitters import INLINED
-from ._random import below, next_u64, owen_sobol2, owen_sobol_interlaced, u01
 
 __all__ = [
     "UNIFORM", "COSINE", "ORBIT", "SYMMETRIC", "SYMMETRIC_SOBOL", "SYMMETRIC_COSINE", "SYMMETRIC_COSINE_SOBOL",
@@ -54,7 +55,7 @@ SYMMETRIC_COSINE_SOBOL_INTERLACED2, SYMMETRIC_COSINE_SOBOL_INTERLACED3 = 9, 10
 _INV_PI, _INV_4PI = INV_PI, INV_4PI  # the kernels' spelling
 _BASE_U = np.uint64(BASE_U)  # distinct tags that split a group key into u and v
 _BASE_V = np.uint64(BASE_V)
-_GOLDEN, _ODD = GOLDEN, ODD  # SplitMix64's constants (symsphere._splitmix), as the kernels name them
+_GOLDEN, _ODD = GOLDEN, ODD  # SplitMix64's constants (symsphere._random.splitmix), as the kernels name them
 _ONE = np.uint64(1)
 
 
@@ -91,7 +92,7 @@ def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
         Sample the whole sphere (Lambertian transmission) rather than the
         upper hemisphere.
     key : uint64
-        The pixel's key (:func:`~symsphere.render._random.pixel_key`).
+        The pixel's key (:func:`~symsphere._random.hashes.pixel_key`).
     s, depth : int
         Sample index within the pixel, vertex index along the path (0 = first hit).
     state : uint64
@@ -111,7 +112,7 @@ def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
     base point B(g, depth) (``SYMMETRIC``: two hashes of (pixel, depth, n,
     g); ``SYMMETRIC_SOBOL``: point g of the Owen-scrambled, index-shuffled
     Sobol' sequence seeded by (pixel, depth, n); ``..._INTERLACED2/3``: point g
-    of the interlaced one, :func:`~symsphere.render._random.owen_sobol_interlaced`)
+    of the interlaced one, :func:`~symsphere._random.owen_sobol.owen_sobol_interlaced`)
     and one offset o(g, depth)
     uniform in 0..n-1 (a third hash), and sample s takes orbit member
     ``(s mod n + o) mod n``.  The n

@@ -41,11 +41,11 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from .._constants import INV_2PI
+from .._constants import INV_2PI, TWO_POW_M53
+from .._random.hashes import next_u64, u01
 from .._threads import route_compiles
 from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
-from ._random import next_u64, u01
 
 __all__ = [
     "INLINED",
@@ -67,7 +67,7 @@ TABLE_FUNCTION: dict[str, Any] = dict(_nrt=False, cache=True, error_model="numpy
 INLINED: dict[str, Any] = dict(TABLE_FUNCTION, forceinline=True)
 _PI = math.pi
 _MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
-_ONE_MINUS_EPSILON = 1.0 - 2.0**-53
+_ONE_MINUS_EPSILON = 1.0 - TWO_POW_M53
 _S32 = np.uint64(32)
 _M32 = np.uint64(0xFFFFFFFF)
 _TWO_M31 = 2.0**-31

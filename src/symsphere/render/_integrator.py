@@ -3,7 +3,7 @@
 The renderer's numba code is here, except the direction sampling at diffuse vertices
 (:mod:`symsphere.render._directions`: the strategies and their densities), the emitters
 (:mod:`symsphere.render._emitters`: sampling, densities, selection, the power
-heuristic), the random-number plumbing (:mod:`symsphere.render._random`) and
+heuristic), the random-number plumbing (:mod:`symsphere._random`) and
 the small kernels for the tests (:mod:`symsphere.render._probes`).  The
 functions of the hot path are numba functions of their own (``INLINED``: typed and compiled
 once each, cached), which LLVM inlines into the one kernel that :func:`render_pass` runs.  The
@@ -67,11 +67,11 @@ from numba.extending import register_jitable
 from .._compile_ahead import compile_ahead, is_cached
 from .._constants import INV_PI
 from .._numba_cache import invalidate_if_changed
+from .._random.hashes import next_u64, path_state, pixel_key, u01
 from .._threads import route_compiles, run_kernel, start_threads
 from ..frames import frame_rows
 from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
 from ._emitters import INLINED, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
-from ._random import next_u64, path_state, pixel_key, u01
 
 PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3

@@ -6,8 +6,8 @@ Each runs one function of the path tracer (as the kernel, which LLVM inlines it 
 (:func:`~symsphere.render._integrator.intersect`), the emitters
 (:func:`~symsphere.render._emitters.sample_emitter`,
 :func:`~symsphere.render._emitters.emitter_pdf`) and the Sobol' points
-(:func:`~symsphere.render._random.owen_sobol2`,
-:func:`~symsphere.render._random.owen_sobol_interlaced`) -- over many inputs, so that
+(:func:`~symsphere._random.owen_sobol.owen_sobol2`,
+:func:`~symsphere._random.owen_sobol.owen_sobol_interlaced`) -- over many inputs, so that
 the tests see exactly what the kernel computes.  Call :func:`prepare_kernels`
 before the first of them runs.
 """
@@ -18,12 +18,13 @@ import numpy as np
 from numba import njit
 
 from .._numba_cache import invalidate_if_changed
+from .._random.hashes import path_state, pixel_key
+from .._random.owen_sobol import interlace_fractions, owen_sobol2, owen_sobol_interlaced, sobol_coordinate
 from .._threads import route_compiles
 from . import _integrator
 from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
 from ._emitters import emitter_pdf, sample_emitter
 from ._integrator import KERNEL_OPTIONS, intersect, plain_spheres
-from ._random import interlace_fractions, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, sobol_coordinate
 
 __all__ = [
     "bsdf_pdfs",
@@ -126,7 +127,7 @@ def sobol_points(count, key):
 def interlaced_points(count, key, factor, scrambled):
     """The first *count* interlaced Sobol' points (factor 2 or 3): scrambled with *key*, or not (key unused).
 
-    Scrambled: :func:`~symsphere.render._random.owen_sobol_interlaced`, as the
+    Scrambled: :func:`~symsphere._random.owen_sobol.owen_sobol_interlaced`, as the
     kernel draws them.  Unscrambled: the reference, natural-order points
     ``interlace_fractions(sobol_coordinate(i, 0), ...)``.
     """

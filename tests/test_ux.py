@@ -90,7 +90,7 @@ def test_sobol_balance_warning_is_one_note_on_the_cli(tmp_path, verb):
 
 # --- the docs cite files that exist -----------------------------------------------------------
 
-_ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+_ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize(
