@@ -61,6 +61,38 @@ SAMPLING_CODE = (
 )  # fmt: skip
 
 
+# A speed table written by hand (a Markdown table whose header names a time or a rate, outside the generated
+# blocks) is a measurement of one day that no command regenerates: it must follow a line
+# ``<!-- dated YYYY-MM-DD: ... -->`` saying so, its command being in the text around it.
+SPEED_HEADER = re.compile(
+    r"\bms\b|\(s\)|, s\b|\bs\s*\||\bseconds\b|/s\b|\bwall\b|\bCPU\b|\bspeed|\bvs fill\b|\btime\b", re.I
+)
+DATED = re.compile(r"<!-- dated \d{4}-\d\d-\d\d: .*-->")
+
+
+def undated_tables(text: str) -> list[str]:
+    """The header rows of the hand-written speed tables in *text* without a ``<!-- dated ...`` line before them."""
+    lines = BLOCK.sub(lambda m: "\n" * m.group(0).count("\n"), text).split("\n")
+    return [
+        line
+        for i, line in enumerate(lines)
+        if line.startswith("|")
+        and (i == 0 or not lines[i - 1].startswith("|"))
+        and SPEED_HEADER.search(line + "|")
+        and not (i and DATED.fullmatch(lines[i - 1].strip()))
+    ]
+
+
+def _dated_scope(path: Path) -> bool:
+    """Whether hand-written speed tables in *path* need their date: the results and explanation pages, the
+    README, the benchmarks' pages (the other docs pages carry no dates: tests/test_docs.py)."""
+    try:
+        relative = path.resolve().relative_to(ROOT).as_posix()
+    except ValueError:
+        return True
+    return not relative.startswith("docs/") or relative.startswith(("docs/results/", "docs/explanation/"))
+
+
 def source_hashes(root: Path = ROOT) -> dict[str, str]:
     """{path: git blob hash} of every file under src/symsphere (as git hashes it: computed here, no git)."""
     hashes = {}
@@ -311,6 +343,11 @@ def main(argv: list[str] | None = None) -> int:
                     if changed:
                         print(f"{path}: {block['name']} from {file}: {', '.join(changed)}")
             continue
+        undated = undated_tables(text) if _dated_scope(path) else []
+        if undated:
+            differ += 1
+            print("\n".join(f"{path}: a speed table written by hand without a '<!-- dated YYYY-MM-DD: ... -->' "
+                             f"line before it: {row}" for row in undated))  # fmt: skip
         new = rewrite(text)
         blocks = len(BLOCK.findall(text))
         if new == text:

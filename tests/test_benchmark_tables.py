@@ -41,3 +41,17 @@ def test_the_check_sees_a_number_edited_by_hand(tmp_path):
     path.write_text(text.replace(row, edited_row, 1), encoding="utf-8")
     run = _check(path)
     assert run.returncode == 1 and edited_row in run.stdout and row in run.stdout
+
+
+def test_the_check_sees_a_speed_table_written_by_hand_without_its_date(tmp_path):
+    table = "| case | median ms |\n|---|---:|\n| sample_sphere | 2.92 |\n"
+    undated = tmp_path / "undated.md"
+    undated.write_text("Measured today.\n\n" + table, encoding="utf-8")
+    dated = tmp_path / "dated.md"
+    dated.write_text("Measured today.\n\n<!-- dated 2026-11-22: measured by hand -->\n" + table, encoding="utf-8")
+    other = tmp_path / "other.md"
+    other.write_text("| option | values |\n|---|---|\n| --n | 48 |\n", encoding="utf-8")  # no time or rate
+    run = _check(undated)
+    assert run.returncode == 1 and "| case | median ms |" in run.stdout
+    assert _check(dated).returncode == 0, _check(dated).stdout
+    assert _check(other).returncode == 0

@@ -317,8 +317,11 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
         # their own (register_jitable: compiled once per process and shared by the cases; LLVM
         # inlines them), not numba-IR inlines, which cost compile time in every case.
         whole = rows.shape[0]
-        u = np.full(_BATCH, 0.5)
-        v = np.full(_BATCH, 0.5)
+        u = np.empty(_BATCH)
+        v = np.empty(_BATCH)
+        for j in range(_BATCH):  # a partial batch maps these lanes too (np.full: one more overload to compile)
+            u[j] = 0.5
+            v[j] = 0.5
         base = np.empty((3, _BATCH))
         scratch = np.empty(rows.shape[1], dtype=tail.dtype)  # the cut orbit, stored whole
         if source == _RANDOM:

@@ -1,0 +1,86 @@
+"""The sampling kernels' CPU time on one thread: this checkout against a base revision, in one process.
+
+    python benchmarks/kernel_cpu.py --base main --rounds 25
+
+For a loaded machine: ``time.thread_time()`` around each call counts only the time the calling thread ran
+(with ``numba.set_num_threads(1)`` the kernel runs in that thread), not the time it waited for a core, so
+it is the kernel's own cost, stalls on memory included.  It says nothing about two threads sharing the
+memory system (``regress.py`` on an idle machine does).  The base revision's ``src/symsphere`` is
+copied out of git under another package name (``symsphere_base``) and imported beside this checkout's;
+the rows (numpy's ``fill`` of the same buffer, ``sample_sphere``, ``sample_hemisphere`` and
+``sample_hemisphere`` about (1, 1, 1), all ``out=``, n = 48 * 2**16, float64 and float32) take turns in
+every round.  Printed: the median and the minimum in ms, and the fraction of ``fill`` (its minimum over
+the row's minimum).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+N = 48 * 2**16
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--base", default="HEAD", help="git revision to compare against (default: HEAD)")
+    parser.add_argument("--rounds", type=int, default=25, help="interleaved rounds (default: 25)")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as folder:
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.base, "src/symsphere"], check=True,
+                                 capture_output=True).stdout  # fmt: skip
+        subprocess.run(["tar", "-x", "-C", folder], input=archive, check=True)
+        (Path(folder) / "src" / "symsphere").rename(Path(folder) / "symsphere_base")
+        sys.path.insert(0, folder)
+        sys.path.insert(0, str(ROOT / "src"))
+        _run(args.base, args.rounds)
+    return 0
+
+
+def _run(base: str, rounds: int) -> None:
+    import numpy as np
+    import symsphere_base  # type: ignore[import-not-found]  # the copy made above
+    from numba import set_num_threads
+
+    import symsphere
+
+    set_num_threads(1)
+    rows = {}
+    for dtype in (np.float64, np.float32):
+        buffer = np.empty((N, 3), dtype)
+        name = np.dtype(dtype).name
+        rows[f"fill ({name})"] = lambda b=buffer: b.fill(0.5)
+        for tag, package in ((base, symsphere_base), ("this checkout", symsphere)):
+            for label, extra in (
+                ("sample_sphere", {}),
+                ("sample_hemisphere", {}),
+                ("normal=(1,1,1)", {"normal": (1.0, 1.0, 1.0)}),
+            ):
+                call = package.sample_sphere if label == "sample_sphere" else package.sample_hemisphere
+                rows[f"{label}, out= ({name}), {tag}"] = lambda c=call, d=dtype, b=buffer, e=extra: c(
+                    N, rng=1, dtype=d, out=b, **e
+                )
+    for run in rows.values():
+        run()
+    times: dict[str, list[float]] = {key: [] for key in rows}
+    keys = list(rows)
+    for r in range(rounds):
+        for key in keys[r % len(keys) :] + keys[: r % len(keys)]:
+            start = time.thread_time()
+            rows[key]()
+            times[key].append(time.thread_time() - start)
+    print(f"kernel_cpu.py: one thread, thread CPU ms over {rounds} interleaved rounds, n = {N}")
+    for key in keys:
+        fill = min(times[f"fill ({'float64' if 'float64' in key else 'float32'})"])
+        print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}"
+              f"  of fill {fill / min(times[key]):.2f}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    sys.exit(main())
