@@ -35,9 +35,9 @@ converges more slowly on the hemisphere than on the sphere.
   total stays below EXPLORE of that stage (a Lebedev rule's sudden convergence once its order passes
   f's bandwidth is invisible to a prediction from small stages).
 
-A chosen stage answers when it meets the tolerance; a pilot or exploring stage only when it meets
-PILOT_STRICT of it (it ran to choose: one that meets the tolerance narrowly may owe it to a spread that
-happened to be small).  A chosen stage's replicates are independent randomisations of its family
+A chosen stage answers when it meets the tolerance; a pilot or exploring stage never (it ran to choose,
+and one that meets the tolerance may owe it to a spread that happened to be small): one that meets
+PILOT_STRICT of it is repeated afresh, and the repetition is a chosen stage.  A chosen stage's replicates are independent randomisations of its family
 only, drawn after the choice and the size were fixed from earlier stages.  Every interval the run looks
 at spends part of ``alpha = 1 - confidence_level``: the c-th pilot or exploring stage
 ``(alpha / 2) / (c (c + 1))``, the i-th chosen stage ``(alpha / 2) / (i (i + 1))``; these add up to at
