@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 import warnings
@@ -34,6 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import cpu_name
+from tables import source_hashes
 
 import symsphere
 from symsphere.harmonics import real_sh
@@ -150,6 +152,8 @@ def main():
                     date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
                     n_max=args.n_max,
                     seed=args.seed,
+                    load_average=list(os.getloadavg()),
+                    sources=source_hashes(),
                     summary=summary,
                     rows=rows,
                 ),

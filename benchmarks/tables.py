@@ -14,6 +14,8 @@ the repository's root); everything between the two markers is replaced.  Kinds (
 * ``bench_sample-targets``  -- its targets, one column pair per file (run 1, run 2, ...);
 * ``regress``               -- the table of ``regress.py --json``;
 * ``cold-start``            -- the steps of ``first_sample.py --cold-start --json`` (wall and CPU seconds);
+* ``bench_integrate_auto``  -- evaluations of ``integrate(method='auto')`` against the best rule family
+                               alone, from ``bench_integrate_auto.py --json``;
 * ``speed-sentence``        -- one sentence for the README (``sample_sphere`` and the hemisphere about a
                                normal against the memory write limit), from a ``bench_sample.py`` file.
 
@@ -298,7 +300,49 @@ def _cold_start(loaded):
 
 # kind: (how the block is made, the code it measures, the command that measures it again: None for the
 # command recorded in the results file)
+def _integrate_auto(loaded):
+    """Evaluations of integrate(method='auto') against the best family alone, from bench_integrate_auto.py."""
+    (_, result), *_ = loaded
+    letter = {"equal_area": "S", "fibonacci": "F", "lebedev": "L"}
+    rtols = sorted({row["rtol"] for row in result["rows"]}, reverse=True)
+    by_integrand: dict[str, dict[float, dict]] = {}
+    for row in result["rows"]:
+        by_integrand.setdefault(row["integrand"], {})[row["rtol"]] = row
+
+    def cell(row):
+        if not row["best"]:
+            return "no family within n_max"
+        best = row["runs"][row["best"]]
+        auto, note = row["runs"]["auto"], ""
+        if not auto["converged"] and row["runs"].get("auto_4x_n_max", {}).get("converged"):
+            auto, note = row["runs"]["auto_4x_n_max"], ", 4× n_max"
+        if not auto["converged"]:
+            return f"not reached / {best['evaluations']} {letter[row['best']]}"
+        text = (f"{auto['evaluations']} {letter[auto['chosen']]}{note} / {best['evaluations']} "
+                f"{letter[row['best']]} = {row['ratio']:.2f}")  # fmt: skip
+        return f"**{text}**" if row["ratio"] > 2 else text
+
+    summary = result["summary"]
+    lines = [
+        f"`{result['command']}` ({result['date']}, {result['cpu']}; `n_max` = {result['n_max']}, seed "
+        f"{result['seed']}): within 2× in {summary['within_2x']} of the {summary['cells_some_family_reached']} "
+        f"cells some family reached (median ratio {summary['median_ratio']:.2f}, worst {summary['max_ratio']:.2f}).",
+        "",
+        "| integrand | " + " | ".join(f"rtol {r:.0e}" for r in rtols) + " |",
+        "|---|" + "---|" * len(rtols),
+    ]
+    for name, cells in by_integrand.items():
+        lines.append(f"| `{name}` | " + " | ".join(cell(cells[r]) for r in rtols) + " |")
+    return "\n".join(lines)
+
+
+AUTO_CODE = (
+    "src/symsphere/_auto.py", "src/symsphere/_integration.py", "src/symsphere/_lebedev.py",
+    "src/symsphere/peers.py", "src/symsphere/integrands.py", "src/symsphere/harmonics.py",
+)  # fmt: skip
+
 KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...], str | None]] = {
+    "bench_integrate_auto": (_integrate_auto, AUTO_CODE, None),
     "bench_sample": (_throughput, SAMPLING_CODE, "make bench"),
     "bench_sample-profile": (_profile, SAMPLING_CODE, "make bench"),
     "bench_sample-targets": (_targets, SAMPLING_CODE, "make bench"),

@@ -22,19 +22,30 @@ would make it discontinuous at the horizon and ruin the rule's order); the folde
 kink at the horizon where f's derivative along the normal is not zero there, so a high-order rule
 converges more slowly on the hemisphere than on the sphere.
 
-``'auto'`` (needs ``atol`` or ``rtol``): every family runs two pilot stages, the cheapest pending stage
-first, and the integration stops as soon as any stage meets the tolerance.  After the pilot, the
-family whose predicted remaining cost is smallest runs its next stage; the prediction extrapolates
-the standard error from the family's last two stages (its measured rate, at least n**-0.5;
-exactly n**-0.5 for the Lebedev copies) along the family's stage sizes.  The choice is made again
-after every stage.  Every interval the run looks at spends part of the error probability
-``alpha = 1 - confidence_level``: each of the F families gets alpha / F, and its stage j is at level
-``1 - alpha / (F j (j + 1))`` (F = 1 for a named family: the scheme's rule).  These add up to alpha over
-all stages of all families, so the interval returned covers with probability at least
-``confidence_level`` (a union bound) whichever stage of whichever family it is.
-``n_max`` bounds the evaluations of all stages of all families (pilot and discarded stages
-included), which is what ``n_evaluations`` counts.  ``result.history`` lists every stage: family,
-evaluations, estimate, standard error, half-width, tolerance, and why it ran.
+``'auto'`` (needs ``atol`` or ``rtol``) runs three kinds of stages:
+
+- *pilot*: the family whose total after its next stage is smallest (Lebedev's counted at half) runs
+  its next stage on its own ladder (the scheme's nested, the rotated rules' fresh);
+- *chosen*: once a family has two stages, its standard error is extrapolated to each larger stage of
+  its ladder (a power of the size fitted to its last stages, at least n**-0.5; for a Lebedev rule
+  converging faster than n**-2, exp(-b sqrt(size)), its order growing like sqrt(size)); the family
+  whose smallest stage predicted to meet the tolerance costs least (at most JUMP times everything
+  spent before) runs that stage *afresh* -- new rotations or new base points, nothing reused;
+- *exploring*: before each chosen stage, every other family continues its pilot ladder while its
+  total stays below EXPLORE of that stage (a Lebedev rule's sudden convergence once its order passes
+  f's bandwidth is invisible to a prediction from small stages).
+
+A chosen stage answers when it meets the tolerance; a pilot or exploring stage never (it ran to choose,
+and one that meets the tolerance may owe it to a spread that happened to be small): one that meets
+PILOT_STRICT of it is repeated afresh, and the repetition is a chosen stage.  A chosen stage's replicates are independent randomisations of its family
+only, drawn after the choice and the size were fixed from earlier stages.  Every interval the run looks
+at spends part of ``alpha = 1 - confidence_level``: the c-th pilot or exploring stage
+``(alpha / 2) / (c (c + 1))``, the i-th chosen stage ``(alpha / 2) / (i (i + 1))``; these add up to at
+most alpha, so the interval returned covers with probability at least ``confidence_level`` (a union
+bound) whichever stage it is.  A named family runs its own ladder alone (stage j at level
+``1 - alpha / (j (j + 1))``).  ``n_max`` bounds the evaluations of all stages of all families (pilot
+and discarded stages included), which is what ``n_evaluations`` counts.  ``result.history`` lists every
+stage: family, evaluations, estimate, standard error, half-width, tolerance, level, and why it ran.
 """
 
 from __future__ import annotations
@@ -79,7 +90,18 @@ LEBEDEV_LADDER: tuple[int, ...] = (6, 14, 26, 50, 110, 230, 434, 974, 2030, 3890
 FIBONACCI_FIRST = 16
 AUTO_POINTS = "sobol_interlaced3"
 PILOT_STAGES = 2
+PILOT_ALPHA = 0.5
+"""'auto': the share of alpha for the pilot's and the exploring stages; the rest is for the chosen fresh stages."""
 EXPLORE = 0.25
+PILOT_STRICT = 0.1
+JUMP = 4
+"""'auto': a fresh stage costs at most this multiple of every evaluation before it (a prediction from small
+stages may be far off; the totals then grow geometrically)."""
+SLOPE_MARGIN = 0.0
+"""'auto' predicts with the fitted rate of decay slowed by this much: about one standard deviation of a
+slope fitted to standard errors of 8 replicates over a factor 4 in size (an upper bound on the cost)."""
+SPECTRAL_MARGIN = 0.8
+"""The same for a Lebedev rule converging spectrally: the fitted decay per unit of sqrt(size), times this."""
 SHARE = {"lebedev": 2.0}
 """Balanced stages give a family this multiple of the others' total: Lebedev's small rules are cheap, and
 exact on band-limited f once the order passes the degree, which no small stage can predict."""
@@ -105,6 +127,7 @@ class _Family:
     def __init__(self, replicates: int) -> None:
         self.replicates = replicates
         self.stages: list[_Stage] = []
+        self.chosen: list[_Stage] = []  # fresh stages run by 'auto' after the pilot
         self.spent = 0
 
     def sizes(self) -> list[tuple[int, int]]:
@@ -112,6 +135,14 @@ class _Family:
         raise NotImplementedError
 
     def run_next(self) -> _Stage:
+        raise NotImplementedError
+
+    def ladder(self, k: int) -> tuple[int, int]:
+        """(size, evaluations) of stage k run afresh."""
+        raise NotImplementedError
+
+    def fresh(self, k: int) -> _Stage:
+        """Stage k from a randomisation of its own, independent of every stage before."""
         raise NotImplementedError
 
 
@@ -150,6 +181,19 @@ class _Rotated(_Family):
 
     def run_next(self) -> _Stage:
         return self.run_stage(len(self.stages))
+
+    def ladder(self, k: int) -> tuple[int, int]:
+        """(size, evaluations) of stage k run afresh: every copy drawn."""
+        size, copies = self._size(k)
+        return size * copies, self.replicates * size * copies
+
+    def fresh(self, k: int) -> _Stage:
+        """Stage k from rotations of its own (a child of this family's seed), nothing reused."""
+        domain, normal = ("sphere", np.zeros(3)) if self.normal is None else ("hemisphere", self.normal)
+        other = _Rotated(self.name, self.f, domain, normal, self.seed.spawn(1)[0], self.replicates)
+        stage = other.run_stage(k)
+        self.varies = self.varies or other.varies
+        return stage
 
     def run_stage(self, k: int) -> _Stage:
         """Stage k (0-based); copies stages reuse the copies drawn so far."""
@@ -216,12 +260,22 @@ class _Scheme(_Family):
     name = "equal_area"
 
     def __init__(
-        self, f: Integrand, domain: str, points: PointsLike, normal: Any, seed: Any, replicates: int, n_max: int
+        self,
+        f: Integrand,
+        domain: str,
+        points: PointsLike,
+        normal: Any,
+        seed: Any,
+        replicates: int,
+        n_max: int,
+        first: int | None = None,
     ):
         units = 1 if points == "random" else replicates
         super().__init__(units)
+        self.args = (f, domain, points, normal, seed, replicates, n_max)
         self.count = orbit_size(cast(Domain, domain))
-        self.first = 16 if points == "random" else 1  # orbits (per replicate) of the first stage
+        self.base = 16 if points == "random" else 1  # orbits (per replicate) of the first stage
+        self.first = self.base if first is None else first
         orbits = self.first
         while self.count * units * orbits * 2 <= n_max:
             orbits *= 2
@@ -238,6 +292,20 @@ class _Scheme(_Family):
         )
         self.points_name = self.largest.points_name
         self.kept: dict[tuple[int, int], Any] = {}
+
+    def ladder(self, k: int) -> tuple[int, int]:
+        """(size, evaluations) of stage k (counted from the first stage of 1 or 16 orbits) run afresh."""
+        orbits = self.base << k
+        if orbits > self.largest.orbits_per_replicate:
+            return self.count * orbits, 2**62  # beyond the plan for n_max: never affordable
+        return self.count * orbits, self.count * self.replicates * orbits
+
+    def fresh(self, k: int) -> _Stage:
+        """Stage k from base points of their own (a child of this family's seed), nothing reused."""
+        f, domain, points, normal, seed, replicates, n_max = self.args
+        child = seed.spawn(1)[0]
+        other = _Scheme(f, domain, points, normal, child, replicates, n_max, first=self.base << k)
+        return other.run_next()
 
     def sizes(self) -> list[tuple[int, int]]:
         out = []
@@ -375,9 +443,8 @@ def integrate_rules(
             rotated("fibonacci"),
             rotated("lebedev"),
         ]
-    else:
-        families = [rotated(method)]
-    return _race(families, domain, confidence_level, atol_value, rtol_value, n_max)
+        return _auto(families, domain, confidence_level, atol_value, rtol_value, n_max)
+    return _race([rotated(method)], domain, confidence_level, atol_value, rtol_value, n_max)
 
 
 def _fixed(family: _Rotated, n: int, domain: str, level: float) -> IntegrationResult:
@@ -513,15 +580,201 @@ def _race(
             return dataclasses.replace(result, history=tuple(history))
     if result is None:
         raise ValueError(f"'n_max'={n_max} is smaller than the first stage of every family")
-    best = min(
-        latest.values(), key=lambda r: float(np.max(np.subtract(r.confidence_interval[1], r.confidence_interval[0])))
-    )
-    best = dataclasses.replace(best, n_evaluations=spent, n_stages=check, history=tuple(history))
+    return _not_reached(list(latest.values()), spent, history, n_max)
+
+
+def _not_reached(
+    results: Sequence[IntegrationResult], spent: int, history: list[dict[str, Any]], n_max: int
+) -> IntegrationResult:
+    """The narrowest interval of *results*, with a warning naming the tolerance and what was reached."""
+    best = min(results, key=lambda r: float(np.max(np.subtract(r.confidence_interval[1], r.confidence_interval[0]))))
+    best = dataclasses.replace(best, n_evaluations=spent, n_stages=len(history), history=tuple(history))
     low, high = best.confidence_interval
     warnings.warn(
         f"integrate: the tolerance {best.tolerance:.3g} was not reached by n_max={n_max}: the best interval "
         f"({best.method}, {100 * best.confidence_level:.4g}%) has half-width {np.max(np.subtract(high, low)) / 2:.3g}",
         UserWarning,
-        stacklevel=4,
+        stacklevel=5,
     )
     return best
+
+
+def _jump(family: _Family, tolerance: float, t: float, budget: int) -> tuple[int, int, float, bool]:
+    """(stage, evaluations, predicted half-width, whether it meets *tolerance*) of the smallest fresh stage,
+    larger than any run, predicted to meet the tolerance within *budget*; else the largest affordable one
+    (evaluations 0 and half-width inf if none is).  The standard error is extrapolated from the family's
+    largest stages along a power of the size: the slower of the rates through the last two and the last
+    three (at least n**-0.5; exactly n**-0.5 for copies of the largest Lebedev rule) -- an upper bound on
+    the cost, since one stage too large costs about what the family alone spends on its way there, one too
+    small a further stage."""
+    seen: dict[int, float] = {}
+    for stage in (*family.stages, *family.chosen):
+        seen[stage.size] = float(np.max(stage.standard_error))
+    largest = max(seen)
+    se = seen[largest]
+    slope, spectral = -0.5, 0.0
+    known = [(size, e) for size, e in sorted(seen.items()) if e > 0][-3:]
+    if len(known) >= 2:
+        x, y = np.log([z for z, _ in known]), np.log([e for _, e in known])
+        local = float((y[-1] - y[-2]) / (x[-1] - x[-2]))
+        fit = float(np.polyfit(x, y, 1)[0]) if len(known) == 3 else local
+        slope = min(-0.5, fit + SLOPE_MARGIN)
+        if family.name == "lebedev" and local <= -2:  # converging like exp(-b order), order ~ sqrt(size)
+            root = np.sqrt([known[-2][0], known[-1][0]])
+            spectral = SPECTRAL_MARGIN * float((y[-2] - y[-1]) / (root[1] - root[0]))
+    copies_from = LEBEDEV_SIZES[-1] if family.name == "lebedev" else math.inf
+    found: tuple[int, int, float, bool] = (-1, 0, math.inf, False)
+    for k in range(64):
+        size, cost = family.ladder(k)
+        if size <= largest:
+            continue
+        if cost > budget:
+            break
+        if se == 0:  # no spread at the largest stage (a tie on a varying f): the next stage decides
+            return k, cost, 0.0, True
+        rule = min(size, copies_from)
+        if rule <= largest:
+            predicted = se
+        elif spectral > 0:
+            predicted = se * math.exp(-spectral * (math.sqrt(rule) - math.sqrt(largest)))
+        else:
+            predicted = se * (rule / largest) ** slope
+        predicted *= (size / max(rule, largest)) ** -0.5 if size > rule else 1.0
+        found = (k, cost, t * predicted, t * predicted <= tolerance)
+        if found[3]:
+            break
+    return found
+
+
+def _auto(
+    families: Sequence[_Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
+) -> IntegrationResult:
+    """The pilot (every family's first stages, cheapest total first), then fresh stages of the family
+    predicted to meet the tolerance with the fewest evaluations, the others exploring on the side."""
+    alpha = 1.0 - confidence_level
+    spent = 0
+    looks = {"pilot": 0, "chosen": 0}
+    history: list[dict[str, Any]] = []
+    latest: dict[str, tuple[IntegrationResult, int]] = {}  # each family's estimate with the most evaluations behind it
+    result: IntegrationResult | None = None
+    confirm: list[tuple[_Family, int]] = []  # a pilot stage that met PILOT_STRICT of the tolerance
+
+    def level(part: str, look: int) -> float:
+        share = PILOT_ALPHA if part == "pilot" else 1.0 - PILOT_ALPHA
+        return 1.0 - alpha * share / (look * (look + 1))
+
+    def look(family: _Family, stage: _Stage, part: str, reason: str) -> IntegrationResult:
+        nonlocal spent
+        family.spent += stage.cost
+        spent += stage.cost
+        looks[part] += 1
+        result = _result(family, stage, level(part, looks[part]), spent, domain)
+        low, high = result.confidence_interval
+        half_width = (np.asarray(high) - np.asarray(low)) / 2
+        tolerance_now = np.maximum(atol, rtol * np.abs(np.asarray(result.integral)))
+        # A tolerance of 0 (rtol alone, an estimate of exactly 0: every replicate missed f's support) is never met.
+        # Nor is one whose replicates all tied while f varies (a discontinuous f on an even point set).
+        # replicates that all tie while some stage (of any family) had a spread: the scheme's too
+        spread = bool(np.any(stage.standard_error > 0))
+        tied = stage.tied or (not spread and any(np.any(h["standard_error"]) for h in history))
+        valid = bool(np.all(tolerance_now > 0) and not tied)
+        converged = valid and bool(np.all(half_width <= tolerance_now)) and part == "chosen"
+        # A pilot stage never answers: it would be returned because its spread happened to be small (a stage
+        # of 6 Lebedev points answering rtol 1e-2 covers in 91% of runs instead of 95%).  One that meets
+        # PILOT_STRICT of the tolerance is repeated afresh, and the repetition answers.
+        if part == "pilot" and valid and bool(np.all(half_width <= PILOT_STRICT * tolerance_now)):
+            confirm.append((family, len(family.stages) - 1))
+        result = dataclasses.replace(
+            result, tolerance=float(np.min(tolerance_now)), n_stages=len(history) + 1, converged=converged
+        )
+        behind = stage.size * family.replicates
+        if family.name not in latest or behind >= latest[family.name][1]:
+            latest[family.name] = (result, behind)
+        history.append(
+            dict(
+                method=family.name,
+                size=stage.size,
+                evaluations=stage.cost,
+                total_evaluations=spent,
+                integral=result.integral,
+                standard_error=result.standard_error,
+                half_width=float(np.max(half_width)),
+                tolerance=result.tolerance,
+                level=result.confidence_level,
+                reason=reason,
+            )
+        )
+        return result
+
+    def step(family: _Family, reason: str) -> IntegrationResult:
+        return look(family, family.run_next(), "pilot", reason)
+
+    while True:
+        budget = n_max - spent
+        affordable = [fam for fam in families if fam.sizes() and fam.sizes()[0][1] <= budget]
+        if confirm:
+            family, k = confirm.pop()
+            confirm.clear()
+            if family.ladder(k)[1] <= budget:
+                stage = family.fresh(k)
+                family.chosen.append(stage)
+                reason = f"confirming: a pilot stage met {PILOT_STRICT} of the tolerance; this fresh repetition answers"
+                result = look(family, stage, "chosen", reason)
+                if result.converged:
+                    break
+                continue
+        best = max(latest.values(), key=lambda pair: pair[1])[0] if latest else None
+        jumps: dict[str, tuple[int, int, float, bool]] = {}
+        if best is not None:
+            tolerance = float(np.min(np.maximum(atol, rtol * np.abs(best.integral))))
+            units = min(fam.replicates for fam in families)
+            t = _t(units, level("chosen", looks["chosen"] + 1))
+            cap = max(JUMP * spent, 1)  # a fresh stage costs at most JUMP times everything so far
+            jumps = {
+                fam.name: _jump(fam, tolerance, t, min(budget, cap))
+                for fam in families
+                if len(fam.stages) + len(fam.chosen) >= PILOT_STAGES
+            }
+        leaders = [fam for fam in families if jumps.get(fam.name, (-1,))[0] >= 0]
+        said = ", ".join(f"{name} {j[1] if j[3] else 'none'}" for name, j in jumps.items())
+        if leaders:
+            # the one predicted to meet the tolerance with the fewest evaluations, else (all capped) the
+            # smallest predicted half-width per evaluation
+            choice = min(
+                leaders,
+                key=lambda fam: (
+                    not jumps[fam.name][3],
+                    jumps[fam.name][1] if jumps[fam.name][3] else jumps[fam.name][2] * math.sqrt(jumps[fam.name][1]),
+                ),
+            )
+            k, cost, _, _ = jumps[choice.name]
+            # A prediction from small stages can be wrong (a Lebedev rule converges only once its order passes
+            # f's bandwidth): before a fresh stage of the leader, every other family continues its own stages
+            # while its total stays below EXPLORE of that stage.
+            explore = [
+                fam for fam in affordable if fam is not choice and fam.spent + fam.sizes()[0][1] <= EXPLORE * cost
+            ]
+            if explore:
+                result = step(
+                    min(explore, key=_balanced),
+                    f"exploring: its total stays below {EXPLORE} of the leader's next stage; predicted fresh stages: "
+                    + said,
+                )
+            else:
+                reason = (
+                    f"chosen: its fresh stage is predicted to meet the tolerance with the fewest evaluations: {said}"
+                )
+                stage = choice.fresh(k)
+                choice.chosen.append(stage)
+                result = look(choice, stage, "chosen", reason)
+        elif affordable:
+            result = step(min(affordable, key=_balanced), "pilot: the smallest total after the stage")
+        else:
+            break
+        if result.converged:
+            break
+    if result is not None and result.converged:
+        return dataclasses.replace(result, history=tuple(history))
+    if not latest:
+        raise ValueError(f"'n_max'={n_max} is smaller than the first stage of every family")
+    return _not_reached([pair[0] for pair in latest.values()], spent, history, n_max)

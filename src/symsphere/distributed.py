@@ -493,6 +493,14 @@ def _integrate_arguments(kwargs: dict[str, Any]) -> dict[str, Any]:
     unknown = sorted(set(kwargs) - allowed)
     if unknown:
         raise TypeError(f"integrate() got unexpected keyword arguments {unknown}; allowed: {sorted(allowed)}")
+    if kwargs.get("method") in ("auto", "fibonacci", "lebedev"):
+        # Only the scheme's orbits are split into tasks; a rotated Lebedev or Fibonacci stage is one rule per
+        # replicate, evaluated in this process, so 'auto' here would distribute at most one of its families.
+        raise ValueError(
+            f"method={kwargs['method']!r} runs in one process: use symsphere.integrate(f, method="
+            f"{kwargs['method']!r}, ...); distributed.integrate distributes the scheme's maps, one of "
+            "{'equal_area', 'paper1', 'paper2'}"
+        )
     defaults: dict[str, Any] = dict(
         domain="sphere", method="equal_area", points="random", normal=None, rng=None, replicates=None
     )

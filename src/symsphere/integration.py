@@ -92,9 +92,11 @@ def integrate(
         stays unbiased); or a family of randomly rotated rules, ``'lebedev'`` (Lebedev rules of
         increasing order) or ``'fibonacci'`` (spherical Fibonacci sets), each replicate under its own
         uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
-        (needs ``atol`` or ``rtol``): a pilot of every family on f itself, then the family predicted
-        to reach the tolerance with the fewest evaluations (``result.method`` says which,
-        ``result.history`` why).  See ``docs/explanation/fused-integration.md``.
+        (needs ``atol`` or ``rtol``): a pilot of small stages on f itself, then a fresh stage (new
+        rotations or base points) of the family predicted to reach the tolerance with the fewest
+        evaluations, at the size predicted; the answer is always such a fresh stage
+        (``result.method`` says which family, ``result.history`` why).  Not in
+        :func:`symsphere.distributed.integrate`.  See ``docs/explanation/fused-integration.md``.
     points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
 or scipy.stats.qmc.QMCEngine, optional
         The base points of the unit square (as in :func:`symsphere.sample_sphere`); they decide
@@ -161,7 +163,7 @@ or scipy.stats.qmc.QMCEngine, optional
 
     >>> result = integrate(lambda w: np.exp(w[:, 0]), rtol=1e-9, method="auto", rng=4)
     >>> result.method, result.converged, result.n_evaluations
-    ('lebedev', True, 1536)
+    ('lebedev', True, 560)
     >>> bool(abs(result.integral - exact) <= 1e-9 * exact), result.history[0]["reason"][:5]
     (True, 'pilot')
     """
