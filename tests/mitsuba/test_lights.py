@@ -121,7 +121,9 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
         si.p = origin
         si.n = mi.Normal3f(0, 1, 0)
         si.sh_frame = mi.Frame3f(si.n)
-        ds, weight, total = table.sample_direction(scene, si, mi.Point2f(rng.random(n), rng.random(n)), mi.Bool(True))
+        ds, weight, total, _ = table.sample_direction(
+            scene, si, mi.Point2f(rng.random(n), rng.random(n)), mi.Bool(True)
+        )
         hit = scene.ray_intersect(mi.Ray3f(si.p, ds.d))  # from p itself: the points are on no surface
         # (the Cornell box's light is coplanar with its ceiling: a traced ray may hit either)
         lit = (dr.max(weight) > 0).numpy() & (hit.shape.emitter() != None).numpy()  # noqa: E711 - Dr.Jit

@@ -186,6 +186,8 @@ class LightTable:
             emitter_rows += [index] * len(tris)
             radiance += [_radiance(emitter)] * len(tris)
         self.count = sum(len(r) for r in rows)
+        # every emitter of the scene is in the table: a ray can find no other emission
+        self.covers_all = all(in_table)
         self.p_other = float(sum(p for p, t in zip(pmf, in_table, strict=True) if not t))
         self.p_table = 1.0 - self.p_other if self.count else 0.0
         if not self.count:
@@ -375,12 +377,12 @@ class LightTable:
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
-    def sample_direction(self, scene: Any, si: Any, sample: Any, active: Any) -> tuple[Any, Any, Any]:
-        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total),
-        with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
+    def sample_direction(self, scene: Any, si: Any, sample: Any, active: Any) -> tuple[Any, Any, Any, Any]:
+        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total,
+        ours), with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
         tested.  *total* (float64, every lane) is the selection's normaliser at si.p: pass it to
         :meth:`pdf_direction` for a hit seen from si (the next vertex's emission), which then need not
-        evaluate every triangle at si.p again."""
+        evaluate every triangle at si.p again.  *ours*: the lanes whose sample is the table's."""
         u = mi.Float(sample.x)
         ds = dr.zeros(mi.DirectionSample3f)
         weight = dr.zeros(mi.Spectrum)
@@ -406,7 +408,7 @@ class LightTable:
             # again (a differential mode re-attaches the radiance's derivative that way)
             ds = dr.select(ours, ds_table, ds)
             weight = dr.select(ours, value, weight)
-        return ds, weight, total
+        return ds, weight, total, ours
 
     def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any]:
         p = mi.Vector3d(si.p)
@@ -451,6 +453,12 @@ class LightTable:
         return ds, value, total
 
     # --- the density of a hit (MIS) ----------------------------------------------------------------
+
+    def holds(self, si: Any, active: Any) -> Any:
+        """The lanes whose *si* lies on one of the table's emitters."""
+        ident = _registry_ids(si.shape)
+        valid = active & si.is_valid() & (ident < dr.width(self._first))
+        return valid & (dr.gather(mi.UInt32, self._first, ident, valid) != _NONE)
 
     def pdf_direction(self, scene: Any, prev_si: Any, si: Any, ds: Any, active: Any, total: Any = None) -> Any:
         """Like ``scene.pdf_emitter_direction(prev_si, ds, active)`` for the emitter hit at *si*; *total*:
