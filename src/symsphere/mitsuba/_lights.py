@@ -394,11 +394,9 @@ class LightTable:
             emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, other)
             ds_o, w_o = emitter.sample_direction(si, mi.Point2f(u_other, sample.y), other)
             other &= ds_o.pdf != 0.0
-            visible = ~scene.ray_test(si.spawn_ray_to(ds_o.p), other)
-            # an occluded sample has density 0, as the table's own: a differential mode re-attaches the
-            # emitter's derivative wherever the density is not 0
-            ds_o.pdf = dr.select(visible, ds_o.pdf * self.p_other * self._other.eval_pmf_normalized(index, other), 0.0)
-            w_o = dr.select(other & visible, w_o / (self.p_other * self._other.eval_pmf_normalized(index, other)), 0.0)
+            selection = self.p_other * self._other.eval_pmf_normalized(index, other)
+            ds_o.pdf = dr.select(other, ds_o.pdf * selection, 0.0)
+            w_o = dr.select(other, w_o / selection, 0.0)
             ds = dr.select(other, ds_o, ds)
             weight = dr.select(other, w_o, weight)
         total = mi.Float64(0.0)
@@ -408,6 +406,14 @@ class LightTable:
             # again (a differential mode re-attaches the radiance's derivative that way)
             ds = dr.select(ours, ds_table, ds)
             weight = dr.select(ours, value, weight)
+        # one shadow ray for both kinds of sample, as Mitsuba tests its own (a ray to the sampled point,
+        # shortened; a coplanar surface, as the Cornell box's ceiling around its light, does not occlude).
+        # An occluded sample has density 0: a differential mode re-attaches the emitter's derivative
+        # wherever the density is not 0
+        tested = active & (ds.pdf != 0.0)
+        visible = tested & ~scene.ray_test(si.spawn_ray_to(ds.p), tested)
+        ds.pdf = dr.select(visible, ds.pdf, 0.0)
+        weight = dr.select(visible, weight, 0.0)
         return ds, weight, total, ours
 
     def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any]:
@@ -420,9 +426,8 @@ class LightTable:
         pdf = self.p_table * probability / dr.select(omega > 0.0, omega, 1.0)
         active &= omega > 0.0
         d = mi.Vector3f(dr.normalize(direction))
-        # The point q where d meets the triangle's plane: shadow-tested as Mitsuba tests its own samples
-        # (a ray to q, shortened; a coplanar surface, as the Cornell box's ceiling around its light, does
-        # not occlude), and the emitter evaluated there (texture coordinates interpolated).
+        # The point q where d meets the triangle's plane (shadow-tested by the caller), and the emitter
+        # evaluated there (texture coordinates interpolated).
         dd = mi.Vector3d(d)
         cos_n = dr.dot(dd, n)
         t_plane = dr.dot(a - p, n) / dr.select(cos_n != 0.0, cos_n, 1.0)
@@ -444,7 +449,6 @@ class LightTable:
             mi.EmitterPtr, scene.emitters_dr(), dr.gather(mi.UInt32, self._emitter, row, active), active
         )
         active &= t_plane > 0.0
-        active &= ~scene.ray_test(si.spawn_ray_to(ds.p), active)
         radiance: Any = ds.emitter.eval_direction(si, ds, active)
         pdf_f = mi.Float(pdf)
         value = dr.select(active & (pdf_f > 0.0), radiance / dr.select(pdf_f > 0.0, pdf_f, 1.0), 0.0)
@@ -464,11 +468,11 @@ class LightTable:
         """Like ``scene.pdf_emitter_direction(prev_si, ds, active)`` for the emitter hit at *si*; *total*:
         :meth:`sample_direction`'s at prev_si (None: evaluated here)."""
         # Mitsuba's density for its own emitters (none when every emitter it may choose is in the table)
-        mitsuba_pdf = scene.pdf_emitter_direction(prev_si, ds, active) if self.p_other > 0.0 else mi.Float(0.0)
         ident = _registry_ids(si.shape)
         valid = active & si.is_valid() & (ident < dr.width(self._first))
         first = dr.gather(mi.UInt32, self._first, ident, valid)
         ours = valid & (first != _NONE)
+        mitsuba_pdf = scene.pdf_emitter_direction(prev_si, ds, active & ~ours) if self.p_other > 0.0 else mi.Float(0.0)
         rect = dr.gather(mi.UInt32, self._rect, ident, ours) != 0
         index = first + dr.select(rect, dr.select(si.uv.y > si.uv.x, 1, 0), si.prim_index)
         row = dr.gather(mi.UInt32, self._row_of, index, ours)
