@@ -10,8 +10,9 @@ shading point p:
    radiance of its emitter (the mean of its RGB radiance, of the texture's mean for a textured one),
    0 when p is behind the triangle (area emitters are one-sided).  For up to :data:`EXACT_MAX`
    triangles every w_i is evaluated (the loop is unrolled into the kernel, the triangles are
-   constants of it; float32 weights, float64 sums).  Above that, in two levels: the triangles, in a
-   spatial order (by the axis of their normal, then a Morton curve of their centroids), form about
+   constants of it; float32 weights and sums: u has 24 bits, so float64 sums made the choice no
+   closer to the weights, and they cost 20 % of the CPU time of direct light under a 1024-triangle
+   light).  Above that, in two levels: the triangles, in a spatial order (by the axis of their normal, then a Morton curve of their centroids), form about
    :data:`GROUP_COUNT` runs of at most :data:`GROUP_MAX`; a run is chosen by an estimate
    ``power cos / max(d^2, r^2)`` (:class:`_Group`), then a triangle of it by its exact w_i.  Beyond
    GROUP_COUNT x GROUP_MAX (2048) triangles, the triangle is chosen by its power ``area L_e``, as
@@ -157,6 +158,15 @@ def _importance(p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, power
     return value * cos
 
 
+def _sum(weights: list[Any]) -> Any:
+    """The sum of the weights (None: left out) in float32, in order: :meth:`LightTable._pick`'s total."""
+    total = mi.Float(0.0)
+    for w in weights:
+        if w is not None:
+            total += w
+    return total
+
+
 class LightTable:
     """The emitter triangles of a scene and their selection (see the module docstring)."""
 
@@ -290,33 +300,30 @@ class LightTable:
 
     @staticmethod
     def _pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any, Any]:
-        """(index, its weight, the total, u reused) of a choice proportional to *weights* by u (float64 sums)."""
-        total = mi.Float64(0.0)
-        for w in weights:
-            if w is not None:
-                total += mi.Float64(w)
-        target = u * total
+        """(index, its weight, the total, u reused) of a choice proportional to *weights* by u: float32 sums
+        (u itself has 24 bits: float64 sums would not make the frequencies closer to the weights).  The
+        weight and the total are returned as float64."""
+        total = _sum(weights)
+        target = mi.Float(u) * total
         index: Any = mi.UInt32(0)
-        before, chosen, acc = mi.Float64(0.0), mi.Float64(0.0), mi.Float64(0.0)
+        before, chosen, acc = mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)
         for i, w in enumerate(weights):
             if w is None:
                 continue
-            w64 = mi.Float64(w)
-            take = (acc <= target) & (w64 > 0.0)
+            take = (acc <= target) & (w > 0.0)
             index = dr.select(take, i, index)
             before = dr.select(take, acc, before)
-            chosen = dr.select(take, w64, chosen)
-            acc += w64
+            chosen = dr.select(take, w, chosen)
+            acc += w
         reused = dr.clip((target - before) / dr.select(chosen > 0.0, chosen, 1.0), 0.0, 1.0)
-        return index, chosen, total, reused
+        return index, mi.Float64(chosen), mi.Float64(total), mi.Float64(reused)
 
     @staticmethod
     def _share(weights: list[Any], index: Any) -> Any:
-        """weights[index] / sum(weights), in float64 as :meth:`_pick` sums them (0 if the sum is 0)."""
-        total, mine = mi.Float64(0.0), mi.Float64(0.0)
+        """weights[index] / sum(weights), summed as :meth:`_pick` sums them (0 if the sum is 0; float64)."""
+        total, mine = mi.Float64(_sum(weights)), mi.Float64(0.0)
         for i, w in enumerate(weights):
             if w is not None:
-                total += mi.Float64(w)
                 mine = dr.select(index == i, mi.Float64(w), mine)
         return dr.select(total > 0.0, mine / dr.select(total > 0.0, total, 1.0), 0.0)
 
@@ -338,11 +345,7 @@ class LightTable:
         """The first level's total at p, as :meth:`_choose` sums it."""
         if self.mode == "power":
             return mi.Float64(0.0)
-        total = mi.Float64(0.0)
-        for w in self._group_weights(p):
-            if w is not None:
-                total += mi.Float64(w)
-        return total
+        return mi.Float64(_sum(self._group_weights(p)))
 
     def _first_level_weight(self, p: Any, row: Any, active: Any) -> Any:
         """The first level's weight at p of the group (exact: the triangle) that holds *row*, from gathered
