@@ -25,6 +25,8 @@ maps                                domain       what
 ``square_to_spherical_triangle``    triangle     Arvo (1995) onto any spherical triangle;
                                                  ``square_to_arvo_triangle``: onto T0
 ``square_to_spherical_rectangle``   rectangle    Urena, Fajardo & King (2013) onto a rectangle seen from 0
+``square_to_projected_triangle``    triangle     cos(theta) / E about a normal on any spherical triangle
+                                                 (projected solid angle E: ``projected_solid_angle``)
 =================================== ============ ============================================================
 
 Every map is exact and has no NaN or inf for u, v in {0, 1}, in float64 and float32; results take
@@ -61,6 +63,16 @@ from ._octahedral import (
     square_to_octahedral_hemisphere_pdf,
     square_to_octahedral_sphere,
     square_to_octahedral_sphere_pdf,
+)
+from ._projected_triangle import (
+    projected_solid_angle,
+    projected_triangle_density,
+    projected_triangle_point,
+    projected_triangle_setup,
+    projected_triangle_to_square,
+    projected_triangle_uv,
+    square_to_projected_triangle,
+    square_to_projected_triangle_pdf,
 )
 from ._record import Warp
 from ._registry import WARPS, get_warp
@@ -184,4 +196,13 @@ __all__ = [
     "square_to_arvo_triangle",
     "square_to_arvo_triangle_pdf",
     "arvo_triangle_to_square",
+    # a spherical triangle by projected solid angle
+    "projected_solid_angle",
+    "square_to_projected_triangle",
+    "square_to_projected_triangle_pdf",
+    "projected_triangle_to_square",
+    "projected_triangle_setup",
+    "projected_triangle_point",
+    "projected_triangle_uv",
+    "projected_triangle_density",
 ]
