@@ -137,6 +137,60 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
             np.testing.assert_allclose(pdf[lit], ds.pdf.numpy()[lit], rtol=2e-3, err_msg=name)
 
 
+def _sphere_obj(path, rings=10, segments=16):
+    """A UV sphere of radius 1 about the origin (2 rings x segments triangles, those at the poles
+    degenerate), facing outward."""
+    vertices = [
+        (np.sin(t) * np.cos(f), np.cos(t), np.sin(t) * np.sin(f))
+        for t in np.linspace(0, np.pi, rings + 1)
+        for f in 2 * np.pi * np.arange(segments) / segments
+    ]
+    faces = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            c, d = a + segments, b + segments
+            faces += [(a, b, c), (b, d, c)]
+    with open(path, "w") as f:
+        f.writelines(f"v {x} {y} {z}\n" for x, y, z in vertices)
+        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+    return path
+
+
+def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
+    """Light sampling alone at diffuse vertices counts a triangle only through its choice: in two levels
+    (320 triangles of a sphere facing outward, groups of 3 whose normals differ), every triangle that a
+    point outside sees from its front (by more than float32's rounding: some of them at grazing angles near
+    the silhouette, from afar) has a choice probability > 0."""
+    mi = llvm
+    import drjit as dr
+
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = mi.load_dict({
+        "type": "scene",
+        "ball": {"type": "obj", "filename": str(_sphere_obj(tmp_path / "sphere.obj")),
+                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1, 1, 1]}}},
+    })  # fmt: skip
+    table = lights.LightTable(scene)
+    assert table.mode == "groups"
+    rng = np.random.default_rng(14)
+    g = rng.standard_normal((300, 3))
+    points = g / np.linalg.norm(g, axis=1, keepdims=True) * rng.uniform(1.5, 6.0, (300, 1))
+    rows = np.arange(table.count)
+    p = np.repeat(points, table.count, axis=0)
+    row = np.tile(rows, len(points))
+    tris, normal = table.tris[row], table.normal[row]
+    unit = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    height = np.einsum("ij,ij->i", p - tris[:, 0], unit)
+    facing = (height > 1e-4) & (table.lum[row] > 0)
+    point = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
+    probability = table._probability(point, mi.UInt32(row), mi.Bool(True), table._total(point)).numpy()
+    dr.eval()
+    assert facing.sum() > 1000
+    assert np.all(probability[facing] > 0), np.flatnonzero(facing & (probability <= 0))[:5]
+
+
 @pytest.mark.statistical
 def test_the_density_integrates_to_one(llvm, tmp_path):
     """The density of the table's directions over the sphere, by Monte Carlo with numpy's uniform directions
