@@ -41,6 +41,9 @@ CASES = [  # (label, integrator dict)
     ("symsphere_path symmetric_cosine sobol · solid_angle",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
 ]  # fmt: skip
+PROJECTED = [  # --projected: by projected solid angle at Lambertian vertices (float64 inside, a root finder)
+    ("symsphere_path bsdf · projected", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "projected"}),
+]  # fmt: skip
 
 
 def _rel_mse(image, reference):
@@ -64,7 +67,8 @@ def run(args, mi, workdir):
             b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
             ref = 0.5 * (a + b)
             own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
-            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in CASES]
+            specs = CASES + (PROJECTED if args.projected else [])
+            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in specs]
             for _, integrator in cases:  # compile
                 _render(mi, scene, integrator, args.spp, 0)
             errors = {label: [] for label, _ in cases}
@@ -129,6 +133,7 @@ def main(argv=None):
     parser.add_argument("--spp", type=int, default=16, help="spp per render, a multiple of 8 (default %(default)s)")
     parser.add_argument("--ref-spp", type=int, default=4096, help="reference spp (default %(default)s)")
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default %(default)s)")
+    parser.add_argument("--projected", action="store_true", help="add emitter_sampling='projected' (slow)")
     parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="write DIR/<scene>_<depth>.png: the reference and every "
                         "case's last render side by side, in the order of the table")  # fmt: skip

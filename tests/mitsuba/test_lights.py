@@ -20,9 +20,12 @@ ALPHA = 0.01
 SCENES = ("cornell", "textured", "mesh_light")
 # (scene, max_depth): full paths in each scene; direct light only in the Cornell box, where every BSDF is
 # diffuse and every emitter in the table, so that no ray towards a last vertex is traced
-UNBIASED_CASES = [(name, 6) for name in SCENES] + [("cornell", 2)]
+# (scene, max_depth, emitter_sampling); projected: Lambertian vertices by projected solid angle (every one in
+# the Cornell box, some in the textured scene and the mesh-light scene)
+UNBIASED_CASES = [(name, 6, "solid_angle") for name in SCENES] + [("cornell", 2, "solid_angle")]
+UNBIASED_CASES += [("cornell", 2, "projected"), ("textured", 6, "projected"), ("mesh_light", 3, "projected")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
-FURNACE_TESTS = 4
+FURNACE_TESTS = 6
 BLOCK = 4
 
 
@@ -102,7 +105,7 @@ def test_unknown_emitter_sampling_names_the_parameter_and_the_values(llvm):
         mi.load_dict({"type": "symsphere_path", "emitter_sampling": "solid"})
     last = str(info.value).strip().splitlines()[-1]
     assert last.startswith("ValueError: ") and "'solid' is not a valid emitter_sampling" in last
-    assert "use one of {'area', 'solid_angle'}" in last
+    assert "use one of {'area', 'projected', 'solid_angle'}" in last
 
 
 def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path):
@@ -135,6 +138,37 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
         for cached in (None, total):  # evaluated at si.p here, or the normaliser sample_direction found there
             pdf = table.pdf_direction(scene, si, hit, hit_ds, mi.Bool(True), cached).numpy()
             np.testing.assert_allclose(pdf[lit], ds.pdf.numpy()[lit], rtol=2e-3, err_msg=name)
+
+
+def test_projected_direct_light_of_one_polygon_light_has_no_variance(llvm):
+    """With ``projected``, the direct light at an unoccluded Lambertian point lit by one polygon light (a
+    rectangle: two triangles, chosen by projected solid angle, then sampled by it) has a relative standard
+    deviation <= 1e-3 per sample (the estimator is constant up to rounding), at points near and far."""
+    mi = llvm
+    import drjit as dr
+
+    from symsphere._testing import mitsuba_lights as lights
+
+    T = mi.ScalarTransform4f
+    scene = mi.load_dict({
+        "type": "scene",
+        "light": {"type": "rectangle", "to_world": T().translate([0.3, 1.0, -0.2]).rotate([1, 0, 0], 70).scale([0.8, 0.5, 1]),
+                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [4, 4, 4]}}},
+    })  # fmt: skip
+    table = lights.LightTable(scene, projected=True)
+    rng = np.random.default_rng(15)
+    n = 4000
+    for x, z in ((0.0, 0.0), (0.9, -1.5), (-2.0, 1.0)):
+        si = dr.zeros(mi.SurfaceInteraction3f, n)
+        si.p = mi.Point3f(x, 0.0, z)
+        si.n = mi.Normal3f(0, 1, 0)
+        si.sh_frame = mi.Frame3f(si.n)
+        si.wi = mi.Vector3f(0, 0, 1)
+        sample = mi.Point2f(rng.random(n), rng.random(n))
+        ds, weight, _, _ = table.sample_direction(scene, si, sample, mi.Bool(True), mi.Bool(True), True)
+        value = (weight.x * dr.maximum(ds.d.y, 0.0)).numpy()  # L cos / pdf
+        assert np.all(value > 0), (x, z)
+        assert value.std() / value.mean() <= 1e-3, (x, z, value.std() / value.mean())
 
 
 def _sphere_obj(path, rings=10, segments=16):
@@ -224,28 +258,32 @@ def _renders(mi, scene, integrator):
 
 
 @pytest.mark.statistical
-@pytest.mark.parametrize(("scene_name", "max_depth"), UNBIASED_CASES)
-def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, tmp_path):
+@pytest.mark.parametrize(("scene_name", "max_depth", "sampling"), UNBIASED_CASES)
+def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, sampling, tmp_path):
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
     scene = _scene(mi, scene_name, tmp_path)
     depth = {"max_depth": max_depth, "rr_depth": 3}
     ref = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
-    integrator = mi.load_dict(
-        {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", **depth}
-    )
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling, **depth})
     ours = _blocks(_renders(mi, scene, integrator))
     assert np.all(np.isfinite(ours))
     result = stats.ttest_ind(ours, ref, axis=0, equal_var=False)
     assert np.min(result.pvalue) > _sidak(ALPHA, UNBIASED_TESTS), (np.min(result.pvalue), ours.mean(0), ref.mean(0))
 
 
-@pytest.mark.statistical
 # 12 triangles (exact choice), 108 (groups), 4332 (by power); and 12 with a perfect mirror ball inside,
 # which leaves the radiance at 2 but makes the scene not all diffuse (BSDF hits need the table's density)
-@pytest.mark.parametrize(("per_side", "mirror"), [(1, False), (3, False), (19, False), (1, True)])
-def test_emitting_box_furnace(llvm, tmp_path, per_side, mirror):
+# projected: by projected solid angle at every vertex (12 triangles, exact choice), or at the diffuse ones
+# (the mirror ball: both techniques in one kernel)
+FURNACE_CASES = [(1, False, "solid_angle"), (3, False, "solid_angle"), (19, False, "solid_angle")]
+FURNACE_CASES += [(1, True, "solid_angle"), (1, False, "projected"), (1, True, "projected")]
+
+
+@pytest.mark.statistical
+@pytest.mark.parametrize(("per_side", "mirror", "sampling"), FURNACE_CASES)
+def test_emitting_box_furnace(llvm, tmp_path, per_side, mirror, sampling):
     """Inside a closed box whose walls emit radiance 1 inward and reflect diffusely with albedo 1/2, the
     radiance is 1 / (1 - 1/2) = 2 everywhere."""
     mi = llvm
@@ -261,7 +299,7 @@ def test_emitting_box_furnace(llvm, tmp_path, per_side, mirror):
                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1, 1, 1]}}},
     } | ({"mirror": {"type": "sphere", "center": [-0.3, 0.1, -0.4], "radius": 0.35,
                      "bsdf": {"type": "conductor", "material": "none"}}} if mirror else {}))  # fmt: skip
-    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle",
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling,
                                "max_depth": -1, "rr_depth": 5})  # fmt: skip
     images = np.stack([np.array(mi.render(scene, integrator=integrator, spp=SPP, seed=s))[..., :3] for s in range(4)])
     values = images.mean(axis=-1).ravel()

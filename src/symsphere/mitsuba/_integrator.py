@@ -24,7 +24,8 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
-With ``emitter_sampling='solid_angle'`` (a light table, :mod:`._lights`) the MIS differs at diffuse
+With ``emitter_sampling`` ``'solid_angle'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
+differs at diffuse
 vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
 light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters,
 and every emitter at other vertices, keep the power heuristic.  The two weights of each (vertex,
@@ -343,7 +344,15 @@ class _PathMethods:
     # --- next-event estimation: one place, so that another light-sampling technique can replace it -----
 
     def _sample_emitter(
-        self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool, lights: Any
+        self,
+        scene: Any,
+        si: Any,
+        sampler: Any,
+        active: Any,
+        primal: bool,
+        lights: Any,
+        cosine: Any = None,
+        cosine_only: bool = False,
     ) -> tuple[Any, Any, Any, Any, Any]:
         """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
         the sample is valid, the light table's normaliser at si for :meth:`_emitter_pdf`, the lanes whose
@@ -360,7 +369,9 @@ class _PathMethods:
             ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
             total, ours = None, None
         else:
-            ds, em_weight, total, ours = lights.sample_direction(scene, si, sampler.next_2d(), active)
+            ds, em_weight, total, ours = lights.sample_direction(
+                scene, si, sampler.next_2d(), active, cosine, cosine_only
+            )
         active = active & (ds.pdf != 0.0)
         if not primal:
             with dr.resume_grad():
@@ -395,6 +406,11 @@ class _PathMethods:
         # and whose every emitter is in the table, no BSDF hit needs the light sampling's density, and the
         # ray of a vertex whose next vertex is the last can find nothing that counts: it is not traced.
         only_table = lights is not None and lights.covers_all and _all_diffuse(scene)
+        # emitter_sampling='projected': at Lambertian vertices (the shading normal is the BSDF's) the table
+        # samples by projected solid angle; everywhere, when every BSDF is Lambertian
+        projected = lights is not None and lights.projected
+        lambertian_ids = self._lambertian_table(scene) if projected else None
+        cosine_only = projected and only_table and _all_lambertian(scene)
         prev_alone = mi.Bool(False)  # the previous vertex sampled the table's emitters alone
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
@@ -444,7 +460,12 @@ class _PathMethods:
             flags = bsdf.flags()
             active_em = active_next & mi.has_flag(flags, mi.BSDFFlags.Smooth)
             alone = active_em & _diffuse(flags) if lights is not None else mi.Bool(False)
-            ds, em_weight, active_em, total, ours = self._sample_emitter(scene, si, sampler, active_em, primal, lights)
+            cosine = None
+            if dr.hint(projected, mode="scalar"):
+                cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, _bsdf_ids(bsdf), alone) != 0)
+            ds, em_weight, active_em, total, ours = self._sample_emitter(
+                scene, si, sampler, active_em, primal, lights, cosine, cosine_only
+            )
             if dr.hint(lights is not None, mode="scalar"):
                 light_total = total
             wo = si.to_local(ds.d)
@@ -544,6 +565,11 @@ def _all_diffuse(scene: Any) -> bool:
         if not flags & int(mi.BSDFFlags.Diffuse) or flags & int(mi.BSDFFlags.Glossy | mi.BSDFFlags.Delta):
             return False
     return True
+
+
+def _all_lambertian(scene: Any) -> bool:
+    """Whether every BSDF of *scene* is Lambertian (:func:`lambertian_codes`; a trace-time constant)."""
+    return all(shape.bsdf() is None or lambertian_codes(shape.bsdf()) for shape in scene.shapes())
 
 
 def _taken_count(sampler: Any, count: int) -> int:

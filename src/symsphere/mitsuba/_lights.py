@@ -1,4 +1,5 @@
-"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``).
+"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``, and
+``'projected'``: at Lambertian vertices by projected solid angle, see :meth:`LightTable.sample_direction`).
 
 Mitsuba 3 samples a ``rectangle`` or triangle-mesh area emitter by area and converts the density to
 solid angle, so a point near a large light gets wildly varying weights ``d^2 / cos``.  Here every
@@ -45,11 +46,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ._projected import projected_solid_angle, square_to_projected_triangle
 from ._warps import spherical_triangle_solid_angle, square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
 __all__ = ["EMITTER_SAMPLINGS", "EXACT_MAX", "GROUP_COUNT", "GROUP_MAX", "LightTable", "build"]
 
-EMITTER_SAMPLINGS = ("area", "solid_angle")
+EMITTER_SAMPLINGS = ("area", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
 EXACT_MAX = 64
 """Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
@@ -176,7 +178,8 @@ def _sum(weights: list[Any]) -> Any:
 class LightTable:
     """The emitter triangles of a scene and their selection (see the module docstring)."""
 
-    def __init__(self, scene: Any) -> None:
+    def __init__(self, scene: Any, projected: bool = False) -> None:
+        self.projected = projected  # cosine-weighted sampling where sample_direction is given the lanes
         emitters = scene.emitters()
         pmf = [float(scene.pdf_emitter(mi.UInt32(i))[0]) for i in range(len(emitters))]
         rows: list[np.ndarray] = []
@@ -348,6 +351,40 @@ class LightTable:
         probability *= dr.select(group_total > 0.0, chosen / dr.select(group_total > 0.0, group_total, 1.0), 0.0)
         return group * self.group_size + slot, probability, u, total
 
+    def _choose_projected(self, p: Any, normal: Any, u: Any, active: Any) -> tuple[Any, Any, Any]:
+        """(row, its probability, u reused): as :meth:`_choose`, with each triangle's weight its projected
+        solid angle about *normal* x radiance (0 behind it: the first level of two is :meth:`_choose`'s,
+        whose group estimate is 0 only where no member faces p)."""
+        if self.mode == "power":
+            row, probability, u, _ = self._choose(p, u, active)
+            return row, probability, u
+        if self.mode == "exact":
+            weights: list[Any] = []
+            for row in range(self.count):
+                if self.lum[row] <= 0.0:
+                    weights.append(None)
+                    continue
+                a, b, c = (mi.ScalarVector3f(*vertex) for vertex in self.tris[row])
+                front = dr.dot(p - a, mi.ScalarVector3f(*self.normal[row])) > 0.0
+                e = projected_solid_angle(a - p, b - p, c - p, normal)
+                weights.append(dr.select(front, e * float(self.lum[row]), 0.0))
+            index, chosen, total, u = self._pick(weights, u)
+            return index, dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0), u
+        group, chosen, total, u = self._pick(self._group_weights(p), u)
+        probability = dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0)
+        members = []
+        start = group * self.group_size
+        for k in range(self.group_size):
+            row = start + k
+            ok = active & (row < self.count)
+            a, b, c, n = self._vertices(row, ok)
+            lum = dr.gather(mi.Float, self._lum32, row, ok)
+            e = projected_solid_angle(a - p, b - p, c - p, normal)
+            members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
+        slot, chosen, group_total, u = self._pick(members, u)
+        probability *= dr.select(group_total > 0.0, chosen / dr.select(group_total > 0.0, group_total, 1.0), 0.0)
+        return start + slot, probability, u
+
     def _total(self, p: Any) -> Any:
         """The first level's total at p, as :meth:`_choose` sums it."""
         if self.mode == "power":
@@ -388,12 +425,22 @@ class LightTable:
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
-    def sample_direction(self, scene: Any, si: Any, sample: Any, active: Any) -> tuple[Any, Any, Any, Any]:
+    def sample_direction(
+        self, scene: Any, si: Any, sample: Any, active: Any, cosine: Any = None, cosine_only: bool = False
+    ) -> tuple[Any, Any, Any, Any]:
         """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total,
         ours), with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
         tested.  *total* (float64, every lane) is the selection's normaliser at si.p: pass it to
         :meth:`pdf_direction` for a hit seen from si (the next vertex's emission), which then need not
-        evaluate every triangle at si.p again.  *ours*: the lanes whose sample is the table's."""
+        evaluate every triangle at si.p again.  *ours*: the lanes whose sample is the table's.
+
+        *cosine* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
+        triangle is chosen by its projected solid angle about the shading normal (on the side of si.wi)
+        x radiance and the direction drawn by projected solid angle
+        (:func:`symsphere.mitsuba._projected.square_to_projected_triangle`); their density is then not the
+        one :meth:`pdf_direction` gives, so the caller weights their BSDF hits on the table's emitters 0
+        (light sampling alone).  *cosine_only*: every lane is such a lane (the solid-angle technique is
+        not traced)."""
         u = mi.Float(sample.x)
         ds = dr.zeros(mi.DirectionSample3f)
         weight = dr.zeros(mi.Spectrum)
@@ -412,7 +459,9 @@ class LightTable:
             weight = dr.select(other, w_o, weight)
         total = mi.Float64(0.0)
         if self.count:
-            ds_table, value, total = self._sample_table(scene, si, u / self.p_table, sample.y, ours)
+            ds_table, value, total = self._sample_table(
+                scene, si, u / self.p_table, sample.y, ours, cosine, cosine_only
+            )
             # the whole sample (point, normal, uv, emitter), so that the emitter can be evaluated at it
             # again (a differential mode re-attaches the radiance's derivative that way)
             ds = dr.select(ours, ds_table, ds)
@@ -427,16 +476,41 @@ class LightTable:
         weight = dr.select(visible, weight, 0.0)
         return ds, weight, total, ours
 
-    def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any]:
+    def _sample_table(
+        self, scene: Any, si: Any, u: Any, v: Any, active: Any, cosine: Any, cosine_only: bool
+    ) -> tuple[Any, Any, Any]:
         p = mi.Vector3f(si.p)
-        row, probability, u_map, total = self._choose(p, mi.Float64(u), active)
-        active &= probability > 0.0
-        a, b, c, n = self._vertices(row, active)
-        direction, omega = square_to_spherical_triangle((mi.Float(u_map), mi.Float(v)), a - p, b - p, c - p)
-        active &= dr.dot(p - a, n) > 0.0
-        pdf = self.p_table * probability / mi.Float64(dr.select(omega > 0.0, omega, 1.0))
-        active &= omega > 0.0
-        d = dr.normalize(direction)
+        total = mi.Float64(0.0)
+        if not cosine_only:  # by solid angle
+            row, probability, u_map, total = self._choose(p, mi.Float64(u), active)
+            ok = active & (probability > 0.0)
+            a, b, c, n = self._vertices(row, ok)
+            direction, omega = square_to_spherical_triangle((mi.Float(u_map), mi.Float(v)), a - p, b - p, c - p)
+            ok &= (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
+            pdf = mi.Float(self.p_table * probability / mi.Float64(dr.select(omega > 0.0, omega, 1.0)))
+            d = dr.normalize(direction)
+        if cosine is not None:  # by projected solid angle
+            mine = active & cosine
+            normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
+            row_c, probability_c, u_c = self._choose_projected(p, normal, mi.Float64(u), mine)
+            ok_c = mine & (probability_c > 0.0)
+            a_c, b_c, c_c, n_c = self._vertices(row_c, ok_c)
+            d_c, pdf_c = square_to_projected_triangle(
+                a_c - p, b_c - p, c_c - p, normal, mi.Point2f(mi.Float(u_c), mi.Float(v))
+            )
+            ok_c &= (dr.dot(p - a_c, n_c) > 0.0) & (pdf_c > 0.0)
+            pdf_c = mi.Float(self.p_table * probability_c * mi.Float64(pdf_c))
+            if cosine_only:
+                row, ok, a, b, c, n, pdf, d = row_c, ok_c, a_c, b_c, c_c, n_c, pdf_c, d_c
+            else:
+                row, ok, pdf, d = (
+                    dr.select(mine, row_c, row),
+                    dr.select(mine, ok_c, ok),
+                    dr.select(mine, pdf_c, pdf),
+                    dr.select(mine, d_c, d),
+                )
+                a, b, c, n = (dr.select(mine, x_c, x) for x_c, x in ((a_c, a), (b_c, b), (c_c, c), (n_c, n)))
+        active = ok
         # The point q where d meets the triangle's plane (shadow-tested by the caller), and the emitter
         # evaluated there (texture coordinates interpolated).
         cos_n = dr.dot(d, n)
@@ -460,9 +534,8 @@ class LightTable:
         )
         active &= t_plane > 0.0
         radiance: Any = ds.emitter.eval_direction(si, ds, active)
-        pdf_f = mi.Float(pdf)
-        value = dr.select(active & (pdf_f > 0.0), radiance / dr.select(pdf_f > 0.0, pdf_f, 1.0), 0.0)
-        ds.pdf = dr.select(active, pdf_f, 0.0)
+        value = dr.select(active & (pdf > 0.0), radiance / dr.select(pdf > 0.0, pdf, 1.0), 0.0)
+        ds.pdf = dr.select(active, pdf, 0.0)
         ds.delta = mi.Bool(False)
         return ds, value, total
 
@@ -502,5 +575,5 @@ def build(scene: Any, emitter_sampling: str) -> LightTable | None:
     """The light table of *scene* for ``emitter_sampling`` ('area': None, Mitsuba samples its emitters)."""
     if emitter_sampling == "area":
         return None
-    table = LightTable(scene)
+    table = LightTable(scene, projected=emitter_sampling == "projected")
     return table if table.count else None
