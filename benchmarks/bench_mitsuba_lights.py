@@ -12,7 +12,9 @@ seed.  relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01) (a
 the mean over the rounds; seconds = the median over the rounds.  Efficiency = 1 / (relMSE x seconds),
 which is the equal-time comparison (relMSE is inversely proportional to spp); reported as a ratio to
 Mitsuba's path in the same rounds, with the ratio of relMSE at equal spp and of paths/s.  The machine may
-be shared: the others' CPU share during the rounds is recorded.
+be shared: the others' CPU share during the rounds is recorded, and each render's CPU time (this
+process's, Dr.Jit's threads included) is recorded beside its wall-clock seconds, with the ratios it gives
+(steadier than seconds on a loaded machine; on an idle one the two agree up to the threads' idling).
 """
 
 from __future__ import annotations
@@ -39,6 +41,9 @@ CASES = [  # (label, integrator dict)
     ("symsphere_path symmetric_cosine sobol · solid_angle",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
 ]  # fmt: skip
+PROJECTED = [  # --projected: by projected solid angle at Lambertian vertices (float64 inside, a root finder)
+    ("symsphere_path bsdf · projected", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "projected"}),
+]  # fmt: skip
 
 
 def _rel_mse(image, reference):
@@ -46,9 +51,9 @@ def _rel_mse(image, reference):
 
 
 def _render(mi, scene, integrator, spp, seed):
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     image = np.array(mi.render(scene, integrator=integrator, spp=spp, seed=seed), dtype=np.float64)[..., :3]
-    return image, time.perf_counter() - start
+    return image, time.perf_counter() - start, time.process_time() - cpu
 
 
 def run(args, mi, workdir):
@@ -62,22 +67,26 @@ def run(args, mi, workdir):
             b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
             ref = 0.5 * (a + b)
             own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
-            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in CASES]
+            specs = CASES + (PROJECTED if args.projected else [])
+            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in specs]
             for _, integrator in cases:  # compile
                 _render(mi, scene, integrator, args.spp, 0)
             errors = {label: [] for label, _ in cases}
             seconds = {label: [] for label, _ in cases}
+            cpu = {label: [] for label, _ in cases}
             before, t0 = cpu_snapshot(), time.perf_counter()
             for r in range(args.rounds):
                 for label, integrator in cases if r % 2 == 0 else cases[::-1]:
-                    image, s = _render(mi, scene, integrator, args.spp, r + 1)
+                    image, s, c = _render(mi, scene, integrator, args.spp, r + 1)
                     errors[label].append(_rel_mse(image, ref) - own)
                     seconds[label].append(s)
+                    cpu[label].append(c)
                     if r == args.rounds - 1:
                         images.setdefault((name, depth), [ref]).append(image)
             load = others_cpu(before, cpu_snapshot(), time.perf_counter() - t0)
             base = CASES[0][0]
             eff = {label: 1.0 / (np.mean(errors[label]) * statistics.median(seconds[label])) for label, _ in cases}
+            eff_cpu = {label: 1.0 / (np.mean(errors[label]) * statistics.median(cpu[label])) for label, _ in cases}
             share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
             print(
                 f"{name}, max_depth {depth} (reference's own relMSE {own:.2g}; others' CPU share {share})", flush=True
@@ -89,24 +98,29 @@ def run(args, mi, workdir):
                     "efficiency": eff[label], "efficiency_ratio": eff[label] / eff[base],
                     "rel_mse_ratio": float(np.mean(errors[base]) / np.mean(errors[label])),
                     "speed_ratio": statistics.median(seconds[base]) / statistics.median(seconds[label]),
+                    "cpu_seconds": statistics.median(cpu[label]),
+                    "cpu_speed_ratio": statistics.median(cpu[base]) / statistics.median(cpu[label]),
+                    "cpu_efficiency_ratio": eff_cpu[label] / eff_cpu[base],
                     "reference_own_rel_mse": own,
                     "others_cpu_share": None if load is None else load["share_of_all_cpus"],
                 }  # fmt: skip
                 rows.append(row)
                 print(f"  {label:<52} relMSE {row['rel_mse']:.4g} (x{row['rel_mse_ratio']:.2f} lower)  "
-                      f"{row['seconds']:.3f} s (speed x{row['speed_ratio']:.2f})  efficiency x{row['efficiency_ratio']:.2f}",
+                      f"{row['seconds']:.3f} s (speed x{row['speed_ratio']:.2f})  efficiency x{row['efficiency_ratio']:.2f}  "
+                      f"CPU: speed x{row['cpu_speed_ratio']:.2f}, efficiency x{row['cpu_efficiency_ratio']:.2f}",
                       flush=True)  # fmt: skip
     return rows, images
 
 
 def report(record):
     lines = [
-        "| scene | max_depth | case | relMSE | × lower | s | paths/s × | efficiency × path |",
-        "|---|---|---|---|---|---|---|---|",
+        "| scene | max_depth | case | relMSE | × lower | s | paths/s × | efficiency × path | CPU: paths/s × | CPU: efficiency × |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in record["rows"]:
+        cpu = f"{r['cpu_speed_ratio']:.2f} | {r['cpu_efficiency_ratio']:.2f}" if "cpu_speed_ratio" in r else "– | –"
         lines.append(f"| {r['scene']} | {r['max_depth']} | {r['case']} | {r['rel_mse']:.3g} | {r['rel_mse_ratio']:.2f} | "
-                     f"{r['seconds']:.3f} | {r['speed_ratio']:.2f} | {r['efficiency_ratio']:.2f} |")  # fmt: skip
+                     f"{r['seconds']:.3f} | {r['speed_ratio']:.2f} | {r['efficiency_ratio']:.2f} | {cpu} |")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -119,6 +133,7 @@ def main(argv=None):
     parser.add_argument("--spp", type=int, default=16, help="spp per render, a multiple of 8 (default %(default)s)")
     parser.add_argument("--ref-spp", type=int, default=4096, help="reference spp (default %(default)s)")
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default %(default)s)")
+    parser.add_argument("--projected", action="store_true", help="add emitter_sampling='projected' (slow)")
     parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="write DIR/<scene>_<depth>.png: the reference and every "
                         "case's last render side by side, in the order of the table")  # fmt: skip

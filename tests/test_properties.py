@@ -84,6 +84,20 @@ OVERRIDES = {
     "square_to_spherical_rectangle": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
     "spherical_rectangle_to_square": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
     "square_to_spherical_rectangle_pdf": dict(corner=[-1.0, -1.0, 1.0], edge1=[2.0, 0.0, 0.0], edge2=[0.0, 2.0, 0.0]),
+    **{
+        name: dict(a=warps.T0_VERTICES[0], b=warps.T0_VERTICES[1], c=warps.T0_VERTICES[2], n=[0.0, 0.0, 1.0])
+        for name in (
+            "projected_solid_angle",
+            "square_to_projected_triangle",
+            "square_to_projected_triangle_pdf",
+            "projected_triangle_to_square",
+        )
+    },
+    "projected_triangle_setup": dict(verts=warps.T0_VERTICES, normal=np.array([0.0, 0.0, 1.0])),
+    **{
+        name: dict(s=warps.projected_triangle_setup(warps.T0_VERTICES, np.array([0.0, 0.0, 1.0])))
+        for name in ("projected_triangle_point", "projected_triangle_uv", "projected_triangle_density")
+    },
     "rectangle_frame": dict(x0=-1.0, y0=-1.0, z0=1.0, width=2.0, height=2.0),
     "rectangle_point": dict(
         zip(
@@ -122,7 +136,9 @@ MAY_BE_INF = {"square_to_triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
 # since the third reliability round (inside kernels they are the bare formulas) and are tested like the others, and below;
 # so do the elementwise warps of symsphere.warps.
-TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf", "rectangle_frame", "rectangle_point"}
+TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf", "rectangle_frame", "rectangle_point",
+           "projected_triangle_setup", "projected_triangle_point", "projected_triangle_uv",
+           "projected_triangle_density"}  # fmt: skip
 MODULES = (symsphere, sampling, symmetry, frames, harmonics, stats, integrands, peers, quality, points_module,
            bins, integration, warps)  # fmt: skip
 

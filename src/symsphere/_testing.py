@@ -51,11 +51,13 @@ __all__ = [
     "render_integrator",
     "render_probes",
     "warps_triangle",
-]  # and, on first use (module __getattr__), mitsuba_integrator, mitsuba_lights, mitsuba_random, mitsuba_warps
+]  # and, on first use (module __getattr__), mitsuba_integrator, mitsuba_lights, mitsuba_projected, mitsuba_random,
+# mitsuba_warps
 
 _LAZY = {
     "mitsuba_integrator": "symsphere.mitsuba._integrator",
     "mitsuba_lights": "symsphere.mitsuba._lights",
+    "mitsuba_projected": "symsphere.mitsuba._projected",
     "mitsuba_random": "symsphere.mitsuba._random",
     "mitsuba_warps": "symsphere.mitsuba._warps",
 }

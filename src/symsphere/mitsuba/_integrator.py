@@ -24,6 +24,18 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
+With ``emitter_sampling`` ``'solid_angle'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
+differs at diffuse
+vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
+light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters,
+and every emitter at other vertices, keep the power heuristic.  The two weights of each (vertex,
+emitter) pair still sum to 1, and light sampling covers every direction in which a front-facing table
+triangle is seen (its density is positive there), so the estimator is unbiased; by solid angle, light
+sampling alone at a diffuse vertex leaves only the cosine's variation over the light, which MIS with
+the cosine-weighted BSDF sample barely lowers.  In a scene whose every BSDF is diffuse and whose every
+emitter is in the table, no hit needs the light sampling's density, and the ray from a vertex whose next
+vertex is the last (``max_depth``) is not traced: it can only find emission weighted 0.
+
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
 as :mod:`symsphere.render`'s samplers; ``bsdf`` takes the scene sampler's points (choose a QMC sampler
 there), so it refuses ``points='sobol'``.  The grouping is the renderer's
@@ -332,11 +344,19 @@ class _PathMethods:
     # --- next-event estimation: one place, so that another light-sampling technique can replace it -----
 
     def _sample_emitter(
-        self, scene: Any, si: Any, sampler: Any, active: Any, primal: bool, lights: Any
-    ) -> tuple[Any, Any, Any, Any]:
+        self,
+        scene: Any,
+        si: Any,
+        sampler: Any,
+        active: Any,
+        primal: bool,
+        lights: Any,
+        cosine: Any = None,
+        cosine_only: bool = False,
+    ) -> tuple[Any, Any, Any, Any, Any]:
         """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
-        the sample is valid, the light table's normaliser at si for :meth:`_emitter_pdf`: None without a
-        table).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the BSDF's direction;
+        the sample is valid, the light table's normaliser at si for :meth:`_emitter_pdf`, the lanes whose
+        sample is the table's; the last two None without a table).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the BSDF's direction;
         :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
 
         Without a light table (``emitter_sampling='area'``, or a scene without rectangle or mesh lights)
@@ -347,16 +367,18 @@ class _PathMethods:
         """
         if dr.hint(lights is None, mode="scalar"):
             ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
-            total = None
+            total, ours = None, None
         else:
-            ds, em_weight, total = lights.sample_direction(scene, si, sampler.next_2d(), active)
+            ds, em_weight, total, ours = lights.sample_direction(
+                scene, si, sampler.next_2d(), active, cosine, cosine_only
+            )
         active = active & (ds.pdf != 0.0)
         if not primal:
             with dr.resume_grad():
                 em_val = scene.eval_emitter_direction(si, ds, active)
                 inv_pdf = dr.select(ds.pdf != 0.0, dr.rcp(ds.pdf), 0.0)
                 em_weight = _REPLACE_GRAD(em_weight, em_val * dr.detach(inv_pdf))
-        return ds, em_weight, active, total
+        return ds, em_weight, active, total, ours
 
     def _emitter_pdf(self, scene: Any, ref: Any, si: Any, ds: Any, active: Any, lights: Any, total: Any) -> Any:
         """The density (solid angle) with which :meth:`_sample_emitter` at *ref* samples *ds* (the emitter
@@ -377,8 +399,19 @@ class _PathMethods:
         if replaces:
             key, s = self._lanes(sampler, dr.width(ray))
             table = self._lambertian_table(scene)
-        lights = _lights.build(scene, self.emitter_sampling)
+        lights: Any = _lights.build(scene, self.emitter_sampling)
         light_total: Any = mi.Float64(0.0) if lights is not None else None  # the choice's normaliser at prev_si
+        # At a diffuse vertex the table's emitters are sampled by light sampling alone (weight 1; a BSDF-
+        # sampled ray that finds one of them counts 0): see the module docstring.  In a scene whose every BSDF is diffuse
+        # and whose every emitter is in the table, no BSDF hit needs the light sampling's density, and the
+        # ray of a vertex whose next vertex is the last can find nothing that counts: it is not traced.
+        only_table = lights is not None and lights.covers_all and _all_diffuse(scene)
+        # emitter_sampling='projected': at Lambertian vertices (the shading normal is the BSDF's) the table
+        # samples by projected solid angle; everywhere, when every BSDF is Lambertian
+        projected = lights is not None and lights.projected
+        lambertian_ids = self._lambertian_table(scene) if projected else None
+        cosine_only = projected and only_table and _all_lambertian(scene)
+        prev_alone = mi.Bool(False)  # the previous vertex sampled the table's emitters alone
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
         throughput: Any = mi.Spectrum(1.0)
@@ -403,8 +436,15 @@ class _PathMethods:
 
             # direct emission, weighted against the previous vertex's emitter sampling
             ds = mi.DirectionSample3f(scene, si=si, ref=prev_si)
-            em_pdf = self._emitter_pdf(scene, prev_si, si, ds, ~prev_bsdf_delta, lights, light_total)
-            mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
+            if dr.hint(only_table, mode="scalar"):  # after the camera ray, every hit is weighted 0 below
+                mis_bsdf: Any = mi.Float(1.0)
+            else:
+                em_pdf = self._emitter_pdf(scene, prev_si, si, ds, ~prev_bsdf_delta, lights, light_total)
+                mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
+            if dr.hint(only_table, mode="scalar"):
+                mis_bsdf = dr.select(prev_alone, 0.0, mis_bsdf)
+            elif dr.hint(lights is not None, mode="scalar"):
+                mis_bsdf = dr.select(prev_alone & lights.holds(si, prev_alone), 0.0, mis_bsdf)
             shown = prev_bsdf_pdf > 0.0
             if dr.hint(self.hide_emitters, mode="scalar"):  # a hidden environment behind the camera ray
                 shown &= (depth != 0) | si.is_valid()
@@ -417,8 +457,15 @@ class _PathMethods:
             bsdf = si.bsdf(ray)
 
             # emitter sampling
-            active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-            ds, em_weight, active_em, total = self._sample_emitter(scene, si, sampler, active_em, primal, lights)
+            flags = bsdf.flags()
+            active_em = active_next & mi.has_flag(flags, mi.BSDFFlags.Smooth)
+            alone = active_em & _diffuse(flags) if lights is not None else mi.Bool(False)
+            cosine = None
+            if dr.hint(projected, mode="scalar"):
+                cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, _bsdf_ids(bsdf), alone) != 0)
+            ds, em_weight, active_em, total, ours = self._sample_emitter(
+                scene, si, sampler, active_em, primal, lights, cosine, cosine_only
+            )
             if dr.hint(lights is not None, mode="scalar"):
                 light_total = total
             wo = si.to_local(ds.d)
@@ -447,6 +494,8 @@ class _PathMethods:
                 bsdf_weight = dr.select(lambertian, weight_local, bsdf_weight)
 
             mis_em = dr.select(ds.delta, 1.0, _mis_weight(ds.pdf, bsdf_pdf))
+            if dr.hint(lights is not None, mode="scalar"):
+                mis_em = dr.select(alone & ours, 1.0, mis_em)
             if dr.hint(primal, mode="scalar"):
                 L[active_em] = dr.fma(throughput, bsdf_val * em_weight * mis_em, L)
             else:
@@ -466,6 +515,7 @@ class _PathMethods:
             prev_si = mi.Interaction3f(si)
             prev_bsdf_pdf = bsdf_sample.pdf
             prev_bsdf_delta = mi.has_flag(bsdf_sample.sampled_type, mi.BSDFFlags.Delta)
+            prev_alone = alone
 
             # Russian roulette
             depth[si.is_valid()] += 1
@@ -475,6 +525,8 @@ class _PathMethods:
             rr_continue = sampler.next_1d() < rr_prob
             throughput[rr_active] *= dr.rcp(rr_prob)
             active = active_next & (~rr_active | rr_continue) & (throughput_max != 0.0)
+            if dr.hint(only_table, mode="scalar"):  # the next vertex is the last: only emission, weighted 0
+                active &= ~(alone & (depth + 1 >= self.max_depth))
 
             if dr.hint(not primal, mode="scalar"):
                 # the sampling is detached (its density has no parameters), so the derivative of what
@@ -490,6 +542,32 @@ class _PathMethods:
         if dr.hint(primal, mode="scalar"):
             L = dr.select(valid_ray, L, 0.0)
         return (L if primal else δL), valid_ray, [], L
+
+
+def _diffuse(flags: Any) -> Any:
+    """The lanes whose BSDF is diffuse only (no glossy or delta component): light sampling alone there."""
+    return (
+        mi.has_flag(flags, mi.BSDFFlags.Diffuse)
+        & ~mi.has_flag(flags, mi.BSDFFlags.Glossy)
+        & ~mi.has_flag(flags, mi.BSDFFlags.Delta)
+    )
+
+
+def _all_diffuse(scene: Any) -> bool:
+    """Whether every BSDF of *scene* is diffuse only (a trace-time constant)."""
+    for shape in scene.shapes():
+        bsdf = shape.bsdf()
+        if bsdf is None:
+            continue
+        flags = int(bsdf.flags())
+        if not flags & int(mi.BSDFFlags.Diffuse) or flags & int(mi.BSDFFlags.Glossy | mi.BSDFFlags.Delta):
+            return False
+    return True
+
+
+def _all_lambertian(scene: Any) -> bool:
+    """Whether every BSDF of *scene* is Lambertian (:func:`lambertian_codes`; a trace-time constant)."""
+    return all(shape.bsdf() is None or lambertian_codes(shape.bsdf()) for shape in scene.shapes())
 
 
 def _taken_count(sampler: Any, count: int) -> int:

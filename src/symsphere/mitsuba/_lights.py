@@ -1,4 +1,5 @@
-"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``).
+"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``, and
+``'projected'``: at Lambertian vertices by projected solid angle, see :meth:`LightTable.sample_direction`).
 
 Mitsuba 3 samples a ``rectangle`` or triangle-mesh area emitter by area and converts the density to
 solid angle, so a point near a large light gets wildly varying weights ``d^2 / cos``.  Here every
@@ -10,8 +11,9 @@ shading point p:
    radiance of its emitter (the mean of its RGB radiance, of the texture's mean for a textured one),
    0 when p is behind the triangle (area emitters are one-sided).  For up to :data:`EXACT_MAX`
    triangles every w_i is evaluated (the loop is unrolled into the kernel, the triangles are
-   constants of it; float32 weights, float64 sums).  Above that, in two levels: the triangles, in a
-   spatial order (by the axis of their normal, then a Morton curve of their centroids), form about
+   constants of it; float32 weights and sums: u has 24 bits, so float64 sums made the choice no
+   closer to the weights, and they cost 20 % of the CPU time of direct light under a 1024-triangle
+   light).  Above that, in two levels: the triangles, in a spatial order (by the axis of their normal, then a Morton curve of their centroids), form about
    :data:`GROUP_COUNT` runs of at most :data:`GROUP_MAX`; a run is chosen by an estimate
    ``power cos / max(d^2, r^2)`` (:class:`_Group`), then a triangle of it by its exact w_i.  Beyond
    GROUP_COUNT x GROUP_MAX (2048) triangles, the triangle is chosen by its power ``area L_e``, as
@@ -20,12 +22,14 @@ shading point p:
    ``path`` at direct light where these two levels give 3.7x: the exact weights at the second level
    matter);
 2. a direction is drawn uniformly in the chosen triangle's solid angle with Arvo's map
-   (:func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, float64 inside the kernel);
+   (:func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, in float32 as Mitsuba's own sampling:
+   within 2.5e-6 in direction of the float64 map on a 1.76 sr triangle 0.15 away, see there; in float64
+   it took 15 % of the CPU time of full paths in the Cornell box);
 3. the point q where the direction meets the triangle's plane is shadow-tested as Mitsuba tests its
    own samples (a shortened ray to q), and the emitter's ``eval_direction`` gives the radiance there
    (texture coordinates interpolated from the triangle's vertices; the one-sided test).
 
-The density of the direction is ``P(i) / Omega_i`` (Omega_i in float64).  A BSDF-sampled ray that hits such an
+The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it).  A BSDF-sampled ray that hits such an
 emitter gets this same density at its previous vertex (:meth:`LightTable.pdf_direction`, for MIS).
 
 Every other emitter (sphere, disk, point, spot, directional, environment, constant) keeps Mitsuba's
@@ -42,11 +46,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ._warps import spherical_triangle_solid_angle, square_to_spherical_triangle
+from ._projected import projected_solid_angle, square_to_projected_triangle
+from ._warps import spherical_triangle_solid_angle, square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
 __all__ = ["EMITTER_SAMPLINGS", "EXACT_MAX", "GROUP_COUNT", "GROUP_MAX", "LightTable", "build"]
 
-EMITTER_SAMPLINGS = ("area", "solid_angle")
+EMITTER_SAMPLINGS = ("area", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
 EXACT_MAX = 64
 """Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
@@ -123,8 +128,11 @@ def _spatial_order(tris: np.ndarray) -> np.ndarray:
 class _Group:
     """A run of rows [start, stop) and the constants of its importance at a point p:
     ``power cos / max(d^2, r^2)``, d = |p - centre|, r the radius of its bounding sphere about the
-    centre, cos = the cosine between the mean normal and p - centre plus r / d (clipped to [0, 1]; 1 when
-    the normals spread over more than 60 degrees)."""
+    centre, cos = the cosine between the mean normal and p - centre plus r / d plus s, the largest
+    distance between a member's unit normal and the mean one (and 1e-5 for float32's rounding), clipped to
+    [0, 1]; 1 when the normals spread over more than 60 degrees.  It is 0 only where no member faces p:
+    for x in a member with normal n_t, (p - x).n_t <= (p - centre).axis + d |n_t - axis| + r.  (Light
+    sampling alone at diffuse vertices needs this: a triangle never chosen there would be lost.)"""
 
     def __init__(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray, start: int, stop: int):
         self.start, self.stop = start, stop
@@ -137,13 +145,15 @@ class _Group:
         mean = (unit * area[start:stop, None]).sum(axis=0)
         mean /= max(float(np.linalg.norm(mean)), 1e-300)
         self.axis = mean if np.all(unit @ mean > 0.5) else None
+        self.spread = float(np.max(np.linalg.norm(unit - mean, axis=1))) + 1e-5
 
     def importance(self, p: Any) -> Any:
         axis = None if self.axis is None else mi.ScalarVector3f(*self.axis)
-        return _importance(p, mi.ScalarVector3f(*self.centre), self.radius, self.radius**2, axis, self.power)
+        centre = mi.ScalarVector3f(*self.centre)
+        return _importance(p, centre, self.radius, self.radius**2, axis, self.spread, self.power)
 
 
-def _importance(p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, power: Any) -> Any:
+def _importance(p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, spread: Any, power: Any) -> Any:
     """A group's importance at p (see :class:`_Group`), from constants or from gathered values alike:
     the same float32 operations in the same order, so that both give the same bits."""
     e = p - centre
@@ -151,14 +161,25 @@ def _importance(p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, power
     value = power / dr.maximum(d2, radius2)
     if axis is None:
         return value
-    cos = dr.clip((dr.dot(e, axis) + radius) / dr.maximum(dr.sqrt(d2), radius), 0.0, 1.0)
+    d = dr.sqrt(d2)
+    cos = dr.clip((dr.dot(e, axis) + radius + spread * d) / dr.maximum(d, radius), 0.0, 1.0)
     return value * cos
+
+
+def _sum(weights: list[Any]) -> Any:
+    """The sum of the weights (None: left out) in float32, in order: :meth:`LightTable._pick`'s total."""
+    total = mi.Float(0.0)
+    for w in weights:
+        if w is not None:
+            total += w
+    return total
 
 
 class LightTable:
     """The emitter triangles of a scene and their selection (see the module docstring)."""
 
-    def __init__(self, scene: Any) -> None:
+    def __init__(self, scene: Any, projected: bool = False) -> None:
+        self.projected = projected  # cosine-weighted sampling where sample_direction is given the lanes
         emitters = scene.emitters()
         pmf = [float(scene.pdf_emitter(mi.UInt32(i))[0]) for i in range(len(emitters))]
         rows: list[np.ndarray] = []
@@ -186,6 +207,8 @@ class LightTable:
             emitter_rows += [index] * len(tris)
             radiance += [_radiance(emitter)] * len(tris)
         self.count = sum(len(r) for r in rows)
+        # every emitter of the scene is in the table: a ray can find no other emission
+        self.covers_all = all(in_table)
         self.p_other = float(sum(p for p, t in zip(pmf, in_table, strict=True) if not t))
         self.p_table = 1.0 - self.p_other if self.count else 0.0
         if not self.count:
@@ -202,8 +225,6 @@ class LightTable:
         area = 0.5 * np.linalg.norm(normal, axis=1)
         lum = np.where(area > 0.0, lum, 0.0)  # a degenerate triangle is never chosen
         self.tris, self.normal, self.lum = tris, normal, lum
-        self._columns = [mi.Float64(np.ascontiguousarray(tris[:, k, j])) for k in range(3) for j in range(3)]
-        self._normal = [mi.Float64(np.ascontiguousarray(normal[:, j])) for j in range(3)]
         self._columns32 = [mi.Float(np.ascontiguousarray(tris[:, k, j])) for k in range(3) for j in range(3)]
         self._normal32 = [mi.Float(np.ascontiguousarray(normal[:, j])) for j in range(3)]
         self._lum32 = mi.Float(lum)
@@ -230,6 +251,7 @@ class LightTable:
         axes = [g.axis if g.axis is not None else np.zeros(3) for g in groups]
         self._g_axis = [mi.Float(np.array([a[j] for a in axes], dtype=np.float32)) for j in range(3)]
         self._g_has_axis = mi.Bool(np.array([g.axis is not None for g in groups]))
+        self._g_spread = mi.Float(np.array([g.spread for g in groups], dtype=np.float32))
         self._g_power = mi.Float(np.array([g.power for g in groups], dtype=np.float32))
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
@@ -237,19 +259,19 @@ class LightTable:
     # --- per-point weights ---------------------------------------------------------------------
 
     def _vertices(self, row: Any, active: Any) -> tuple[Any, Any, Any, Any]:
-        c = [dr.gather(mi.Float64, col, row, active) for col in self._columns]
-        n = [dr.gather(mi.Float64, col, row, active) for col in self._normal]
+        c = [dr.gather(mi.Float, col, row, active) for col in self._columns32]
+        n = [dr.gather(mi.Float, col, row, active) for col in self._normal32]
         return (
-            mi.Vector3d(c[0], c[1], c[2]),
-            mi.Vector3d(c[3], c[4], c[5]),
-            mi.Vector3d(c[6], c[7], c[8]),
-            mi.Vector3d(*n),
+            mi.Vector3f(c[0], c[1], c[2]),
+            mi.Vector3f(c[3], c[4], c[5]),
+            mi.Vector3f(c[6], c[7], c[8]),
+            mi.Vector3f(*n),
         )
 
     @staticmethod
     def _weight(p: Any, a: Any, b: Any, c: Any, n: Any, lum: Any) -> Any:
         """``Omega(p) L_e`` in float32, 0 behind the triangle: a selection weight (its rounding only changes
-        which triangle is chosen how often; the density divides by the float64 solid angle)."""
+        which triangle is chosen how often; the density divides by the map's solid angle)."""
         front = dr.dot(p - a, n) > 0.0
         omega = spherical_triangle_solid_angle(a - p, b - p, c - p)
         return dr.select(front & (omega > 0.0), omega * lum, 0.0)
@@ -288,33 +310,30 @@ class LightTable:
 
     @staticmethod
     def _pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any, Any]:
-        """(index, its weight, the total, u reused) of a choice proportional to *weights* by u (float64 sums)."""
-        total = mi.Float64(0.0)
-        for w in weights:
-            if w is not None:
-                total += mi.Float64(w)
-        target = u * total
+        """(index, its weight, the total, u reused) of a choice proportional to *weights* by u: float32 sums
+        (u itself has 24 bits: float64 sums would not make the frequencies closer to the weights).  The
+        weight and the total are returned as float64."""
+        total = _sum(weights)
+        target = mi.Float(u) * total
         index: Any = mi.UInt32(0)
-        before, chosen, acc = mi.Float64(0.0), mi.Float64(0.0), mi.Float64(0.0)
+        before, chosen, acc = mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)
         for i, w in enumerate(weights):
             if w is None:
                 continue
-            w64 = mi.Float64(w)
-            take = (acc <= target) & (w64 > 0.0)
+            take = (acc <= target) & (w > 0.0)
             index = dr.select(take, i, index)
             before = dr.select(take, acc, before)
-            chosen = dr.select(take, w64, chosen)
-            acc += w64
+            chosen = dr.select(take, w, chosen)
+            acc += w
         reused = dr.clip((target - before) / dr.select(chosen > 0.0, chosen, 1.0), 0.0, 1.0)
-        return index, chosen, total, reused
+        return index, mi.Float64(chosen), mi.Float64(total), mi.Float64(reused)
 
     @staticmethod
     def _share(weights: list[Any], index: Any) -> Any:
-        """weights[index] / sum(weights), in float64 as :meth:`_pick` sums them (0 if the sum is 0)."""
-        total, mine = mi.Float64(0.0), mi.Float64(0.0)
+        """weights[index] / sum(weights), summed as :meth:`_pick` sums them (0 if the sum is 0; float64)."""
+        total, mine = mi.Float64(_sum(weights)), mi.Float64(0.0)
         for i, w in enumerate(weights):
             if w is not None:
-                total += mi.Float64(w)
                 mine = dr.select(index == i, mi.Float64(w), mine)
         return dr.select(total > 0.0, mine / dr.select(total > 0.0, total, 1.0), 0.0)
 
@@ -332,15 +351,45 @@ class LightTable:
         probability *= dr.select(group_total > 0.0, chosen / dr.select(group_total > 0.0, group_total, 1.0), 0.0)
         return group * self.group_size + slot, probability, u, total
 
+    def _choose_projected(self, p: Any, normal: Any, u: Any, active: Any) -> tuple[Any, Any, Any]:
+        """(row, its probability, u reused): as :meth:`_choose`, with each triangle's weight its projected
+        solid angle about *normal* x radiance (0 behind it: the first level of two is :meth:`_choose`'s,
+        whose group estimate is 0 only where no member faces p)."""
+        if self.mode == "power":
+            row, probability, u, _ = self._choose(p, u, active)
+            return row, probability, u
+        if self.mode == "exact":
+            weights: list[Any] = []
+            for row in range(self.count):
+                if self.lum[row] <= 0.0:
+                    weights.append(None)
+                    continue
+                a, b, c = (mi.ScalarVector3f(*vertex) for vertex in self.tris[row])
+                front = dr.dot(p - a, mi.ScalarVector3f(*self.normal[row])) > 0.0
+                e = projected_solid_angle(a - p, b - p, c - p, normal)
+                weights.append(dr.select(front, e * float(self.lum[row]), 0.0))
+            index, chosen, total, u = self._pick(weights, u)
+            return index, dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0), u
+        group, chosen, total, u = self._pick(self._group_weights(p), u)
+        probability = dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0)
+        members = []
+        start = group * self.group_size
+        for k in range(self.group_size):
+            row = start + k
+            ok = active & (row < self.count)
+            a, b, c, n = self._vertices(row, ok)
+            lum = dr.gather(mi.Float, self._lum32, row, ok)
+            e = projected_solid_angle(a - p, b - p, c - p, normal)
+            members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
+        slot, chosen, group_total, u = self._pick(members, u)
+        probability *= dr.select(group_total > 0.0, chosen / dr.select(group_total > 0.0, group_total, 1.0), 0.0)
+        return start + slot, probability, u
+
     def _total(self, p: Any) -> Any:
         """The first level's total at p, as :meth:`_choose` sums it."""
         if self.mode == "power":
             return mi.Float64(0.0)
-        total = mi.Float64(0.0)
-        for w in self._group_weights(p):
-            if w is not None:
-                total += mi.Float64(w)
-        return total
+        return mi.Float64(_sum(self._group_weights(p)))
 
     def _first_level_weight(self, p: Any, row: Any, active: Any) -> Any:
         """The first level's weight at p of the group (exact: the triangle) that holds *row*, from gathered
@@ -357,8 +406,9 @@ class LightTable:
         radius = dr.gather(mi.Float, self._g_radius, g, active)
         radius2 = dr.gather(mi.Float, self._g_radius2, g, active)
         power = dr.gather(mi.Float, self._g_power, g, active)
-        with_axis = _importance(p, centre, radius, radius2, axis, power)
-        without = _importance(p, centre, radius, radius2, None, power)
+        spread = dr.gather(mi.Float, self._g_spread, g, active)
+        with_axis = _importance(p, centre, radius, radius2, axis, spread, power)
+        without = _importance(p, centre, radius, radius2, None, spread, power)
         value = dr.select(dr.gather(mi.Bool, self._g_has_axis, g, active), with_axis, without)
         return dr.select(power > 0.0, value, 0.0)
 
@@ -375,12 +425,22 @@ class LightTable:
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
-    def sample_direction(self, scene: Any, si: Any, sample: Any, active: Any) -> tuple[Any, Any, Any]:
-        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total),
-        with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
+    def sample_direction(
+        self, scene: Any, si: Any, sample: Any, active: Any, cosine: Any = None, cosine_only: bool = False
+    ) -> tuple[Any, Any, Any, Any]:
+        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total,
+        ours), with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
         tested.  *total* (float64, every lane) is the selection's normaliser at si.p: pass it to
         :meth:`pdf_direction` for a hit seen from si (the next vertex's emission), which then need not
-        evaluate every triangle at si.p again."""
+        evaluate every triangle at si.p again.  *ours*: the lanes whose sample is the table's.
+
+        *cosine* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
+        triangle is chosen by its projected solid angle about the shading normal (on the side of si.wi)
+        x radiance and the direction drawn by projected solid angle
+        (:func:`symsphere.mitsuba._projected.square_to_projected_triangle`); their density is then not the
+        one :meth:`pdf_direction` gives, so the caller weights their BSDF hits on the table's emitters 0
+        (light sampling alone).  *cosine_only*: every lane is such a lane (the solid-angle technique is
+        not traced)."""
         u = mi.Float(sample.x)
         ds = dr.zeros(mi.DirectionSample3f)
         weight = dr.zeros(mi.Spectrum)
@@ -392,43 +452,74 @@ class LightTable:
             emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, other)
             ds_o, w_o = emitter.sample_direction(si, mi.Point2f(u_other, sample.y), other)
             other &= ds_o.pdf != 0.0
-            visible = ~scene.ray_test(si.spawn_ray_to(ds_o.p), other)
-            # an occluded sample has density 0, as the table's own: a differential mode re-attaches the
-            # emitter's derivative wherever the density is not 0
-            ds_o.pdf = dr.select(visible, ds_o.pdf * self.p_other * self._other.eval_pmf_normalized(index, other), 0.0)
-            w_o = dr.select(other & visible, w_o / (self.p_other * self._other.eval_pmf_normalized(index, other)), 0.0)
+            selection = self.p_other * self._other.eval_pmf_normalized(index, other)
+            ds_o.pdf = dr.select(other, ds_o.pdf * selection, 0.0)
+            w_o = dr.select(other, w_o / selection, 0.0)
             ds = dr.select(other, ds_o, ds)
             weight = dr.select(other, w_o, weight)
         total = mi.Float64(0.0)
         if self.count:
-            ds_table, value, total = self._sample_table(scene, si, u / self.p_table, sample.y, ours)
+            ds_table, value, total = self._sample_table(
+                scene, si, u / self.p_table, sample.y, ours, cosine, cosine_only
+            )
             # the whole sample (point, normal, uv, emitter), so that the emitter can be evaluated at it
             # again (a differential mode re-attaches the radiance's derivative that way)
             ds = dr.select(ours, ds_table, ds)
             weight = dr.select(ours, value, weight)
-        return ds, weight, total
+        # one shadow ray for both kinds of sample, as Mitsuba tests its own (a ray to the sampled point,
+        # shortened; a coplanar surface, as the Cornell box's ceiling around its light, does not occlude).
+        # An occluded sample has density 0: a differential mode re-attaches the emitter's derivative
+        # wherever the density is not 0
+        tested = active & (ds.pdf != 0.0)
+        visible = tested & ~scene.ray_test(si.spawn_ray_to(ds.p), tested)
+        ds.pdf = dr.select(visible, ds.pdf, 0.0)
+        weight = dr.select(visible, weight, 0.0)
+        return ds, weight, total, ours
 
-    def _sample_table(self, scene: Any, si: Any, u: Any, v: Any, active: Any) -> tuple[Any, Any, Any]:
-        p = mi.Vector3d(si.p)
-        row, probability, u_map, total = self._choose(mi.Vector3f(si.p), mi.Float64(u), active)
-        active &= probability > 0.0
-        a, b, c, n = self._vertices(row, active)
-        direction, omega = square_to_spherical_triangle((u_map, mi.Float64(v)), a - p, b - p, c - p)
-        active &= dr.dot(p - a, n) > 0.0
-        pdf = self.p_table * probability / dr.select(omega > 0.0, omega, 1.0)
-        active &= omega > 0.0
-        d = mi.Vector3f(dr.normalize(direction))
-        # The point q where d meets the triangle's plane: shadow-tested as Mitsuba tests its own samples
-        # (a ray to q, shortened; a coplanar surface, as the Cornell box's ceiling around its light, does
-        # not occlude), and the emitter evaluated there (texture coordinates interpolated).
-        dd = mi.Vector3d(d)
-        cos_n = dr.dot(dd, n)
+    def _sample_table(
+        self, scene: Any, si: Any, u: Any, v: Any, active: Any, cosine: Any, cosine_only: bool
+    ) -> tuple[Any, Any, Any]:
+        p = mi.Vector3f(si.p)
+        total = mi.Float64(0.0)
+        if not cosine_only:  # by solid angle
+            row, probability, u_map, total = self._choose(p, mi.Float64(u), active)
+            ok = active & (probability > 0.0)
+            a, b, c, n = self._vertices(row, ok)
+            direction, omega = square_to_spherical_triangle((mi.Float(u_map), mi.Float(v)), a - p, b - p, c - p)
+            ok &= (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
+            pdf = mi.Float(self.p_table * probability / mi.Float64(dr.select(omega > 0.0, omega, 1.0)))
+            d = dr.normalize(direction)
+        if cosine is not None:  # by projected solid angle
+            mine = active & cosine
+            normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
+            row_c, probability_c, u_c = self._choose_projected(p, normal, mi.Float64(u), mine)
+            ok_c = mine & (probability_c > 0.0)
+            a_c, b_c, c_c, n_c = self._vertices(row_c, ok_c)
+            d_c, pdf_c = square_to_projected_triangle(
+                a_c - p, b_c - p, c_c - p, normal, mi.Point2f(mi.Float(u_c), mi.Float(v))
+            )
+            ok_c &= (dr.dot(p - a_c, n_c) > 0.0) & (pdf_c > 0.0)
+            pdf_c = mi.Float(self.p_table * probability_c * mi.Float64(pdf_c))
+            if cosine_only:
+                row, ok, a, b, c, n, pdf, d = row_c, ok_c, a_c, b_c, c_c, n_c, pdf_c, d_c
+            else:
+                row, ok, pdf, d = (
+                    dr.select(mine, row_c, row),
+                    dr.select(mine, ok_c, ok),
+                    dr.select(mine, pdf_c, pdf),
+                    dr.select(mine, d_c, d),
+                )
+                a, b, c, n = (dr.select(mine, x_c, x) for x_c, x in ((a_c, a), (b_c, b), (c_c, c), (n_c, n)))
+        active = ok
+        # The point q where d meets the triangle's plane (shadow-tested by the caller), and the emitter
+        # evaluated there (texture coordinates interpolated).
+        cos_n = dr.dot(d, n)
         t_plane = dr.dot(a - p, n) / dr.select(cos_n != 0.0, cos_n, 1.0)
-        q = p + t_plane * dd
+        q = p + t_plane * d
         n2 = dr.squared_norm(n)
         n2 = dr.select(n2 > 0.0, n2, 1.0)
-        lb = mi.Float(dr.dot(dr.cross(q - a, c - a), n) / n2)
-        lc = mi.Float(dr.dot(dr.cross(b - a, q - a), n) / n2)
+        lb = dr.dot(dr.cross(q - a, c - a), n) / n2
+        lc = dr.dot(dr.cross(b - a, q - a), n) / n2
         uv = [dr.gather(mi.Float, col, row, active) for col in self._uv]
         ds: Any = dr.zeros(mi.DirectionSample3f)
         ds.p = mi.Point3f(q)
@@ -437,36 +528,41 @@ class LightTable:
             uv[0] + lb * (uv[2] - uv[0]) + lc * (uv[4] - uv[0]), uv[1] + lb * (uv[3] - uv[1]) + lc * (uv[5] - uv[1])
         )
         ds.d = d
-        ds.dist = mi.Float(t_plane)
+        ds.dist = t_plane
         ds.emitter = dr.gather(
             mi.EmitterPtr, scene.emitters_dr(), dr.gather(mi.UInt32, self._emitter, row, active), active
         )
         active &= t_plane > 0.0
-        active &= ~scene.ray_test(si.spawn_ray_to(ds.p), active)
         radiance: Any = ds.emitter.eval_direction(si, ds, active)
-        pdf_f = mi.Float(pdf)
-        value = dr.select(active & (pdf_f > 0.0), radiance / dr.select(pdf_f > 0.0, pdf_f, 1.0), 0.0)
-        ds.pdf = dr.select(active, pdf_f, 0.0)
+        value = dr.select(active & (pdf > 0.0), radiance / dr.select(pdf > 0.0, pdf, 1.0), 0.0)
+        ds.pdf = dr.select(active, pdf, 0.0)
         ds.delta = mi.Bool(False)
         return ds, value, total
 
     # --- the density of a hit (MIS) ----------------------------------------------------------------
 
+    def holds(self, si: Any, active: Any) -> Any:
+        """The lanes whose *si* lies on one of the table's emitters."""
+        ident = _registry_ids(si.shape)
+        valid = active & si.is_valid() & (ident < dr.width(self._first))
+        return valid & (dr.gather(mi.UInt32, self._first, ident, valid) != _NONE)
+
     def pdf_direction(self, scene: Any, prev_si: Any, si: Any, ds: Any, active: Any, total: Any = None) -> Any:
         """Like ``scene.pdf_emitter_direction(prev_si, ds, active)`` for the emitter hit at *si*; *total*:
         :meth:`sample_direction`'s at prev_si (None: evaluated here)."""
         # Mitsuba's density for its own emitters (none when every emitter it may choose is in the table)
-        mitsuba_pdf = scene.pdf_emitter_direction(prev_si, ds, active) if self.p_other > 0.0 else mi.Float(0.0)
         ident = _registry_ids(si.shape)
         valid = active & si.is_valid() & (ident < dr.width(self._first))
         first = dr.gather(mi.UInt32, self._first, ident, valid)
         ours = valid & (first != _NONE)
+        mitsuba_pdf = scene.pdf_emitter_direction(prev_si, ds, active & ~ours) if self.p_other > 0.0 else mi.Float(0.0)
         rect = dr.gather(mi.UInt32, self._rect, ident, ours) != 0
         index = first + dr.select(rect, dr.select(si.uv.y > si.uv.x, 1, 0), si.prim_index)
         row = dr.gather(mi.UInt32, self._row_of, index, ours)
-        p = mi.Vector3d(prev_si.p)
+        p = mi.Vector3f(prev_si.p)
         a, b, c, n = self._vertices(row, ours)
-        omega = spherical_triangle_solid_angle(a - p, b - p, c - p)
+        # the map's own solid angle (the same operations on the same float32 values as in sampling)
+        omega = unit_spherical_triangle_solid_angle(dr.normalize(a - p), dr.normalize(b - p), dr.normalize(c - p))
         front = (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
         if total is None:
             total = self._total(mi.Vector3f(prev_si.p))
@@ -479,5 +575,5 @@ def build(scene: Any, emitter_sampling: str) -> LightTable | None:
     """The light table of *scene* for ``emitter_sampling`` ('area': None, Mitsuba samples its emitters)."""
     if emitter_sampling == "area":
         return None
-    table = LightTable(scene)
+    table = LightTable(scene, projected=emitter_sampling == "projected")
     return table if table.count else None

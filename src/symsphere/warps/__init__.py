@@ -25,6 +25,8 @@ maps                                domain       what
 ``square_to_spherical_triangle``    triangle     Arvo (1995) onto any spherical triangle;
                                                  ``square_to_arvo_triangle``: onto T0
 ``square_to_spherical_rectangle``   rectangle    Urena, Fajardo & King (2013) onto a rectangle seen from 0
+``square_to_projected_triangle``    triangle     cos(theta) / E about a normal on any spherical triangle
+                                                 (projected solid angle E: ``projected_solid_angle``)
 =================================== ============ ============================================================
 
 Every map is exact and has no NaN or inf for u, v in {0, 1}, in float64 and float32; results take
@@ -57,6 +59,7 @@ from ._uniform import *  # noqa: F403
 from ._octahedral import *  # noqa: F403
 from ._concentric import *  # noqa: F403
 from ._spherical_rectangle import *  # noqa: F403
+from ._projected_triangle import *  # noqa: F403
 # isort: on
 
 __all__ = ["Warp", "WARPS", "get_warp", *_namespace(__name__)]  # each module's names are listed once, in its __all__
