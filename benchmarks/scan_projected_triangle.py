@@ -129,16 +129,17 @@ def scan_drjit(triangles, samples, seed, batch=1000):
 
     rng = np.random.default_rng(seed)
     counts = dict.fromkeys(("samples", "nonfinite", "nonunit", "bad_pdf", "below", "refused_nonzero_pdf"), 0)
-    errors = []
+    errors, worst = [], {}
     for start in range(0, triangles, batch):
         count = min(batch, triangles - start)
-        tris, normals, refs, accepted = [], [], [], []
+        tris, normals, refs, accepted, kinds = [], [], [], [], []
         uv = rng.random((count * samples, 2)).astype(np.float32)
         uv[:: max(samples // 20, 1)] = rng.choice(
             np.array([0.0, 1.0], dtype=np.float32), size=(len(uv[:: max(samples // 20, 1)]), 2)
         )
         for k in range(count):
             tri, n = _triangle(KINDS[(start + k) % len(KINDS)], rng)
+            kinds.append((start + k) % len(KINDS))
             tri32, n32 = tri.astype(np.float32), n.astype(np.float32)
             part = uv[k * samples : (k + 1) * samples].astype(np.float64)
             try:
@@ -167,8 +168,15 @@ def scan_drjit(triangles, samples, seed, batch=1000):
         ok = np.repeat(np.array(accepted), samples)
         counts["refused_nonzero_pdf"] += int(np.sum(~ok & (pdf > 0)))
         both = ok & (pdf > 0)
-        errors.append(np.linalg.norm(got[both] - ref[both], axis=1))
+        error = np.linalg.norm(got - ref, axis=1)
+        errors.append(error[both])
+        kind = np.repeat(np.array(kinds), samples)
+        for index, name in enumerate(KINDS):
+            mine = both & (kind == index)
+            if mine.any():
+                worst[name] = max(worst.get(name, 0.0), float(error[mine].max()))
     err = np.concatenate(errors)
+    counts["direction_error_vs_float64_max_by_kind"] = worst
     counts["direction_error_vs_float64"] = {
         "max": float(err.max()),
         "p99.99": float(np.quantile(err, 0.9999)),
