@@ -334,6 +334,15 @@ def projected_triangle_uv(x: float, y: float, z: float, s: Any) -> tuple[float, 
 
     u is the area of the pieces before the direction's azimuth over E's sum of pieces, v the place of
     r^2 between r_lo^2 and r_hi^2 on its ray (from r^2 near the pole, from z^2 near the horizon).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import projected_triangle_point, projected_triangle_setup, projected_triangle_uv
+    >>> s = projected_triangle_setup(np.eye(3), np.array([0, 0, 1.0]))
+    >>> x, y, z, _ = projected_triangle_point(0.3, 0.7, s)
+    >>> bool(np.allclose(projected_triangle_uv(x, y, z, s), (0.3, 0.7)))
+    True
     """
     total = s[_C + 4]
     if not s[_E] > 0.0:
@@ -374,7 +383,18 @@ def projected_triangle_uv(x: float, y: float, z: float, s: Any) -> tuple[float, 
 @register_jitable
 def projected_triangle_density(x: float, y: float, z: float, s: Any) -> float:
     """max(0, n.d) / E for the direction d = (x, y, z) in the triangle (each edge's plane within 1e-12),
-    0 elsewhere and when E = 0."""
+    0 elsewhere and when E = 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import projected_triangle_density, projected_triangle_setup
+    >>> s = projected_triangle_setup(np.eye(3), np.array([0, 0, 1.0]))   # an octant: E = pi / 4
+    >>> bool(np.isclose(projected_triangle_density(0.0, 0.0, 1.0, s), 4 / np.pi))
+    True
+    >>> projected_triangle_density(0.0, 0.0, -1.0, s)
+    0.0
+    """
     if not s[_E] > 0.0:
         return 0.0
     lx, ly, lz = _local(s, x, y, z)
