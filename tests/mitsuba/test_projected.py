@@ -55,39 +55,49 @@ def _random_triangles(rng, count):
     return tri, n
 
 
+def _batch(mi, rng, count, per):
+    """Random triangles (float32) that the numpy map accepts with E >= 1e-5, ``per`` lanes each, and the
+    Dr.Jit arguments: one launch for all of them."""
+    tri, n = _random_triangles(rng, count)
+    tri, n = tri.astype(np.float32), n.astype(np.float32)
+    keep, energies = [], []
+    for k in range(count):
+        try:
+            e = projected_solid_angle(*tri[k].astype(np.float64), n[k].astype(np.float64))
+        except ValueError:  # a degenerate triangle of the random draw: tested below
+            continue
+        if e >= 1e-5:  # (almost) below the horizon: no light, nothing sampled (tested below)
+            keep.append(k)
+            energies.append(e)
+    tri, n = tri[keep], n[keep]
+    lanes_tri, lanes_n = np.repeat(tri, per, axis=0), np.repeat(n, per, axis=0)
+    args = [_vec(mi, lanes_tri[:, i]) for i in range(3)] + [_vec(mi, lanes_n)]
+    return tri, n, np.array(energies), args
+
+
 def test_equals_numpy(llvm):
     mi = llvm
     from symsphere._testing import mitsuba_projected as mp
 
     rng = np.random.default_rng(1)
-    tri, n = _random_triangles(rng, 60)
     per = 300
+    tri, n, energies, args = _batch(mi, rng, 60, per)
+    assert len(tri) > 30
+    uv = rng.random((len(tri) * per, 2)).astype(np.float32)
+    d, pdf = mp.square_to_projected_triangle(*args, mi.Point2f(uv[:, 0], uv[:, 1]))
+    e_drjit = np.asarray(mp.projected_solid_angle(*args))
+    again = np.asarray(mp.square_to_projected_triangle_pdf(*args, d))
+    got, pdf = _np(d), np.asarray(pdf)
     worst = 0.0
-    checked = 0
     for k in range(len(tri)):
-        t32, n32 = tri[k].astype(np.float32), n[k].astype(np.float32)
-        t64, n64 = t32.astype(np.float64), n32.astype(np.float64)
-        try:
-            e = projected_solid_angle(*t64, n64)
-        except ValueError:  # a degenerate triangle of the random draw: tested below
-            continue
-        if e < 1e-6:
-            continue
-        uv = rng.random((per, 2)).astype(np.float32)
-        args = [_vec(mi, np.broadcast_to(v, (per, 3))) for v in (*t32, n32)]
-        d, pdf = mp.square_to_projected_triangle(*args, mi.Point2f(uv[:, 0], uv[:, 1]))
-        ref = square_to_projected_triangle(uv.astype(np.float64), *t64, n64)
-        got = _np(d)
-        worst = max(worst, float(np.max(np.abs(got - ref))))
-        n_unit = n64 / np.linalg.norm(n64)
-        np.testing.assert_allclose(np.asarray(pdf), ref @ n_unit / e, rtol=1e-5, atol=1e-5 / e)
-        e_drjit = np.asarray(mp.projected_solid_angle(*args[:4]))
-        np.testing.assert_allclose(e_drjit, e, rtol=1e-6)
-        again = np.asarray(mp.square_to_projected_triangle_pdf(*args[:4], d))
+        lanes = slice(k * per, (k + 1) * per)
+        t64, n64, e = tri[k].astype(np.float64), n[k].astype(np.float64), energies[k]
+        ref = square_to_projected_triangle(uv[lanes].astype(np.float64), *t64, n64)
+        worst = max(worst, float(np.max(np.abs(got[lanes] - ref))))
+        np.testing.assert_allclose(pdf[lanes], ref @ _unit(n64) / e, rtol=1e-5, atol=1e-5 / e)
+        np.testing.assert_allclose(e_drjit[lanes], e, rtol=1e-6)
         # at d rounded to float32: its cosine moves by up to ~1e-7 (absolute)
-        np.testing.assert_allclose(again, np.asarray(pdf), rtol=1e-6, atol=2e-7 / e)
-        checked += 1
-    assert checked > 30
+        np.testing.assert_allclose(again[lanes], pdf[lanes], rtol=1e-6, atol=2e-7 / e)
     assert worst < 1e-6, worst
 
 
@@ -150,30 +160,19 @@ def test_lambertian_direct_light_relative_std(llvm):
     from symsphere._testing import mitsuba_projected as mp
 
     rng = np.random.default_rng(7)
-    tri, n = _random_triangles(rng, 200)
     per = 256
+    tri, n, energies, args = _batch(mi, rng, 200, per)
+    assert len(tri) > 100
     radiance, albedo = 3.0, 0.7
-    worst_std, worst_mean, checked = 0.0, 0.0, 0
-    for k in range(len(tri)):
-        t32, n32 = tri[k].astype(np.float32), n[k].astype(np.float32)
-        t64, n64 = t32.astype(np.float64), n32.astype(np.float64)
-        try:
-            e = projected_solid_angle(*t64, n64)
-        except ValueError:
-            continue
-        if e < 1e-5:  # a triangle (almost) below the horizon: no light, nothing sampled (tested below)
-            continue
-        args = [_vec(mi, np.broadcast_to(v, (per, 3))) for v in (*t32, n32)]
-        uv = rng.random((per, 2)).astype(np.float32)
-        d, pdf = mp.square_to_projected_triangle(*args, mi.Point2f(uv[:, 0], uv[:, 1]))
-        cos = _np(d) @ _unit(n64)  # the cosine of the returned direction, here in float64
-        estimate = radiance * albedo / np.pi * cos / np.asarray(pdf, dtype=np.float64)
-        worst_std = max(worst_std, float(np.std(estimate) / np.mean(estimate)))
-        worst_mean = max(worst_mean, abs(float(np.mean(estimate)) / (radiance * albedo / np.pi * e) - 1))
-        checked += 1
-    assert checked > 100
-    assert worst_std <= 1e-3, worst_std
-    assert worst_mean <= 1e-5, worst_mean
+    uv = rng.random((len(tri) * per, 2)).astype(np.float32)
+    d, pdf = mp.square_to_projected_triangle(*args, mi.Point2f(uv[:, 0], uv[:, 1]))
+    # the cosine of the returned direction, here in float64
+    cos = np.sum(_np(d) * np.repeat(_unit(n.astype(np.float64)), per, axis=0), axis=1)
+    estimate = (radiance * albedo / np.pi * cos / np.asarray(pdf, dtype=np.float64)).reshape(len(tri), per)
+    relative_std = np.std(estimate, axis=1) / np.mean(estimate, axis=1)
+    mean_error = np.abs(np.mean(estimate, axis=1) / (radiance * albedo / np.pi * energies) - 1)
+    assert np.max(relative_std) <= 1e-3, np.max(relative_std)
+    assert np.max(mean_error) <= 1e-5, np.max(mean_error)
 
 
 def _adversarial(rng):

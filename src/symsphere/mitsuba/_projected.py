@@ -30,6 +30,7 @@ __all__ = ["projected_solid_angle", "square_to_projected_triangle", "square_to_p
 _TWO_PI = 2.0 * math.pi
 _TOL = 4.0 * 2.220446049250313e-16 * _TWO_PI  # the root finder's step tolerance on phi (as the numpy form)
 _MAX_STEPS = 100
+_CANCELLED = 1e-10  # as the numpy form: E below this fraction of Lambert's terms is rounding noise
 
 
 def _cross(p: tuple[Any, Any, Any], q: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
@@ -102,15 +103,17 @@ class _Setup:
         valid &= count >= 3
         self.poly, self.count = poly, count
         # Lambert over the clipped polygon's edges (edge k from slot k to slot k + 1, the last back to 0)
-        e = f(0.0)
+        e, scale = f(0.0), f(0.0)
         for k in range(4):
             p = poly[k]
             q = _select3(count == k + 1, poly[0], poly[(k + 1) % 4])
             cr = _cross(p, (q[0] - p[0], q[1] - p[1], q[2] - p[2]))
             sin_g = dr.sqrt(_dot(cr, cr))
             term = 0.5 * dr.atan2(sin_g, _dot(p, q)) * cr[2] / _safe(sin_g)
-            e += dr.select((k < count) & (sin_g > 0.0), term, 0.0)
-        valid &= e > 0.0
+            term = dr.select((k < count) & (sin_g > 0.0), term, 0.0)
+            e += term
+            scale += dr.abs(term)
+        valid &= e > _CANCELLED * scale  # E within its rounding error of 0 (seen edge-on): nothing to sample
         self.e = dr.select(valid, e, 0.0)
         self.valid = valid
         if pieces:
@@ -141,24 +144,26 @@ class _Setup:
             sm, cm = dr.sincos(mid)
             hi = (f(0.0), f(0.0), f(1.0))
             lo = (f(0.0), f(0.0), f(0.0))
-            rho_hi, rho_lo = f(1.0), f(0.0)
+            # the bounds as (m_z^2, k^2), compared by cross products (rho^2 = m_z^2 / (m_z^2 + k^2) rounds to
+            # 1 for an edge within 1e-8 of the horizon): the horizon (1, 0), no lower bound (0, 1)
+            mh, kh, ml, kl = f(1.0), f(0.0), f(0.0), f(1.0)
             lo_none = dr.full(mi.Bool, True, dr.width(mid))
             empty = ~self.valid
             for m in self.m:
                 mz, k = m[2], m[0] * cm + m[1] * sm
-                rho2 = mz * mz / _safe(mz * mz + k * k)
-                upper = (mz > 0.0) & (k < 0.0) & (rho2 < rho_hi)
-                lower = (mz < 0.0) & (k > 0.0) & (rho2 > rho_lo)
+                mz2, k2 = mz * mz, k * k
+                upper = (mz > 0.0) & (k < 0.0) & (mz2 * kh < mh * k2)
+                lower = (mz < 0.0) & (k > 0.0) & (mz2 * kl > ml * k2)
                 never = ~((mz > 0.0) & (k < 0.0)) & ~((mz < 0.0) & (k > 0.0)) & ~((mz >= 0.0) & (k >= 0.0))
                 never |= (mz == 0.0) & (k == 0.0)
-                hi, rho_hi = _select3(upper, m, hi), dr.select(upper, rho2, rho_hi)
-                lo, rho_lo = _select3(lower, m, lo), dr.select(lower, rho2, rho_lo)
+                hi, mh, kh = _select3(upper, m, hi), dr.select(upper, mz2, mh), dr.select(upper, k2, kh)
+                lo, ml, kl = _select3(lower, m, lo), dr.select(lower, mz2, ml), dr.select(lower, k2, kl)
                 lo_none &= ~lower
                 empty |= never
             self.hi.append(hi)
             self.lo.append(lo)
             self.lo_none.append(lo_none)
-            nonempty = ~empty & (rho_hi > rho_lo) & (s[j + 1] > s[j])
+            nonempty = ~empty & (mh * kl > ml * kh) & (s[j + 1] > s[j])
             area = _piece_area(self.phi0 + s[j], self.phi0 + s[j + 1], hi, lo, lo_none)
             self.c.append(self.c[j] + dr.select(nonempty, dr.maximum(area, 0.0), 0.0))
 

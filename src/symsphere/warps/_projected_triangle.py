@@ -56,6 +56,9 @@ __all__ = [
 _TWO_PI = 2.0 * math.pi
 _TOL = 4.0 * 2.220446049250313e-16 * _TWO_PI  # the root finder's step tolerance on phi
 _MAX_STEPS = 100  # bisection alone needs 54 halvings of 2 pi to reach _TOL
+# Lambert's sum cancels for a triangle seen nearly edge-on (terms ~ 1, E ~ their height^2): below this
+# fraction of the terms' sum E is rounding noise, and the triangle is treated as having E = 0.
+_CANCELLED = 1e-10
 
 # Layout of the setup array (float64): the frame, the inward edge normals (local), the reference
 # azimuth, the 5 piece boundaries (offsets from it), each piece's upper and lower constraint
@@ -67,15 +70,16 @@ SETUP_SIZE = 38
 
 @register_jitable
 def _constraint(m: Any, i: int, cos_phi: float, sin_phi: float) -> tuple[float, float, float]:
-    """(kind, rho^2, z^2) of edge i along the ray of azimuth phi: kind 1 r <= rho, -1 r >= rho, 0 any r,
-    2 no r; rho^2 = m_z^2 / (m_z^2 + k^2), z^2 = k^2 / (m_z^2 + k^2) (z at the crossing)."""
+    """(kind, m_z^2, k^2) of edge i along the ray of azimuth phi: kind 1 r <= rho, -1 r >= rho, 0 any r,
+    2 no r; rho^2 = m_z^2 / (m_z^2 + k^2).  Bounds are compared by m_z^2 k'^2 against m_z'^2 k^2 (no
+    rounding of rho^2 to 1 for an edge within 1e-8 of the horizon: its z^2 = k^2 / (m_z^2 + k^2))."""
     mz = m[_M + 3 * i + 2]
     k = m[_M + 3 * i] * cos_phi + m[_M + 3 * i + 1] * sin_phi
     den = mz * mz + k * k
     if mz > 0.0 and k < 0.0:
-        return 1.0, mz * mz / den, k * k / den
+        return 1.0, mz * mz, k * k
     if mz < 0.0 and k > 0.0:
-        return -1.0, mz * mz / den, k * k / den
+        return -1.0, mz * mz, k * k
     if mz >= 0.0 and k >= 0.0 and den > 0.0:
         return 0.0, 0.0, 1.0
     return 2.0, 0.0, 1.0
@@ -204,14 +208,18 @@ def projected_triangle_setup(verts: Any, normal: Any) -> Any:
     if count < 3:
         return s
     # Lambert: E = 1/2 sum gamma_e n.unit(p x q) over the clipped polygon's edges
-    e = 0.0
+    e, scale = 0.0, 0.0
     for k in range(count):
         p, q = poly[k], poly[(k + 1) % count]
         dx, dy, dz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
         cx, cy, cz = p[1] * dz - p[2] * dy, p[2] * dx - p[0] * dz, p[0] * dy - p[1] * dx
         sin_g = math.sqrt(cx * cx + cy * cy + cz * cz)
         if sin_g > 0.0:
-            e += 0.5 * math.atan2(sin_g, p[0] * q[0] + p[1] * q[1] + p[2] * q[2]) * cz / sin_g
+            term = 0.5 * math.atan2(sin_g, p[0] * q[0] + p[1] * q[1] + p[2] * q[2]) * cz / sin_g
+            e += term
+            scale += abs(term)
+    if not e > _CANCELLED * scale:  # E within its rounding error of 0: an edge-on triangle, nothing to sample
+        return s
     # the pieces: azimuth offsets of the clipped vertices from the first one's, sorted
     phi0 = math.atan2(poly[0, 1], poly[0, 0])
     s[_PHI0] = phi0
@@ -229,18 +237,19 @@ def projected_triangle_setup(verts: Any, normal: Any) -> Any:
         s[_S + j] = a_
         mid = phi0 + 0.5 * (a_ + b_)
         cm, sm = math.cos(mid), math.sin(mid)
-        hi, lo, rho_hi, rho_lo, empty = 3, 3, 1.0, 0.0, False
+        # the bounds as (m_z^2, k^2): the horizon (1, 0), no lower bound (0, 1)
+        hi, lo, mh, kh, ml, kl, empty = 3, 3, 1.0, 0.0, 0.0, 1.0, False
         for i in range(3):
-            kind, rho2, _ = _constraint(s, i, cm, sm)
-            if kind == 1.0 and rho2 < rho_hi:
-                hi, rho_hi = i, rho2
-            elif kind == -1.0 and rho2 > rho_lo:
-                lo, rho_lo = i, rho2
+            kind, mz2, k2 = _constraint(s, i, cm, sm)
+            if kind == 1.0 and mz2 * kh < mh * k2:
+                hi, mh, kh = i, mz2, k2
+            elif kind == -1.0 and mz2 * kl > ml * k2:
+                lo, ml, kl = i, mz2, k2
             elif kind == 2.0:
                 empty = True
         s[_HI + j], s[_LO + j] = hi, lo
         s[_C + j] = cumulative
-        if not empty and rho_hi > rho_lo and b_ > a_:
+        if not empty and mh * kl > ml * kh and b_ > a_:
             cumulative += max(_piece_area(s, j, b_), 0.0)
     s[_S + 4] = _TWO_PI
     s[_C + 4] = cumulative
@@ -325,6 +334,15 @@ def projected_triangle_uv(x: float, y: float, z: float, s: Any) -> tuple[float, 
 
     u is the area of the pieces before the direction's azimuth over E's sum of pieces, v the place of
     r^2 between r_lo^2 and r_hi^2 on its ray (from r^2 near the pole, from z^2 near the horizon).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import projected_triangle_point, projected_triangle_setup, projected_triangle_uv
+    >>> s = projected_triangle_setup(np.eye(3), np.array([0, 0, 1.0]))
+    >>> x, y, z, _ = projected_triangle_point(0.3, 0.7, s)
+    >>> bool(np.allclose(projected_triangle_uv(x, y, z, s), (0.3, 0.7)))
+    True
     """
     total = s[_C + 4]
     if not s[_E] > 0.0:
@@ -365,7 +383,18 @@ def projected_triangle_uv(x: float, y: float, z: float, s: Any) -> tuple[float, 
 @register_jitable
 def projected_triangle_density(x: float, y: float, z: float, s: Any) -> float:
     """max(0, n.d) / E for the direction d = (x, y, z) in the triangle (each edge's plane within 1e-12),
-    0 elsewhere and when E = 0."""
+    0 elsewhere and when E = 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from symsphere.warps import projected_triangle_density, projected_triangle_setup
+    >>> s = projected_triangle_setup(np.eye(3), np.array([0, 0, 1.0]))   # an octant: E = pi / 4
+    >>> bool(np.isclose(projected_triangle_density(0.0, 0.0, 1.0, s), 4 / np.pi))
+    True
+    >>> projected_triangle_density(0.0, 0.0, -1.0, s)
+    0.0
+    """
     if not s[_E] > 0.0:
         return 0.0
     lx, ly, lz = _local(s, x, y, z)
