@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import qmc
 
+import symsphere
 from symsphere import METHODS, integrate
 from symsphere.points import BLOCK
 
@@ -158,3 +159,12 @@ def test_sobol_balance_warning_once_at_the_callers_line():
     balance = [w for w in caught if "balance" in str(w.message)]
     assert len(balance) == 1
     assert balance[0].filename == __file__
+
+
+# --- f of shape (m, 0) ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("options", [dict(n=96), dict(atol=1e-2)])
+def test_integrate_rejects_empty_components(options):
+    with pytest.raises(ValueError, match="'f' must return shape"):
+        symsphere.integrate(lambda d: np.zeros((len(d), 0)), rng=1, **options)
