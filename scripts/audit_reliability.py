@@ -385,7 +385,7 @@ ABSURD = [
     (["render", "--width", str(2**31), "--height", str(2**31)], "--width * --height"),
     (["render", "--spp", str(10**15)], "--spp"),
     (["render", "--spp", str(10**13)], "--allow-long"),
-    # more than a day, and (below ~600 GB of memory) more partial sums than memory holds, said first
+    # more than a day, and (below ~1.2 TB of memory) more partial sums than memory holds, said first
     (["integrate", "--integrand", "exp", "--n", str(48 * 10**13)], ("--allow-long", "'--n'")),
     (["sample", "--n", str(48 * 10**13), "--out", "x.npy"], "--allow-long"),
     (["sample", "--n", str(48 * 2**64), "--out", "x.npy"], "'n'"),
