@@ -53,12 +53,10 @@ from symsphere._fused import call_vector, call_xyz
 from symsphere._kernels import (
     BATCH,
     map_batch,
-    pcg64_advanced,
-    pcg64_random,
-    pcg64_seeded,
     prepare_kernels,
     rotated_weights,
 )
+from symsphere._random.pcg64 import pcg64_advanced, pcg64_random, pcg64_seeded
 from symsphere.integrands import INTEGRANDS
 from symsphere.points import BasePoints
 

@@ -407,10 +407,8 @@ def profile_cases(n, rng):
         fill_orbits,
         fill_random_orbits,
         part_bounds,
-        pcg64_advanced,
-        pcg64_random,
-        pcg64_seeded,
     )
+    from symsphere._random.pcg64 import pcg64_advanced, pcg64_random, pcg64_seeded
     from symsphere.points import BasePoints
 
     @njit(parallel=True, cache=False)

@@ -57,7 +57,7 @@ DEFAULT_FILES = ("README.md", "docs/*.md", "docs/*/*.md", "benchmarks/*.md")
 SAMPLING_CODE = (
     "src/symsphere/_kernels.py", "src/symsphere/_blocks.py", "src/symsphere/sampling.py",
     "src/symsphere/points.py", "src/symsphere/frames.py", "src/symsphere/_threads.py",
-    "src/symsphere/_splitmix.py", "src/symsphere/warps/", "src/symsphere/_validation/",
+    "src/symsphere/_random/", "src/symsphere/warps/", "src/symsphere/_validation/",
 )  # fmt: skip
 
 

@@ -8,7 +8,7 @@ optimisation starts from a grey wall and minimises the mean squared difference t
 Adam, every gradient by ``mi.render`` + ``dr.backward`` through ``symsphere_path`` (path replay, here
 with the ``symmetric_cosine`` strategy), a new seed at every step.  ``optimize()`` returns the
 reflectance error (the largest over R, G, B) at the start and the end: the measure of convergence, since
-the loss soon reaches the noise floor of the two Monte Carlo images.  tests/mitsuba/test_plugin.py runs
+the loss soon reaches the noise floor of the two Monte Carlo images.  tests/mitsuba/test_integrator.py runs
 it small.
 """
 

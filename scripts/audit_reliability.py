@@ -94,7 +94,7 @@ def _render_table(folder):
         (
             "plan_passes",
             rd.plan_passes,
-            dict(scene="furnace", width=4, height=3, spp=2, sampler="cosine", method=None, pixel_filter="box", seed=1),
+            dict(scene="furnace", width=4, height=3, spp=2, strategy="cosine", method=None, pixel_filter="box", seed=1),
         ),  # fmt: skip
         ("load_scene", rd.load_scene, dict(path=scene)),
         ("load_pfm", rd.load_pfm, dict(path=pfm)),

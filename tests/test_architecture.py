@@ -7,6 +7,9 @@
   listed in a public module's ``__all__`` is defined there, or in a private module behind exactly
   one public module; package ``__init__``s gather names for their documented namespaces);
 - the tests reach private modules only through ``symsphere._testing`` (docs/explanation/testing.md);
+- the tests mirror the modules: ``tests/<folders>/test_<name>.py`` tests ``symsphere/<folders>/<name>.py``
+  or ``_<name>.py`` (or the package ``<name>/``); the tests of the package as a whole are listed in
+  ``PACKAGE_TESTS``;
 - the tests' seeds are fixed: none comes from ``hash()``, ``id()``, the clock or the process id.
 """
 
@@ -252,6 +255,46 @@ def _private_uses(path: Path) -> list[str]:
 )
 def test_tests_reach_internals_only_through_the_testing_hook(path):
     assert _private_uses(path) == []
+
+
+# Tests of the package as a whole (or of the repository around it), not of one module: its layout and
+# typing, the docs and the site, packaging, the pinned public outputs, the property-based error
+# contract of every public function, examples and first contact, the statistical uniformity of every
+# sampler.  The reliability rounds' files are being moved into the files of the modules they exercise.
+PACKAGE_TESTS = {
+    "test_architecture.py", "test_typing.py", "test_docs.py", "test_site.py", "test_gallery.py",
+    "test_examples.py", "test_packaging.py", "test_benchmark_tables.py", "test_public_outputs.py",
+    "test_properties.py", "test_properties_apps.py", "test_ux.py", "test_without_mitsuba.py",
+    "statistical/test_uniformity.py", "test_reliability.py", "test_reliability3.py",
+}  # fmt: skip
+
+
+def _tested_module(test: Path, package: Path = PACKAGE) -> Path | None:
+    """The module a test file is named after (``tests/a/test_b.py``: ``a/b.py``, ``a/_b.py`` or the package
+    ``a/b/``, under *package*), or None."""
+    name = test.stem.removeprefix("test_")
+    folder = package.joinpath(*test.parent.relative_to(TESTS).parts)
+    for candidate in (folder / f"{name}.py", folder / f"_{name}.py", folder / name / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+@pytest.mark.parametrize("path", sorted(TESTS.rglob("test_*.py")), ids=lambda p: str(p.relative_to(TESTS)))
+def test_each_test_file_is_named_after_its_module(path):
+    relative = path.relative_to(TESTS).as_posix()
+    assert relative in PACKAGE_TESTS or _tested_module(path) is not None, (
+        f"tests/{relative} is named after no module of symsphere: name it tests/<folders>/test_<module>.py "
+        "after the module it tests (merge it into that file if one exists), or list it in PACKAGE_TESTS"
+    )
+
+
+def test_the_layout_check_sees_a_misnamed_test():
+    assert _tested_module(TESTS / "warps" / "test_triangle.py") == PACKAGE / "warps" / "_triangle.py"
+    assert _tested_module(TESTS / "apps" / "test_study.py") == PACKAGE / "apps" / "study" / "__init__.py"
+    assert _tested_module(TESTS / "test_io.py") == PACKAGE / "io" / "__init__.py"
+    assert _tested_module(TESTS / "test_tolerance.py") is None  # integration to a tolerance: test_integration.py
+    assert _tested_module(TESTS / "test_integrate_auto.py") is None  # integrate(method="auto"): test_auto.py
 
 
 def test_the_hook_check_sees_a_private_import(tmp_path):

@@ -44,7 +44,6 @@ API_INDEX = ROOT / "docs" / "api" / "index.rst"
 NOT_DOCUMENTED = {
     "symsphere.apps": "a package of applications without names of its own; its modules have pages",
     "symsphere.mitsuba": "needs Mitsuba 3 (the extra 'mitsuba', not in the docs build); docs/reference/mitsuba-plugin.md documents it",
-    "symsphere.apps.study.compiled": "the study's compiled peer samplers, an internal of the study; docs/results/study-qmc.md describes them",
     "symsphere.apps.mitsuba_render": "the render verb's Mitsuba scene files; symsphere render --help and docs/reference/mitsuba-plugin.md",
     "symsphere.apps.render_command": "the render verb of symsphere.apps.cli (its parser and handlers); symsphere render --help",
     "symsphere.render.image": "its public names are documented on the symsphere.render page",
@@ -54,7 +53,7 @@ NOT_DOCUMENTED = {
     "symsphere.render.scenes": "its public names are documented on the symsphere.render page",
     **{
         f"symsphere.apps.study.{name}": "the study's internals; symsphere.apps.study documents its interface"
-        for name in ("command", "config", "figures", "report", "results", "run", "samplers")
+        for name in ("command", "config", "figures", "findings", "report", "results", "run", "samplers")
     },
 }
 
@@ -84,7 +83,7 @@ def has_examples(doc):
 
 
 def doc_comment(module_name, name, _seen=None):
-    """The doc comment of constant *name* of a module, following ``from .x import name``; or None."""
+    """The doc comment of constant *name* of a module, following ``from .x import name`` (or ``*``); or None."""
     _seen = set() if _seen is None else _seen
     if (module_name, name) in _seen:
         return None
@@ -108,8 +107,12 @@ def doc_comment(module_name, name, _seen=None):
                     return following.value.value
         if isinstance(node, ast.ImportFrom):
             for alias in node.names:
-                if (alias.asname or alias.name) == name:
-                    source = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+                source = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+                if alias.name == "*" and name in getattr(importlib.import_module(source), "__all__", ()):
+                    found = doc_comment(source, name, _seen)
+                    if found:
+                        return found
+                elif (alias.asname or alias.name) == name:
                     found = doc_comment(source, alias.name, _seen)
                     if found:
                         return found

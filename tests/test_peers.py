@@ -1,7 +1,7 @@
 """The peer samplers: registry, conventions, densities, and their distributions.
 
 The peers' maps of the unit square are tested in tests/warps/ (one file per module, and the contract
-every warp keeps in tests/warps/test_contract.py).
+every warp keeps in tests/warps/test_registry.py).
 
 Statistical tests use significance 0.01 with a Sidak correction over the
 CHI2_TESTS chi-square (and two-sample) tests of this file and of
@@ -426,3 +426,16 @@ def test_peer_estimate_is_the_weighted_mean():
         )
     d = P.sample_lebedev(590)
     assert P.PEERS["lebedev"].estimate(f, 590) == float(np.sum(P.lebedev_weights(590) * f(d)))
+
+
+def test_peer_over_a_warp_takes_its_facts():
+    # A peer over a map is a record over the warp: its sampler, density, uniformity and reference are the
+    # warp's, and it samples what the warp samples.
+    for name, peer in P.PEERS.items():
+        if peer.warp is not None and peer.warp.domain == peer.domain:
+            assert P.Peer.over(peer.warp, name=name) == peer
+            np.testing.assert_array_equal(
+                peer.sample(64, rng=3, points="halton"), peer.warp.sample(64, rng=3, points="halton")
+            )
+    with pytest.raises(ValueError, match="'warp'"):
+        P.Peer.over(warps.WARPS["equal_area"], name="t0")

@@ -60,7 +60,7 @@ def folder(tmp_path_factory):
 def tiny():
     """A 4 x 3, 2-sample render (compiles the kernels before the deadlines apply) and its plan."""
     result = rd.render("furnace", width=4, height=3, spp=2, seed=1)
-    plan = rd.plan_passes("furnace", 4, 3, 2, "symmetric_sobol", None, "box", 1)
+    plan = rd.plan_passes("furnace", 4, 3, 2, strategy="symmetric", points="sobol", seed=1)
     return result, plan
 
 
@@ -279,7 +279,7 @@ def test_builtin_scenes_are_finite(function):
 
 # --- symsphere.render: rendering ----------------------------------------------------------------------
 
-RENDER = dict(scene="furnace", width=4, height=3, spp=2, sampler="symmetric_sobol", method=None,
+RENDER = dict(scene="furnace", width=4, height=3, spp=2, strategy="symmetric", points="sobol", method=None,
               pixel_filter="box", seed=1, threads=1, progress=False, integrator="path")  # fmt: skip
 
 
@@ -498,7 +498,7 @@ EXCLUDED = {
     "symsphere.render.RenderPlan": "built by plan_passes (tested); render_passes gets one",
     "symsphere.render.SceneError": "the exception type itself",
     "symsphere.Scheme": "the engine behind sample_sphere/sample_hemisphere/iter_* (property-tested through them: "
-    "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_engine.py",
+    "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_sampling.py",
 }
 # Whole modules left out: the applications.  Their contract (one line on stderr, exit status 2 for bad
 # arguments, never a traceback) is tested through symsphere.apps.cli.main in tests/apps/ (hostile scene

@@ -1,4 +1,17 @@
-"""The scheme: layout of the orbits, point sets, determinism, dtypes, out=, normals, pdfs, bad input."""
+"""The scheme: layout of the orbits, point sets, determinism, dtypes, out=, normals, pdfs, bad input.
+
+Any size: sample_sphere(n) and sample_hemisphere(n) for every positive n.
+
+Whole orbits first, the last orbit cut short (from a random member on).  The statistical test uses significance 0.01 with a Sidak
+correction over the CHI2_TESTS tests of this file (one per row of a cut orbit: 47 on the sphere, 23 on
+the hemisphere); the reference density is ``uniform_pdf``, a constant, independent of the maps.
+
+The sampling engine ``symsphere.Scheme``: its stream, reset, fast_forward, blocks, pdf, out=/dtype=, errors.
+
+The functions of :mod:`symsphere.sampling` are one call on a fresh engine each; their outputs are
+pinned bit for bit by tests/test_public_outputs.py, so here the engine is compared with them and
+with itself (a stream split into calls against the same stream in one call).
+"""
 
 import time
 import warnings
@@ -11,6 +24,7 @@ from scipy.stats import qmc
 import symsphere
 from symsphere import (
     METHODS,
+    Scheme,
     fold,
     harmonics,
     hemisphere_pdf,
@@ -25,7 +39,11 @@ from symsphere import (
     triangle_to_square,
     warps,
 )
+from symsphere._testing import kernels
 from symsphere.frames import frame
+from symsphere.points import BasePoints
+from symsphere.stats import chi2_test, uniform_pdf
+from symsphere.symmetry import orbit_size
 
 SAMPLERS = [(sample_sphere, 48, "sphere"), (sample_hemisphere, 24, "hemisphere")]
 
@@ -358,3 +376,311 @@ def test_zero_and_non_unit_vectors_are_rejected():
     ):
         with pytest.raises(ValueError, match="unit vectors"):
             call()
+
+
+SIGNIFICANCE = 0.01
+CHI2_TESTS = 47 + 23
+CALLS = 3000  # independent cut orbits per row
+
+
+@pytest.mark.parametrize("n", [1, 5, 47, 49, 95, 100, 1000])
+@pytest.mark.parametrize("points", ["random", "sobol", "halton"])
+def test_sphere_any_n_is_a_prefix_of_whole_orbits(n, points):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # Sobol' balance
+        d = sample_sphere(n, points=points, rng=3)
+        whole = sample_sphere(48 * -(-n // 48), points=points, rng=3)
+    assert d.shape == (n, 3) and d.dtype == np.float64
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+    _check_cut(d, whole, 48)
+
+
+def _check_cut(d, whole, count):
+    """The same base points: the whole orbits unchanged, then distinct members of the next orbit."""
+    n = len(d)
+    full = n - n % count
+    assert np.array_equal(d[:full], whole[:full])
+    cut, orbit = d[full:], whole[full : full + count]
+    matches = np.all(cut[:, None, :] == orbit[None, :, :], axis=-1)  # (rows of the cut, members)
+    assert np.all(matches.sum(axis=1) >= 1)  # every row is a member of that orbit ...
+    assert len(set(np.argmax(matches, axis=1).tolist())) == len(cut)  # ... and no member twice
+
+
+@pytest.mark.parametrize("n", [1, 7, 23, 25, 50])
+def test_hemisphere_any_n(n):
+    normal = [0.0, 0.6, 0.8]
+    d = sample_hemisphere(n, normal=normal, rng=4)
+    assert d.shape == (n, 3)
+    _check_cut(d, sample_hemisphere(24 * -(-n // 24), normal=normal, rng=4), 24)
+    assert np.all(d @ np.array(normal) >= -1e-12)
+
+
+@pytest.mark.parametrize("n", [101, 48 * 400 + 5])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_out_and_dtype_for_any_n(dtype, n):
+    out = np.full((n, 3), np.nan, dtype=dtype)
+    assert sample_sphere(n, rng=5, dtype=dtype, out=out) is out
+    fresh = sample_sphere(n, rng=5, dtype=dtype)
+    assert np.array_equal(out, fresh) and fresh.base is None  # a fresh array of n rows, not a view of more
+    assert np.all(np.isfinite(out))
+    with pytest.raises(ValueError, match="'out' must have shape"):
+        sample_sphere(101, out=np.empty((96, 3), dtype=dtype), dtype=dtype)
+
+
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+@pytest.mark.parametrize("rest, offset", [(1, 0), (5, 3), (5, -2), (-1, 7)])
+def test_cut_orbit_is_made_in_the_kernel_call(count, normal, rest, offset):
+    # The kernels cut the last orbit themselves (one call, no copy): the rows are those of the whole
+    # orbits, then members (offset + i) % count of the last one, bit for bit, whatever the number of parts.
+    rest, offset = rest % count, offset % count
+    m = 40  # points: more than one batch of the kernels per part
+    basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
+    source = BasePoints("random", 11, total=m + 3)
+    members = (m - 1) * count + (offset + np.arange(rest)) % count
+    for dtype in (np.float64, np.float32):
+        whole = kernels.fill_random_orbits(
+            source.seed_words, 3, m, "equal_area", count, basis, np.empty((m * count, 3), dtype)
+        )
+        expected = np.concatenate([whole[: (m - 1) * count], whole[members]])
+        for parts in (1, 2, 3, 7):
+            got = np.full(((m - 1) * count + rest, 3), np.nan, dtype)
+            kernels.fill_random_orbits(
+                source.seed_words, 3, m, "equal_area", count, basis, got, parts=parts, offset=offset
+            )
+            assert np.array_equal(got, expected)
+            got[:] = np.nan
+            kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)
+            assert np.array_equal(got, expected)
+
+
+def test_stratified_needs_a_square_number_of_orbits():
+    assert sample_sphere(48 * 15 + 1, points="stratified", rng=0).shape == (721, 3)  # 16 orbits, a square
+    with pytest.raises(ValueError):
+        sample_sphere(48 * 16 + 1, points="stratified", rng=0)  # 17 orbits
+
+
+def test_bad_n_still_rejected():
+    for n, error in [(0, ValueError), (-48, ValueError), (4.5, TypeError), (True, TypeError)]:
+        with pytest.raises(error, match="'n'"):
+            sample_sphere(n)
+    with pytest.raises(ValueError, match="not a multiple of 48"):
+        iter_sphere(100)  # the streaming samplers stay in whole orbits
+
+
+def test_sobol_warning_is_attributed_to_the_caller():
+    # the balance warning pointed at a line of symsphere/sampling.py.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sample_sphere(48 * 6, points="sobol", rng=0)
+    assert [w.filename for w in caught if "power of 2" in str(w.message)] == [__file__]
+
+
+@pytest.mark.slow
+@pytest.mark.statistical
+@pytest.mark.parametrize("count", [48, 24])
+def test_every_row_of_a_cut_orbit_is_uniform(count):
+    # n = count - 1: no whole orbit, one orbit cut to count - 1 members from a random offset.  CALLS independent runs
+    # give, for each row, CALLS independent directions; each row is tested on its own.  (Row k of a whole
+    # orbit lies in triangle k: the cut orbit's rows are uniform only because its members are random.)
+    sampler, domain = (sample_sphere, "sphere") if count == 48 else (sample_hemisphere, "hemisphere")
+    rows = np.stack([sampler(count - 1, rng=seed) for seed in range(CALLS)], axis=1)  # (row, run, 3)
+    for row, directions in enumerate(rows):
+        result = chi2_test(directions, uniform_pdf(domain), domain, significance=SIGNIFICANCE, test_count=CHI2_TESTS)
+        assert result.passed, f"row {row}: {result}"
+
+
+def test_cut_orbit_members_are_random():
+    # Row k of a whole orbit is always in triangle k; the rows of a cut orbit are not tied to a triangle.
+    triangles = np.array([fold(sample_sphere(5, rng=seed))[0] for seed in range(200)])  # (run, row)
+    assert all(len(np.unique(triangles[:, row])) > 30 for row in range(5))
+    assert all(len(set(run)) == 5 for run in triangles.tolist())
+
+
+DOMAINS = ["sphere", "hemisphere"]
+STREAMS = ["random", "sobol", "halton", "sobol_interlaced2", "sobol_interlaced3"]
+
+
+def _one_call(domain, n, **kwargs):
+    sampler = sample_sphere if domain == "sphere" else sample_hemisphere
+    return sampler(n, **kwargs)
+
+
+@pytest.mark.parametrize("domain", DOMAINS)
+@pytest.mark.parametrize("points", STREAMS)
+def test_the_stream_continues_across_calls(domain, points):
+    count = orbit_size(domain)
+    a, b = 4 * count, 3 * count + 5  # a a multiple of the orbit size, b any
+    scheme = Scheme(domain, points=points, rng=11)
+    split = np.concatenate([scheme.random(a), scheme.random(b)])
+    assert np.array_equal(split, Scheme(domain, points=points, rng=11).random(a + b))
+    assert np.array_equal(split, _one_call(domain, a + b, points=points, rng=11))
+
+
+@pytest.mark.parametrize("domain", DOMAINS)
+def test_a_cut_orbit_uses_up_its_base_point(domain):
+    count = orbit_size(domain)
+    scheme = Scheme(domain, rng=4)
+    first = scheme.random(count + 1)  # one whole orbit and one member of the second
+    after = scheme.random(count)
+    whole = Scheme(domain, rng=4).random(3 * count)
+    assert np.array_equal(first[:count], whole[:count])
+    assert np.array_equal(after, whole[2 * count :])
+
+
+@pytest.mark.parametrize("domain", DOMAINS)
+@pytest.mark.parametrize("points", ["random", "sobol", "stratified"])
+def test_reset_starts_the_stream_again(domain, points):
+    count = orbit_size(domain)
+    scheme = Scheme(domain, points=points, rng=2)
+    first = scheme.random(16 * count)
+    assert np.array_equal(scheme.reset().random(16 * count), first)
+    assert np.array_equal(first, _one_call(domain, 16 * count, points=points, rng=2))
+
+
+def test_stratified_points_are_one_grid_per_call():
+    scheme = Scheme(points="stratified", rng=0)
+    scheme.random(48 * 4)
+    with pytest.raises(ValueError, match="reset"):
+        scheme.random(48 * 4)
+    with pytest.raises(ValueError, match="stratified"):
+        scheme.fast_forward(48)
+
+
+@pytest.mark.parametrize("domain", DOMAINS)
+@pytest.mark.parametrize("points", ["random", "halton"])
+def test_fast_forward_skips_whole_orbits(domain, points):
+    count = orbit_size(domain)
+    scheme = Scheme(domain, points=points, rng=9).fast_forward(5 * count)
+    assert np.array_equal(
+        scheme.random(2 * count + 3), Scheme(domain, points=points, rng=9).random(7 * count + 3)[5 * count :]
+    )
+    assert np.array_equal(Scheme(domain, rng=9).fast_forward(0).random(count), Scheme(domain, rng=9).random(count))
+
+
+@pytest.mark.parametrize("domain", DOMAINS)
+def test_blocks_are_the_stream_in_pieces(domain):
+    count = orbit_size(domain)
+    scheme = Scheme(domain, rng=6)
+    scheme.random(count)
+    pieces = list(scheme.blocks(10 * count, chunk=3 * count))
+    assert [len(p) for p in pieces] == [3 * count] * 3 + [count]
+    following = scheme.random(count)  # the blocks moved the stream past their rows at the call
+    whole = Scheme(domain, rng=6).random(12 * count)
+    assert np.array_equal(np.concatenate(pieces), whole[count : 11 * count])
+    assert np.array_equal(following, whole[11 * count :])
+
+
+def test_blocks_fill_out_and_match_iter_sphere():
+    out = np.empty((48 * 20, 3), np.float32)
+    pieces = list(Scheme(dtype=np.float32, rng=1).blocks(48 * 20, 48 * 8, out=out))
+    assert all(np.shares_memory(p, out) for p in pieces)
+    assert np.array_equal(out, np.concatenate(list(iter_sphere(48 * 20, chunk=48 * 8, dtype=np.float32, rng=1))))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_out_and_dtype_as_generator_random(dtype):
+    scheme = Scheme("hemisphere", normal=[1.0, 2.0, -2.0], dtype=dtype, rng=5)
+    out = np.empty((100, 3), dtype)
+    assert scheme.random(100, out=out) is out
+    assert np.array_equal(out, sample_hemisphere(100, normal=[1.0, 2.0, -2.0], dtype=dtype, rng=5))
+    assert scheme.random(7).dtype == dtype
+    other = np.float64 if dtype == np.float32 else np.float32
+    with pytest.raises(TypeError, match="'out'"):
+        scheme.random(10, out=np.empty((10, 3), other))
+    with pytest.raises(ValueError, match="'out'"):
+        scheme.random(10, out=np.empty((11, 3), dtype))
+    with pytest.raises(ValueError, match="'out'"):
+        scheme.random(10, out=np.empty((3, 10), dtype).T)
+
+
+def test_a_generator_advances_as_one_sampling_call_advances_it():
+    for points in ("random", "sobol"):
+        g1, g2 = np.random.default_rng(3), np.random.default_rng(3)
+        scheme = Scheme(points=points, rng=g1)
+        first = sample_sphere(96, points=points, rng=g2)
+        assert g1.random() == g2.random()  # the same draw, at construction
+        assert np.array_equal(scheme.random(96), first)
+
+
+ENGINES = [
+    lambda: qmc.Sobol(d=2, rng=np.random.default_rng(1)),
+    lambda: qmc.Halton(d=2, rng=np.random.default_rng(1)),
+    lambda: qmc.LatinHypercube(d=2, rng=np.random.default_rng(1)),
+    lambda: qmc.PoissonDisk(d=2, radius=0.05, rng=np.random.default_rng(1)),
+]
+
+
+@pytest.mark.parametrize("make", ENGINES, ids=["Sobol", "Halton", "LatinHypercube", "PoissonDisk"])
+def test_every_qmc_engine_as_points(make):
+    got = Scheme(points=make(), rng=0).random(48 * 8)
+    assert np.array_equal(got, sample_sphere(48 * 8, points=make(), rng=0))
+    np.testing.assert_allclose(np.linalg.norm(got, axis=1), 1.0, atol=1e-15)
+
+
+@pytest.mark.filterwarnings("ignore:The balance properties of Sobol")
+@pytest.mark.parametrize("make", ENGINES[:2], ids=["Sobol", "Halton"])
+def test_a_sequence_engine_continues_from_where_the_user_left_it(make):
+    engine = make()
+    engine.random(5)  # the engine's own position is the stream's start
+    scheme = Scheme(points=engine, rng=0)
+    split = np.concatenate([scheme.random(48 * 4), scheme.random(48 * 3)])
+    reference = make()
+    reference.random(5)
+    assert np.array_equal(split, sample_sphere(48 * 7, points=reference, rng=0))
+
+
+@pytest.mark.parametrize("method", ["equal_area", "paper1", "paper2"])
+def test_pdf_is_the_functions_pdf(method):
+    d = sample_sphere(480, rng=8)
+    assert np.array_equal(Scheme(method=method).pdf(d), sphere_pdf(d, method))
+    normal = [0.3, -1.0, 0.2]
+    e = sample_hemisphere(480, normal=normal, dtype=np.float32, rng=8)
+    got = Scheme("hemisphere", method=method, normal=normal).pdf(e)
+    assert got.dtype == np.float32
+    assert np.array_equal(got, hemisphere_pdf(e, method, normal))
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, named",
+    [
+        ({"domain": "torus"}, ValueError, "domain"),
+        ({"method": "polar"}, ValueError, "polar"),
+        ({"points": "grid"}, ValueError, "grid"),
+        ({"normal": [0, 0, 1]}, ValueError, "'normal'"),
+        ({"domain": "hemisphere", "normal": [0, 0, 0]}, ValueError, "'normal'"),
+        ({"dtype": np.int32}, TypeError, "'dtype'"),
+        ({"rng": "seed"}, TypeError, "'rng'"),
+        ({"rng": -1}, ValueError, "'rng'"),
+    ],
+)
+def test_bad_arguments_are_named_at_construction(kwargs, error, named):
+    with pytest.raises(error, match=named):
+        Scheme(**kwargs)
+
+
+def test_bad_counts_are_named():
+    scheme = Scheme("hemisphere", rng=0)
+    with pytest.raises(ValueError, match="'n'"):
+        scheme.random(0)
+    with pytest.raises(TypeError, match="'n'"):
+        scheme.random(2.5)
+    with pytest.raises(ValueError, match="'n'"):
+        scheme.fast_forward(25)
+    with pytest.raises(ValueError, match="'n_total'"):
+        scheme.blocks(25)
+    with pytest.raises(ValueError, match="'chunk'"):
+        scheme.blocks(48, chunk=25)
+    assert np.array_equal(scheme.random(24), Scheme("hemisphere", rng=0).random(24))  # errors moved nothing
+
+
+def test_the_domain_message_lists_the_choices_sorted():
+    with pytest.raises(ValueError, match=r"use one of \{'hemisphere', 'sphere'\}"):
+        Scheme("torus")
+
+
+def test_repr_names_the_configuration_and_position():
+    scheme = Scheme("hemisphere", normal=[0, 0, 2], dtype=np.float32, rng=0)
+    scheme.random(48)
+    assert repr(scheme) == (
+        "Scheme('hemisphere', method='equal_area', points='random', normal=[0.0, 0.0, 1.0], dtype=float32, position=2)"
+    )

@@ -43,7 +43,7 @@ import dataclasses
 import math
 import warnings
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -62,11 +62,11 @@ from ._integration import (
     stage_result,
 )
 from ._lebedev import LEBEDEV_SIZES, lebedev_weights, sample_lebedev
-from ._typing import Float64Array, PointsLike, RNGLike
+from ._typing import Domain, Float64Array, PointsLike, RNGLike
 from ._validation import check_choice, check_count, check_nonnegative, check_normal, check_rng, check_rtol, short_repr
 from .peers import fibonacci_points
 from .points import BLOCK, check_points
-from .symmetry import DOMAINS
+from .symmetry import DOMAINS, orbit_size
 
 __all__ = ["FAMILIES", "RULE_METHODS", "LEBEDEV_LADDER", "haar_rotations", "integrate_rules"]
 
@@ -220,7 +220,7 @@ class _Scheme(_Family):
     ):
         units = 1 if points == "random" else replicates
         super().__init__(units)
-        self.count = 48 if domain == "sphere" else 24
+        self.count = orbit_size(cast(Domain, domain))
         self.first = 16 if points == "random" else 1  # orbits (per replicate) of the first stage
         orbits = self.first
         while self.count * units * orbits * 2 <= n_max:
@@ -340,7 +340,7 @@ def integrate_rules(
             "'points' with method='auto' must be nested and randomised: one of 'halton', 'random', 'sobol', "
             f"'sobol_interlaced2', 'sobol_interlaced3'; got {short_repr(scheme_points)}"
         )
-    count = 48 if domain == "sphere" else 24
+    count = orbit_size(cast(Domain, domain))
     to_tolerance = atol is not None or rtol is not None
     atol_value = 0.0 if atol is None else check_nonnegative(atol, "atol")
     rtol_value = 0.0 if rtol is None else check_rtol(rtol, "rtol")

@@ -20,7 +20,7 @@ import math
 
 __all__ = [
     "INV_PI", "INV_2PI", "INV_4PI", "SPHERE_AREA", "HEMISPHERE_AREA", "T0_DENSITY", "GOLDEN_BITS",
-    "TWO_POW_M53",
+    "TWO_POW_M53", "BASE_U", "BASE_V",
 ]  # fmt: skip
 
 INV_PI = 1.0 / math.pi
@@ -47,5 +47,13 @@ increment and the Fibonacci lattice's fraction, in 64 bits."""
 
 TWO_POW_M53 = 2.0**-53
 """2**-53: numpy's ``next_double`` step (a double in [0, 1) from the top 53 bits of a uint64)."""
+
+BASE_U = 0x2545F4914F6CDD1D
+"""The tag that derives a group's base-point coordinate u from its key (``mix64(key ^ BASE_U)``): the
+symmetric strategies with random points, in the numba renderer and in ``symsphere_path`` alike (the same
+directions from the same key)."""
+
+BASE_V = 0x5851F42D4C957F2D
+"""The tag of the coordinate v, as :data:`BASE_U` (distinct tags: u and v independent)."""
 
 assert GOLDEN_BITS == 0x9E3779B97F4A7C15

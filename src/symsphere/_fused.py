@@ -62,14 +62,12 @@ from ._kernels import (
     BATCH,
     METHOD_CODES,
     map_batch,
-    pcg64_advanced,
-    pcg64_random,
-    pcg64_seeded,
     prepare_kernels,
     rotated_weights,
     triangle_density,
 )
 from ._numba_cache import invalidate_if_changed
+from ._random.pcg64 import pcg64_advanced, pcg64_random, pcg64_seeded
 from ._threads import route, route_compiles, run_kernel
 from ._typing import Float64Array, MapMethod
 from .points import BLOCK, BasePoints

@@ -12,16 +12,18 @@ import dataclasses
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from . import frames
-from ._blocks import fill_range, warn_at_caller
+from ._blocks import warn_at_caller
+from ._constants import HEMISPHERE_AREA, SPHERE_AREA
 from ._fused import Compiled, NonFiniteBlock, compiled_integrand, fused_partials, vectorised
-from ._kernels import fill_orbits
-from ._typing import Float64Array, MapMethod, PointsLike, RNGLike
+from ._kernels import Plan as KernelPlan
+from ._kernels import fill, fill_orbits
+from ._typing import Domain, Float64Array, MapMethod, PointsLike, RNGLike
 from ._validation import (
     check_choice,
     check_count,
@@ -34,7 +36,7 @@ from ._validation import (
     short_repr,
 )
 from .points import BLOCK, BasePoints, check_points
-from .symmetry import DOMAINS
+from .symmetry import DOMAINS, orbit_size
 from .warps import triangle_warp
 
 Integrand = Callable[[Float64Array], npt.ArrayLike]
@@ -229,7 +231,7 @@ def plan(
         raise TypeError(f"'f' must be callable, taking an (m, 3) array of directions; got {type(f).__name__}")
     compiled = compiled_integrand(f)
     domain = check_choice(domain, "domain", DOMAINS)
-    count = 48 if domain == "sphere" else 24
+    count = orbit_size(cast(Domain, domain))
     triangle_warp(method)
     engine = check_points(points)
     normal = check_normal(normal)
@@ -337,8 +339,10 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     triangle_map = triangle_warp(plan.method)
     directions = np.empty(((stop - start) * plan.count, 3))
     if triangle_map.uniform:
-        fill_range(source, start, stop, plan.method, plan.count, plan.basis, directions)  # random: drawn in the kernel
-        weight = np.full(stop - start, 4 * np.pi if plan.count == 48 else 2 * np.pi)
+        fill(
+            KernelPlan(source, plan.method, plan.count, plan.basis), start, stop, directions
+        )  # random: drawn in the kernel
+        weight = np.full(stop - start, SPHERE_AREA if plan.domain == "sphere" else HEMISPHERE_AREA)
     else:
         uv = source.take(start, stop)  # the weights need the base points
         fill_orbits(uv, plan.method, plan.count, plan.basis, directions)
@@ -487,7 +491,7 @@ def to_tolerance(
     rtol = 0.0 if rtol is None else check_rtol(rtol, "rtol")
     if atol == 0 and rtol == 0:
         raise ValueError("'atol' or 'rtol' must be positive")
-    count = 48 if check_choice(domain, "domain", DOMAINS) == "sphere" else 24
+    count = orbit_size(cast(Domain, check_choice(domain, "domain", DOMAINS)))
     if check_points(points) is not None:
         raise ValueError(
             "'atol' and 'rtol' need an error estimate, which a QMCEngine does not give "

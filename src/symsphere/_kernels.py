@@ -6,9 +6,8 @@ The map formulas are the elementwise functions of :func:`symsphere.warps.square_
 same tables, so nothing here restates a formula.  The numpy path
 (``warps.Warp.points`` + ``symmetry.orbit`` + ``frames.to_world``) is the
 reference the tests compare against.  Random base points are drawn inside the
-kernel from numpy's PCG64 stream: each part starts from the state numpy's own
-``PCG64.advance`` gives (:func:`pcg64_state`) and steps it as numpy does (tested
-bit for bit against numpy).
+kernel from numpy's PCG64 stream (:mod:`symsphere._random.pcg64`): each part starts
+from the state numpy's own ``PCG64.advance`` gives and steps it as numpy does.
 
 Compile time.  A kernel is specialised at the Python level by (point source,
 map, store): :func:`_fill_kernel` makes one small serial function per case, the
@@ -31,12 +30,11 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import numpy.typing as npt
-from llvmlite import ir
-from numba import get_num_threads, njit, types
-from numba.extending import intrinsic, register_jitable
+from numba import get_num_threads, njit
+from numba.extending import register_jitable
 
-from ._constants import TWO_POW_M53
 from ._numba_cache import invalidate_if_changed
+from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
 from .symmetry import SIGNS, SOURCES, orbit_size
@@ -58,10 +56,6 @@ __all__ = [
     "part_bounds",
     "part_range",
     "part_count",
-    "pcg64_random",
-    "pcg64_advanced",
-    "pcg64_seeded",
-    "pcg64_state",
     "triangle_point",
     "triangle_density",
     "orbit_member",
@@ -115,126 +109,6 @@ def orbit_member(x, y, z, k):
         _SIGNS[k, 1] * base[_SOURCES[k, 1]],
         _SIGNS[k, 2] * base[_SOURCES[k, 2]],
     )
-
-
-# numpy's PCG64 (O'Neill 2014: 128-bit LCG, XSL-RR output), for drawing base points inside
-# the kernels.  numba can call a numpy Generator itself, but through the bit generator's
-# function pointer: measured 3x slower than this inlined step.  Bit for bit numpy's
-# ``Generator(PCG64).random()`` (test_kernels checks it against numpy's own stream).
-_PCG64_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
-_MUL_HI = np.uint64(_PCG64_MULTIPLIER >> 64)
-_MUL_LO = np.uint64(_PCG64_MULTIPLIER & (2**64 - 1))
-_U0, _U1, _U11, _U58, _U63, _U64 = (np.uint64(k) for k in (0, 1, 11, 58, 63, 64))
-_MASK64 = 2**64 - 1
-_MASK128 = 2**128 - 1
-
-
-@intrinsic
-def _mul_high(typingctx, a, b):
-    """The high 64 bits of the 128-bit product of two uint64 (one machine instruction)."""
-
-    def codegen(context, builder, signature, args):
-        wide = ir.IntType(128)
-        product = builder.mul(builder.zext(args[0], wide), builder.zext(args[1], wide))
-        return builder.trunc(builder.lshr(product, ir.Constant(wide, 64)), ir.IntType(64))
-
-    return types.uint64(types.uint64, types.uint64), codegen
-
-
-@register_jitable
-def _mul128(a_hi, a_lo, b_hi, b_lo):
-    """(a * b) mod 2**128 of 128-bit numbers given as (high, low) uint64 halves."""
-    return _mul_high(a_lo, b_lo) + a_hi * b_lo + a_lo * b_hi, a_lo * b_lo  # type: ignore[call-arg]  # an intrinsic
-
-
-@register_jitable
-def _add128(a_hi, a_lo, b_hi, b_lo):
-    """(a + b) mod 2**128."""
-    lo = a_lo + b_lo
-    return a_hi + b_hi + (_U1 if lo < a_lo else _U0), lo
-
-
-@register_jitable
-def _pcg64_step(stream):
-    """state = M state + inc (mod 2**128); returns the new state (high, low)."""
-    hi, lo = _mul128(stream[0], stream[1], _MUL_HI, _MUL_LO)
-    hi, lo = _add128(hi, lo, stream[2], stream[3])
-    stream[0], stream[1] = hi, lo
-    return hi, lo
-
-
-@register_jitable
-def pcg64_random(stream):
-    """Next ``Generator.random()`` of the PCG64 *stream* (uint64[4]: state hi, lo; inc hi, lo)."""
-    hi, lo = _pcg64_step(stream)
-    mixed = hi ^ lo
-    rotation = hi >> _U58
-    bits = (mixed >> rotation) | (mixed << ((_U64 - rotation) & _U63))
-    return np.float64(bits >> _U11) * TWO_POW_M53  # numpy's next_double: 53 bits
-
-
-@register_jitable
-def pcg64_seeded(words):
-    """The stream of numpy's ``PCG64(seed_sequence)``, from ``seed_sequence.generate_state(4,
-    np.uint64)`` (O'Neill's ``pcg_setseq_128_srandom_r``, as numpy seeds it)."""
-    stream = np.zeros(4, dtype=np.uint64)
-    stream[2] = (words[2] << _U1) | (words[3] >> _U63)  # inc = (initseq << 1) | 1
-    stream[3] = (words[3] << _U1) | _U1
-    _pcg64_step(stream)
-    stream[0], stream[1] = _add128(stream[0], stream[1], words[0], words[1])
-    _pcg64_step(stream)
-    return stream
-
-
-@register_jitable
-def pcg64_advanced(start, draws):
-    """The PCG64 stream *start* after *draws* draws, as numpy's ``PCG64.advance`` (a new array).
-
-    Jump-ahead of an LCG in O(log draws) steps (Brown, "Random number generation with
-    arbitrary strides", 1994; O'Neill's ``pcg_advance_lcg_128``): x -> M x + c applied
-    *draws* times is x -> A x + C, built from the binary digits of *draws*.
-    """
-    mult_hi, mult_lo = _MUL_HI, _MUL_LO
-    plus_hi, plus_lo = start[2], start[3]
-    acc_mult_hi, acc_mult_lo = _U0, _U1
-    acc_plus_hi, acc_plus_lo = _U0, _U0
-    remaining = np.uint64(draws)
-    while remaining > _U0:
-        if remaining & _U1:
-            acc_mult_hi, acc_mult_lo = _mul128(acc_mult_hi, acc_mult_lo, mult_hi, mult_lo)
-            acc_plus_hi, acc_plus_lo = _mul128(acc_plus_hi, acc_plus_lo, mult_hi, mult_lo)
-            acc_plus_hi, acc_plus_lo = _add128(acc_plus_hi, acc_plus_lo, plus_hi, plus_lo)
-        next_hi, next_lo = _add128(mult_hi, mult_lo, _U0, _U1)
-        plus_hi, plus_lo = _mul128(next_hi, next_lo, plus_hi, plus_lo)
-        mult_hi, mult_lo = _mul128(mult_hi, mult_lo, mult_hi, mult_lo)
-        remaining = remaining >> _U1
-    stream = start.copy()
-    stream[0], stream[1] = _mul128(acc_mult_hi, acc_mult_lo, start[0], start[1])
-    stream[0], stream[1] = _add128(stream[0], stream[1], acc_plus_hi, acc_plus_lo)
-    return stream
-
-
-def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) -> npt.NDArray[np.uint64]:
-    """The stream (uint64[4]: state hi, lo; inc hi, lo) of numpy's ``PCG64(seed_sequence)`` after
-    *draws* draws, with *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``.
-
-    Python's integers do the seeding (O'Neill's ``pcg_setseq_128_srandom_r``, as numpy does it:
-    two steps of the LCG) and numpy's own ``PCG64.advance`` the jump, so the kernels need not
-    compile either: a part of a kernel starts from this state and only steps.
-    """
-    w0, w1, w2, w3 = (int(w) for w in seed_words)
-    increment = (((w2 << 64) | w3) << 1 | 1) & _MASK128
-    state = increment  # one step from state 0
-    state = (state + ((w0 << 64) | w1)) & _MASK128
-    state = (state * _PCG64_MULTIPLIER + increment) & _MASK128
-    bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
-    bit_generator.state = {
-        "bit_generator": "PCG64", "state": {"state": state, "inc": increment}, "has_uint32": 0, "uinteger": 0,
-    }  # fmt: skip
-    bit_generator.advance(int(draws))
-    advanced = bit_generator.state["state"]
-    s, inc = advanced["state"], advanced["inc"]
-    return np.array([s >> 64, s & _MASK64, inc >> 64, inc & _MASK64], dtype=np.uint64)
 
 
 # Base points are handled in batches of _BATCH: first the map for the whole batch, into
@@ -430,7 +304,7 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
     if rest > 0, the last of the m = whole + 1 points has its orbit cut to rest members from
     *offset* on, in the same call (stored whole by the same store as every other orbit, so the
     members are bit for bit those of a whole orbit, then copied).  Given points are *points* (m, 2); random ones
-    are drawn from *points*, the PCG64 stream at point *lo* (uint64[4], :func:`pcg64_state`),
+    are drawn from *points*, the PCG64 stream at point *lo* (uint64[4], :func:`~symsphere._random.pcg64.pcg64_state`),
     u then v per point; the next batch's points are drawn between the current batch's orbit
     stores, so that the generator's dependent chain of 128-bit multiplications overlaps the
     stores instead of following them.

@@ -15,34 +15,41 @@ from types import ModuleType
 from . import _auto as auto
 from . import _blocks as blocks
 from . import _compile_ahead as compile_ahead
+from . import _compiled_peers as compiled_peers
 from . import _fused as fused
 from . import _integrand_kernels as integrand_kernels
 from . import _kernels as kernels
 from . import _numba_cache as numba_cache
-from . import _splitmix as splitmix
+from . import _strategies as strategies
 from . import _threads as threads
 from . import _validation as validation
+from ._random import hashes, owen_sobol, pcg64, splitmix
+from .render import _directions as render_directions
 from .render import _emitters as render_emitters
 from .render import _integrator as render_integrator
 from .render import _probes as render_probes
-from .render import _random as render_random
 from .warps import _triangle as warps_triangle
 
 __all__ = [
     "auto",
     "blocks",
     "compile_ahead",
+    "compiled_peers",
     "fused",
+    "hashes",
     "integrand_kernels",
     "kernels",
     "numba_cache",
+    "owen_sobol",
+    "pcg64",
     "splitmix",
+    "strategies",
     "threads",
     "validation",
+    "render_directions",
     "render_emitters",
     "render_integrator",
     "render_probes",
-    "render_random",
     "warps_triangle",
 ]  # and, on first use (module __getattr__), mitsuba_integrator, mitsuba_lights, mitsuba_random, mitsuba_warps
 

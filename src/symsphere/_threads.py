@@ -27,18 +27,18 @@ the setting has no effect (as with any OpenMP setting).
 
 from __future__ import annotations
 
-import contextlib
 import os
-import signal
 import threading
 import weakref
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor, wait
 from typing import Any, cast
 
 import numba
 import numpy as np
 from numba.core.dispatcher import Dispatcher
+
+from ._signals import kept as signals_kept
 
 __all__ = [
     "ROUTED",
@@ -187,43 +187,8 @@ def compile_interruptibly(kernel: Any, signature: tuple[Any, ...]) -> None:
     again (through its handler) if the compile did not raise it itself.  :func:`route_compiles` puts
     the first compile of every other call of the package's numba functions on the same path.
     """
-    if threading.current_thread() is not threading.main_thread():
+    with signals_kept():  # a no-op outside the main thread
         kernel.compile(signature)
-        return
-    with _signals_kept():
-        kernel.compile(signature)
-
-
-_KEPT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
-@contextlib.contextmanager
-def _signals_kept() -> Iterator[None]:
-    """Within the block (main thread): a signal with a Python handler is recorded as well as handled; if
-    the block then raises anything but the handler's exception, or nothing, the handler runs again."""
-    previous = {signum: signal.getsignal(signum) for signum in _KEPT_SIGNALS}
-    handlers = {signum: handler for signum, handler in previous.items() if callable(handler)}
-    arrived: list[int] = []
-
-    def record(signum: int, frame: Any) -> None:
-        arrived.append(signum)
-        handlers[signum](signum, frame)
-
-    for signum in handlers:
-        signal.signal(signum, record)
-    try:
-        yield
-    except BaseException as error:
-        for signum in handlers:
-            signal.signal(signum, previous[signum])
-        if arrived and not isinstance(error, KeyboardInterrupt):
-            handlers[arrived[0]](arrived[0], None)  # the interrupt the compile lost, instead of its error
-        raise
-    finally:
-        for signum in handlers:
-            signal.signal(signum, previous[signum])
-    if arrived:
-        handlers[arrived[0]](arrived[0], None)
 
 
 ROUTED = "_symsphere_routed"
@@ -254,9 +219,7 @@ def route(dispatcher: Any) -> Any:
     original = dispatcher._compile_for_args
 
     def compile_for_args(*args: Any, **kws: Any) -> Any:
-        if threading.current_thread() is not threading.main_thread():
-            return original(*args, **kws)
-        with _signals_kept():
+        with signals_kept():  # a no-op outside the main thread
             return original(*args, **kws)
 
     dispatcher._compile_for_args = compile_for_args

@@ -33,20 +33,26 @@ from typing import TYPE_CHECKING, Any, Literal, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from ._blocks import fill_range, prepare
+from . import frames
+from ._blocks import base_points
 from ._integration import Integrand, IntegrationResult, Partial, Plan, block_partials, finish, plan, to_tolerance
+from ._kernels import Plan as KernelPlan
+from ._kernels import fill
 from ._threads import start_threads
 from ._typing import DTypeLike, Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._validation import (
     check_bool,
     check_client,
     check_count,
+    check_dtype,
     check_normal,
     check_positive_real,
     check_tasks,
     short_repr,
 )
 from .points import BLOCK, BasePoints
+from .symmetry import orbit_size
+from .warps import triangle_warp
 
 if TYPE_CHECKING:  # not at import: dask and the renderer load only when used
     import dask.array as da
@@ -98,7 +104,7 @@ def sample_sphere(
     >>> bool(np.array_equal(d.compute(scheduler="threads"), symsphere.sample_sphere(48 * 5000, rng=3)))
     True
     """
-    return _dask_directions(n, chunks, 48, None, method, points, rng, dtype)
+    return _dask_directions(n, chunks, orbit_size("sphere"), None, method, points, rng, dtype)
 
 
 def sample_hemisphere(
@@ -140,7 +146,7 @@ def sample_hemisphere(
     >>> bool(np.array_equal(d.compute(scheduler="threads"), local))
     True
     """
-    return _dask_directions(n, chunks, 24, check_normal(normal), method, points, rng, dtype)
+    return _dask_directions(n, chunks, orbit_size("hemisphere"), check_normal(normal), method, points, rng, dtype)
 
 
 def integrate(
@@ -282,11 +288,13 @@ def render(
     width: int = 256,
     height: int = 192,
     spp: int = 96,
-    sampler: str = "symmetric_sobol",
+    strategy: str = "symmetric",
+    points: str | None = None,
     method: str | None = None,
     pixel_filter: str = "box",
     seed: int | None = None,
     integrator: Literal["path", "bsdf"] = "path",
+    sampler: str | None = None,
 ) -> RenderResult:
     """:func:`symsphere.render.render` with its sample passes on a Dask cluster, the identical image.
 
@@ -298,8 +306,10 @@ def render(
 
     Parameters
     ----------
-    scene, width, height, spp, sampler, method, pixel_filter, seed, integrator
+    scene, width, height, spp, strategy, points, method, pixel_filter, seed, integrator
         As in :func:`symsphere.render.render`.
+    sampler : str, optional
+        Deprecated, as in :func:`symsphere.render.render`.
     client : distributed.Client, optional
         Default: a ``LocalCluster`` with one single-threaded worker per core,
         started for this call and closed after it.
@@ -323,9 +333,14 @@ def render(
     """
     from distributed import as_completed
 
+    from ._strategies import resolve
     from .render.renderer import plan_passes
 
-    plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
+    strategy, points, method = resolve(sampler, strategy, points, method, "render", stacklevel=2)
+    plan = plan_passes(
+        scene, width, height, spp, method=method, pixel_filter=pixel_filter, seed=seed, integrator=integrator,
+        strategy=strategy, points=points,
+    )  # fmt: skip
     passes_per_task = check_count(passes_per_task, "passes_per_task")
     check_tasks(-(-plan.passes // passes_per_task), "passes_per_task", f"{plan.passes} passes")
     check_bool(progress, "progress")
@@ -517,7 +532,7 @@ def _directions_task(
     _single_threaded_kernels()
     source = copy.deepcopy(source)  # QMC engines are stateful, and tasks may share a process
     out = np.empty(((stop - start) * count, 3), dtype=dtype)
-    return fill_range(source, start, stop, method, count, basis, out)
+    return fill(KernelPlan(source, method, count, basis), start, stop, out)
 
 
 def _single_threaded_kernels() -> None:
@@ -545,7 +560,11 @@ def _dask_directions(
     import dask.array as da
     from dask.delayed import delayed
 
-    n, dtype, method, source, basis = prepare(n, count, normal, method, points, rng, dtype)
+    n = check_count(n, "n", multiple=count)
+    dtype = check_dtype(dtype)
+    triangle_warp(method)
+    source = base_points(points, rng, n // count, count, n)
+    basis = None if normal is None else frames.frame(normal)
     chunks = check_count(chunks, "chunks", multiple=count * BLOCK)
     per_chunk = chunks // count
     total = n // count

@@ -48,21 +48,20 @@ interlaced (higher-order) Sobol' points ``points='sobol_interlaced2'``.
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload, register_jitable
 
+from ._fibonacci import fibonacci_point, fibonacci_points, sample_fibonacci
 from ._lebedev import LEBEDEV_ORDERS, LEBEDEV_SIZES, lebedev_size, lebedev_weights, sample_lebedev
 from ._typing import Domain, DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike, Sampler
-from ._validation import check_bool, check_count, check_dtype, check_rng, short_repr
+from ._validation import check_count, check_dtype, check_rng, short_repr
 from .points import POINT_SETS, check_points, unit_square_points
-from .symmetry import orbit
-from .warps import WARPS, Warp, square_to_arvo_triangle, square_to_uniform_sphere_pdf
+from .symmetry import DOMAINS, orbit
+from .warps import WARPS, Warp, square_to_uniform_sphere_pdf
 
 __all__ = [
     "PEERS",
@@ -87,9 +86,13 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Peer:
     """A registered peer sampler, so that a study can loop over `PEERS`.
+
+    A record of keyword fields; the defaults are a uniform sampler of the sphere with independent rows.
+    A peer built on a map of the square is a record over its warp, :meth:`Peer.over`, which takes the
+    sampler (:meth:`symsphere.warps.Warp.sample`), density, uniformity and reference from the warp.
 
     Attributes
     ----------
@@ -107,7 +110,7 @@ class Peer:
     is_random : bool
         Whether the output depends on ``rng`` (False only for ``fibonacci``).
     is_map : bool
-        Whether the peer is built on a map of the unit square, so that
+        Whether the peer is built on a map of the unit square (``warp is not None``), so that
         :meth:`sample` accepts every ``points=`` (quasi-Monte Carlo too).
     independent_rows : bool
         Whether the rows of one call are independent samples (False for the
@@ -159,12 +162,11 @@ class Peer:
     """
 
     name: str
-    domain: Domain
     sampler: Sampler
-    pdf: Callable[[npt.ArrayLike], FloatArray]
-    is_random: bool
-    is_map: bool
-    independent_rows: bool
+    domain: Domain = "sphere"
+    pdf: Callable[[npt.ArrayLike], FloatArray] = square_to_uniform_sphere_pdf
+    is_random: bool = True
+    independent_rows: bool = True
     multiple: int = 1
     orbit_size: int | None = 1
     uniform: bool = True
@@ -172,6 +174,45 @@ class Peer:
     reference: str = ""
     rule_weights: Callable[[int], Float64Array] | None = None
     sizes: Callable[[int], int] | None = None
+
+    @classmethod
+    def over(cls, warp: Warp, *, name: str) -> Peer:
+        """The peer that samples *warp*'s domain (the sphere or the hemisphere) by its map: the warp's facts.
+
+        Its sampler is :meth:`symsphere.warps.Warp.sample`, its density, uniformity and reference the warp's.
+
+        Examples
+        --------
+        >>> from symsphere.peers import PEERS, Peer
+        >>> from symsphere.warps import WARPS
+        >>> Peer.over(WARPS["octahedral_sphere"], name="octahedral") == PEERS["octahedral"]
+        True
+        """
+        if warp.domain not in DOMAINS:
+            raise ValueError(f"'warp' must map onto one of {list(DOMAINS)}; got {warp.name!r} onto {warp.domain!r}")
+        domain: Domain = "sphere" if warp.domain == "sphere" else "hemisphere"
+        return cls(
+            name=name,
+            sampler=warp.sample,
+            domain=domain,
+            pdf=warp.pdf,
+            uniform=warp.uniform,
+            warp=warp,
+            reference=warp.reference,
+        )
+
+    @property
+    def is_map(self) -> bool:
+        """Whether the peer is built on a map of the unit square (:attr:`warp`), so that :meth:`sample`
+        accepts every ``points=`` (quasi-Monte Carlo too).
+
+        Examples
+        --------
+        >>> from symsphere.peers import PEERS
+        >>> PEERS["octahedral"].is_map, PEERS["gaussian"].is_map
+        (True, False)
+        """
+        return self.warp is not None
 
     @property
     def forward(self) -> Callable[[npt.ArrayLike], FloatArray] | None:
@@ -315,7 +356,7 @@ def sample_classic(
     >>> d.shape, bool(np.allclose(np.linalg.norm(d, axis=1), 1))
     ((1000, 3), True)
     """
-    return _sample_map(WARPS["uniform_sphere"].forward, n, points, rng, dtype)
+    return WARPS["uniform_sphere"].sample(n, points=points, rng=rng, dtype=dtype)
 
 
 def sample_classic_hemisphere(
@@ -332,7 +373,7 @@ def sample_classic_hemisphere(
     >>> bool(np.all(sample_classic_hemisphere(100, rng=2)[:, 2] >= 0))
     True
     """
-    return _sample_map(WARPS["uniform_hemisphere"].forward, n, points, rng, dtype)
+    return WARPS["uniform_hemisphere"].sample(n, points=points, rng=rng, dtype=dtype)
 
 
 def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float64) -> FloatArray:
@@ -341,17 +382,8 @@ def sample_gaussian(n: int, *, rng: RNGLike = None, dtype: DTypeLike = np.float6
     As ``scipy.stats.uniform_direction`` does (Muller 1959, Marsaglia 1972):
     the standard normal distribution in R^3 is rotation invariant, so its
     direction is uniform.  A zero vector (probability 0, but possible in
-    floating point) is drawn again.
-
-    Parameters
-    ----------
-    n : int
-    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
-    dtype : {numpy.float64, numpy.float32}
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
+    floating point) is drawn again.  Arguments and result as for :func:`sample_classic`, without
+    ``points`` (random only).
 
     Examples
     --------
@@ -386,7 +418,7 @@ def sample_octahedral(
     >>> sample_octahedral(256, points="sobol", rng=3).shape
     (256, 3)
     """
-    return _sample_map(WARPS["octahedral_sphere"].forward, n, points, rng, dtype)
+    return WARPS["octahedral_sphere"].sample(n, points=points, rng=rng, dtype=dtype)
 
 
 def sample_octahedral_hemisphere(
@@ -404,7 +436,7 @@ def sample_octahedral_hemisphere(
     >>> bool(np.all(sample_octahedral_hemisphere(64, rng=4)[:, 2] >= 0))
     True
     """
-    return _sample_map(WARPS["octahedral_hemisphere"].forward, n, points, rng, dtype)
+    return WARPS["octahedral_hemisphere"].sample(n, points=points, rng=rng, dtype=dtype)
 
 
 def sample_cosine(
@@ -424,55 +456,7 @@ def sample_cosine(
     >>> round(float(d[:, 2].mean()), 2)      # E[cos theta] = 2/3
     0.67
     """
-    return _sample_map(WARPS["cosine_hemisphere"].forward, n, points, rng, dtype)
-
-
-def sample_fibonacci(
-    n: int, *, randomize: bool = False, rng: RNGLike = None, dtype: DTypeLike = np.float64
-) -> FloatArray:
-    """The spherical Fibonacci point set, optionally under a random rotation.
-
-    Point i of n (Keinert et al., "Spherical Fibonacci Mapping", SIGGRAPH Asia
-    2015, eq. 2): ``z_i = 1 - (2 i + 1)/n``, ``phi_i = 2 pi frac(i / Phi)`` with
-    the golden ratio Phi; see :func:`fibonacci_points`.  The set is
-    deterministic.  With ``randomize=True`` it is rotated by one uniformly
-    random rotation (``scipy.spatial.transform.Rotation.random``), so that
-    every point is marginally uniform and ``4 pi mean(f)`` is an unbiased
-    estimate of the integral of f; the points of one set stay dependent.
-
-    Parameters
-    ----------
-    n : int
-    randomize : bool
-        Apply a uniformly random rotation drawn from ``rng``.
-    rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
-        Only used when ``randomize`` is True (but validated always).
-    dtype : {numpy.float64, numpy.float32}
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from symsphere.peers import sample_fibonacci
-    >>> d = sample_fibonacci(10_000)
-    >>> f = np.exp(d @ [0.3, -0.5, 0.6])
-    >>> a = np.sqrt(0.3**2 + 0.5**2 + 0.6**2)
-    >>> bool(abs(4 * np.pi * f.mean() / (4 * np.pi * np.sinh(a) / a) - 1) < 1e-5)
-    True
-    """
-    n = check_count(n, "n")
-    dtype = check_dtype(dtype)
-    rng = check_rng(rng)
-    randomize = check_bool(randomize, "randomize")
-    d = _fibonacci(n)
-    if randomize:
-        from scipy.spatial.transform import Rotation  # function-level: scipy.spatial adds ~0.3 s to every CLI start
-
-        d = Rotation.random(rng=rng).apply(d)
-    return d.astype(dtype)
+    return WARPS["cosine_hemisphere"].sample(n, points=points, rng=rng, dtype=dtype)
 
 
 def sample_arvo(
@@ -510,49 +494,7 @@ def sample_arvo(
     dtype = check_dtype(dtype)
     check_points(points)
     uv = unit_square_points(n // 48, points, rng, per_point=48)
-    base = square_to_arvo_triangle(uv)
-    return orbit(base).reshape(n, 3).astype(dtype)
-
-
-def fibonacci_points(n: int, *, start: int = 0, stop: int | None = None) -> Float64Array:
-    """The n spherical Fibonacci points (Keinert et al. 2015), deterministic; rows *start* to *stop* - 1.
-
-    ``z_i = 1 - (2 i + 1)/n`` and ``phi_i = 2 pi frac(i (Phi - 1))`` for
-    i = 0, ..., n - 1 (1/Phi = Phi - 1).  The fractional part is computed in
-    64-bit fixed point: ``i * floor(2^64 (Phi - 1)) mod 2^64`` is an exact
-    integer product, so phi_i has an error below 2 pi i 2^-64 (about 3e-10
-    at i = 10^9) instead of the ~i 1e-16 of the float64 product.
-    sin(theta_i) = sqrt((2 i + 1)(2 n - 2 i - 1))/n, without cancellation.
-
-    Parameters
-    ----------
-    n : int
-    start, stop : int, optional
-        A range of the points (default all): a large set in bounded memory, piece by piece.
-
-    Returns
-    -------
-    ndarray, shape (stop - start, 3), float64
-
-    Examples
-    --------
-    >>> from symsphere.peers import fibonacci_points
-    >>> bool((fibonacci_points(4, start=2) == fibonacci_points(4)[2:]).all())
-    True
-    >>> fibonacci_points(4).round(6)
-    array([[ 0.661438,  0.      ,  0.75    ],
-           [-0.713954, -0.654041,  0.25    ],
-           [ 0.08465 ,  0.964538, -0.25    ],
-           [ 0.402444, -0.524918, -0.75    ]])
-    """
-    n = check_count(n, "n")
-    stop = n if stop is None else stop
-    for value, name in ((start, "start"), (stop, "stop")):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 0 <= value <= n:
-            raise ValueError(f"'{name}' must be an integer with 0 <= {name} <= n = {n}; got {short_repr(value)}")
-    if start > stop:
-        raise ValueError(f"'start' must be at most 'stop'; got start={start}, stop={stop}")
-    return np.stack(_fibonacci_point(np.arange(start, stop, dtype=np.int64), n), axis=-1).reshape(-1, 3)
+    return orbit(WARPS["arvo_triangle"].forward(uv)).reshape(n, 3).astype(dtype)
 
 
 # =============================================================================
@@ -560,224 +502,73 @@ def fibonacci_points(n: int, *, start: int = 0, stop: int | None = None) -> Floa
 # =============================================================================
 
 
-def _random_only(sampler: Callable[..., FloatArray]) -> Sampler:
+def _random_only(sampler: Callable[..., FloatArray], **options: Any) -> Sampler:
+    """*sampler* (no ``points=``: it is no map of the square) with *options*, as a peer's sampler."""
+
     def wrapped(
         n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
     ) -> FloatArray:
-        return sampler(n, rng=rng, dtype=dtype)
+        return sampler(n, rng=rng, dtype=dtype, **options)
 
     return wrapped
-
-
-def _lebedev_sampler(randomize: bool) -> Sampler:
-    def wrapped(
-        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
-    ) -> FloatArray:
-        return sample_lebedev(n, randomize=randomize, rng=rng, dtype=dtype)
-
-    return wrapped
-
-
-def _fibonacci_sampler(randomize: bool) -> Sampler:
-    def wrapped(
-        n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
-    ) -> FloatArray:
-        return sample_fibonacci(n, randomize=randomize, rng=rng, dtype=dtype)
-
-    return wrapped
-
-
-# =============================================================================
-# Private helpers: trust their inputs (float64 arrays)
-# =============================================================================
-
-
-def _sample_map(
-    forward: Callable[[npt.ArrayLike], FloatArray], n: int, points: PointsLike, rng: RNGLike, dtype: DTypeLike
-) -> FloatArray:
-    n = check_count(n, "n")
-    dtype = check_dtype(dtype)
-    check_points(points)
-    return forward(unit_square_points(n, points, rng)).astype(dtype)
-
-
-def _fibonacci(n: int) -> Float64Array:
-    return np.stack(_fibonacci_point(np.arange(n, dtype=np.int64), n), axis=-1)
-
-
-@register_jitable
-def _fibonacci_point(i: Any, n: Any) -> Any:
-    # Keinert et al. (2015): z_i = 1 - (2i + 1)/n, phi_i = 2 pi frac(i / Phi).  numpy applies it to an
-    # int64 array i, numba compiles it for one int (the study's kernels, through fibonacci_point).
-    odd = 2.0 * i + 1.0  # exact: i < 2^52
-    z = 1.0 - odd / n
-    sin_theta = np.sqrt(odd * (2.0 * n - odd)) / n
-    # frac(i (Phi - 1)) in 64-bit fixed point: the product wraps mod 2^64 exactly.
-    frac_bits = np.uint64(i) * _GOLDEN_FRACTION_BITS
-    frac = np.float64(frac_bits >> np.uint64(11)) * 2.0**-53
-    phi = 2.0 * np.pi * frac
-    return sin_theta * np.cos(phi), sin_theta * np.sin(phi), z
-
-
-def fibonacci_point(i: int, n: int) -> tuple[float, float, float]:
-    """Point *i* of the *n* spherical Fibonacci points, elementwise: what :func:`fibonacci_points` gives in row i.
-
-    Numba compiles it (the study's compiled peers call it in their kernels); from Python, *i* and *n* are
-    checked (``0 <= i < n``).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from symsphere.peers import fibonacci_point, fibonacci_points
-    >>> bool(np.array_equal(fibonacci_point(2, 4), fibonacci_points(4)[2]))
-    True
-    """
-    n = check_count(n, "n")
-    if isinstance(i, bool) or not isinstance(i, int | np.integer) or not 0 <= i < n:
-        raise ValueError(f"'i' must be an integer with 0 <= i < n = {n}; got {short_repr(i)}")
-    with np.errstate(over="ignore"):  # the fixed-point product wraps mod 2^64 by design
-        x, y, z = _fibonacci_point(np.int64(i), n)
-    return float(x), float(y), float(z)
-
-
-@overload(fibonacci_point, jit_options={}, inline="never", strict=False)
-def _fibonacci_point_in_kernels(i: Any, n: Any) -> Any:
-    return _fibonacci_point
-
-
-# floor(2^64 (Phi - 1)) = floor(2^64 (sqrt 5 - 1)/2), from the exact integer square root.
-_GOLDEN_FRACTION_BITS = np.uint64((math.isqrt(5 << 128) - (1 << 64)) >> 1)
 
 
 def _build_peers() -> dict[str, Peer]:
+    lebedev = "Lebedev & Laikov 1999; scipy.integrate.lebedev_rule (orders 3-131, 6-5810 points)"
     peers = [
+        Peer.over(WARPS["uniform_sphere"], name="classic"),
+        Peer.over(WARPS["uniform_hemisphere"], name="classic_hemisphere"),
         Peer(
-            "classic",
-            "sphere",
-            sample_classic,
-            WARPS["uniform_sphere"].pdf,
-            True,
-            True,
-            True,
-            warp=WARPS["uniform_sphere"],
-            reference="Archimedes' hat-box map; pbrt-v4 SampleUniformSphere, Mitsuba 3 square_to_uniform_sphere",
-        ),
-        Peer(
-            "classic_hemisphere",
-            "hemisphere",
-            sample_classic_hemisphere,
-            WARPS["uniform_hemisphere"].pdf,
-            True,
-            True,
-            True,
-            warp=WARPS["uniform_hemisphere"],
-            reference="pbrt-v4 SampleUniformHemisphere",
-        ),
-        Peer(
-            "gaussian",
-            "sphere",
-            _random_only(sample_gaussian),
-            square_to_uniform_sphere_pdf,
-            True,
-            False,
-            True,
+            name="gaussian",
+            sampler=_random_only(sample_gaussian),
             reference="Muller (1959), Marsaglia (1972); scipy.stats.uniform_direction",
         ),
+        Peer.over(WARPS["octahedral_sphere"], name="octahedral"),
+        Peer.over(WARPS["octahedral_hemisphere"], name="octahedral_hemisphere"),
         Peer(
-            "octahedral",
-            "sphere",
-            sample_octahedral,
-            WARPS["octahedral_sphere"].pdf,
-            True,
-            True,
-            True,
-            warp=WARPS["octahedral_sphere"],
-            reference="Clarberg, Fast equal-area mapping of the (hemi)sphere using SIMD, JGT 2008",
-        ),
-        Peer(
-            "octahedral_hemisphere",
-            "hemisphere",
-            sample_octahedral_hemisphere,
-            WARPS["octahedral_hemisphere"].pdf,
-            True,
-            True,
-            True,
-            warp=WARPS["octahedral_hemisphere"],
-            reference="Clarberg, JGT 2008 (hemisphere variant)",
-        ),
-        Peer(
-            "fibonacci",
-            "sphere",
-            _fibonacci_sampler(False),
-            square_to_uniform_sphere_pdf,
-            False,
-            False,
-            False,
+            name="fibonacci",
+            sampler=_random_only(sample_fibonacci, randomize=False),
+            is_random=False,
+            independent_rows=False,
             orbit_size=None,
             reference="Keinert et al., Spherical Fibonacci Mapping, SIGGRAPH Asia 2015",
         ),
         Peer(
-            "fibonacci_rotated",
-            "sphere",
-            _fibonacci_sampler(True),
-            square_to_uniform_sphere_pdf,
-            True,
-            False,
-            False,
+            name="fibonacci_rotated",
+            sampler=_random_only(sample_fibonacci, randomize=True),
+            independent_rows=False,
             orbit_size=None,
             reference="Keinert et al. 2015, under a uniformly random rotation",
         ),
-        Peer(
-            "arvo",
-            "sphere",
-            sample_arvo,
-            square_to_uniform_sphere_pdf,
-            True,
-            True,
-            False,
-            multiple=48,
+        Peer(  # a map onto T0, then the 48 images: a uniform density on the sphere
+            name="arvo",
+            sampler=sample_arvo,
+            independent_rows=False,
+            multiple=WARPS["arvo_triangle"].orbit_size,
             orbit_size=WARPS["arvo_triangle"].orbit_size,
             warp=WARPS["arvo_triangle"],
-            reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995; on T0, then 48 images",
+            reference=WARPS["arvo_triangle"].reference + "; on T0, then 48 images",
         ),
         Peer(
-            "lebedev",
-            "sphere",
-            _lebedev_sampler(False),
-            square_to_uniform_sphere_pdf,
-            False,
-            False,
-            False,
+            name="lebedev",
+            sampler=_random_only(sample_lebedev, randomize=False),
+            is_random=False,
+            independent_rows=False,
             orbit_size=None,
             rule_weights=lebedev_weights,
             sizes=lebedev_size,
-            reference="Lebedev & Laikov 1999; scipy.integrate.lebedev_rule (orders 3-131, 6-5810 points)",
+            reference=lebedev,
         ),
         Peer(
-            "lebedev_rotated",
-            "sphere",
-            _lebedev_sampler(True),
-            square_to_uniform_sphere_pdf,
-            True,
-            False,
-            False,
+            name="lebedev_rotated",
+            sampler=_random_only(sample_lebedev, randomize=True),
+            independent_rows=False,
             orbit_size=None,
             rule_weights=functools.partial(lebedev_weights, randomize=True),
             sizes=functools.partial(lebedev_size, randomize=True),
             reference="Lebedev rules under uniformly random rotations; r x 5810 points: r rotations",
         ),
-        Peer(
-            "cosine",
-            "hemisphere",
-            sample_cosine,
-            WARPS["cosine_hemisphere"].pdf,
-            True,
-            True,
-            True,
-            uniform=False,
-            warp=WARPS["cosine_hemisphere"],
-            reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere",
-        ),
+        Peer.over(WARPS["cosine_hemisphere"], name="cosine"),
     ]
     return {peer.name: peer for peer in peers}
 

@@ -38,6 +38,7 @@ from ._validation import (
     check_positive_real,
     check_rng,
     check_samples,
+    off_unit,
     short_repr,
 )
 from .bins import bin_probabilities, equal_area_bins
@@ -500,7 +501,7 @@ def _histogram(
     problems = []
     d64 = d.astype(np.float64)
     norm = np.linalg.norm(d64, axis=1)
-    bad_norm = ~(np.abs(norm - 1.0) <= _NORM_TOL)
+    bad_norm = off_unit(d64, _NORM_TOL)
     v = np.divide(d64, norm[:, None], out=np.zeros_like(d64), where=norm[:, None] > 0)
     x, y, z = v[:, 0], v[:, 1], v[:, 2]
     if domain == "sphere":

@@ -166,8 +166,13 @@ def _orbit(p: FloatArray, count: int) -> FloatArray:
     return images
 
 
-def _fold_key(d: np.ndarray) -> np.ndarray:
-    """Key of the sign pattern of d and the weak order of |d| (729 possible values)."""
+def fold_key(d: np.ndarray) -> np.ndarray:
+    """Key of the sign pattern of d and the weak order of |d| (729 possible values): within the package
+    (:data:`FOLD_TABLE` maps it to the sub-domain index; ``mitsuba._warps`` computes it on Dr.Jit arrays).
+
+    Base-3 digits, most significant first: the signs of x, y, z, then the weak orders of |x| vs |y|,
+    |x| vs |z|, |y| vs |z| (each digit -1, 0, 1 plus 1).
+    """
     sign = (d > 0).astype(np.int64) - (d < 0)  # -0.0 counts as 0
     a = np.abs(d)
     pairs = ((0, 1), (0, 2), (1, 2))
@@ -197,15 +202,17 @@ def _build_fold_table() -> np.ndarray:
     # enumerate them and record the lowest k whose image is exact.
     grid = np.array(np.meshgrid(*[np.arange(-3, 4.0)] * 3, indexing="ij")).reshape(3, -1).T
     table = np.full(3**6, -1, dtype=np.int64)
-    keys = _fold_key(grid)
+    keys = fold_key(grid)
     matches = np.all(_orbit(base_point(grid), 48) == grid[:, None, :], axis=-1)
     table[keys] = np.argmax(matches, axis=-1)
     table.setflags(write=False)
     return table
 
 
-_FOLD_TABLE = _build_fold_table()
+FOLD_TABLE = _build_fold_table()
+"""The sub-domain index k of every :func:`fold_key` (-1 for the keys no vector has): the lowest k whose
+image of the base point is the vector exactly."""
 
 
 def _fold(d: FloatArray) -> tuple[IntArray, FloatArray]:
-    return _FOLD_TABLE[_fold_key(d)], base_point(d)
+    return FOLD_TABLE[fold_key(d)], base_point(d)

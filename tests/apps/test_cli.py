@@ -534,7 +534,7 @@ def test_work_beyond_a_day_needs_allow_long(capsys, monkeypatch):
 
     monkeypatch.setattr(symsphere.render, "render", lambda *a, **k: pytest.fail("rendered"))
     # A machine whose memory holds the partial sums of 48e13 evaluations (on a smaller one the memory
-    # bound, which --allow-long cannot lift, is said first: tests/test_integration_input.py)
+    # bound, which --allow-long cannot lift, is said first: tests/test_integration.py)
     monkeypatch.setattr(validation.values, "machine_memory", lambda: 2**50)
     start = time.monotonic()
     assert main(["render", "--spp", str(10**13), "--out", "never.png"]) == 2

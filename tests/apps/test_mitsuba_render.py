@@ -229,7 +229,10 @@ def test_help_lists_only_what_applies_in_a_stable_order(cornell):
 
     first, second = helps(), helps()
     assert first == second
-    choices = re.search(r"--sampler \{([^}]*)\}", first).group(1).split(",")
+    choices = re.search(r"--strategy \{([^}]*)\}", first).group(1).split(",")
+    assert choices == sorted(choices) == ["bsdf", "cosine", "symmetric", "symmetric_cosine"]
+    assert re.search(r"--points \{([^}]*)\}", first).group(1).split(",") == ["random", "sobol"]
+    choices = re.search(r"--sampler \{([^}]*)\}", first).group(1).split(",")  # deprecated, for one release
     assert choices == sorted(choices) == ["bsdf", "cosine", "symmetric", "symmetric_cosine", "symmetric_cosine_sobol",
                                           "symmetric_sobol"]  # fmt: skip
     for absent in ("--filter", "--workers", "--integrator", "uniform", "interlaced", "translucent"):

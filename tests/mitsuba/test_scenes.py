@@ -59,7 +59,7 @@ def test_cli_renders_a_mitsuba_scene_file(llvm, tmp_path, capsys):
 
     out = tmp_path / "gap.png"
     status = main(["render", "--scene", str(sm.scene_path("gap")), "--width", "16", "--height", "12", "--spp", "24",
-                   "--sampler", "symmetric_sobol", "--seed", "3", "--out", str(out), "--no-progress"])  # fmt: skip
+                   "--strategy", "symmetric", "--seed", "3", "--out", str(out), "--no-progress"])  # fmt: skip
     assert status == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["gap.exr", "gap.npy", "gap.pfm", "gap.png"]
     assert np.load(tmp_path / "gap.npy").shape == (12, 16, 3)
@@ -93,8 +93,26 @@ def test_cli_spp_and_sampler_errors(llvm, tmp_path, capsys):
     assert main(["render", "--scene", scene, "--spp", "10", "--out", str(tmp_path / "x.png")]) == 0
     assert (tmp_path / "x.png").stat().st_size > 0
     capsys.readouterr()
-    assert main(["render", "--scene", scene, "--sampler", "uniform", "--out", str(tmp_path / "x.png")]) == 2
+    assert main(["render", "--scene", scene, "--strategy", "uniform", "--out", str(tmp_path / "x.png")]) == 2
     assert "invalid choice: 'uniform' (choose from 'bsdf', 'cosine', " in capsys.readouterr().err
+    assert (
+        main(["render", "--scene", scene, "--strategy", "bsdf", "--points", "sobol", "--out", str(tmp_path / "x.png")])
+        == 2
+    )
+    assert "--points sobol does not apply to --strategy bsdf" in capsys.readouterr().err
+
+
+def test_cli_deprecated_sampler_warns_on_stderr_and_renders_the_same(llvm, tmp_path, capsys):
+    import symsphere.mitsuba as sm
+
+    base = ["render", "--scene", str(sm.scene_path("gap")), "--width", "8", "--height", "6", "--spp", "8"]
+    base += ["--seed", "3", "--no-progress"]
+    assert main([*base, "--sampler", "symmetric_cosine_sobol", "--out", str(tmp_path / "old.png")]) == 0
+    assert "--sampler is deprecated; use --strategy symmetric_cosine --points sobol" in capsys.readouterr().err
+    new = ["--strategy", "symmetric_cosine", "--points", "sobol", "--out", str(tmp_path / "new.png")]
+    assert main([*base, *new]) == 0
+    assert "deprecated" not in capsys.readouterr().err
+    np.testing.assert_array_equal(np.load(tmp_path / "old.npy"), np.load(tmp_path / "new.npy"))
 
 
 def test_import_symsphere_never_imports_mitsuba():

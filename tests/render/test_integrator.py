@@ -1,4 +1,4 @@
-"""symsphere.render._integrator and _emitters: frame, samplers and their pdfs, MIS, emitter sampling, NEE, statistics.
+"""symsphere.render._integrator and _emitters: frame, MIS, emitter sampling, NEE, statistics (the directions: test_directions.py).
 
 Statistical tests use fixed seeds (a run passes or fails reproducibly); each
 family's threshold is Sidak-corrected so that a correct renderer fails any
@@ -60,7 +60,7 @@ from numba import njit
 from scipy import stats
 
 from symsphere import frames
-from symsphere._testing import kernels
+from symsphere._testing import kernels, strategies
 from symsphere._testing import render_emitters as E
 from symsphere._testing import render_integrator as K
 from symsphere._testing import render_probes as P
@@ -79,10 +79,16 @@ from symsphere.render import (
     render,
     translucent_scene,
 )
-from symsphere.symmetry import fold, orbit
-from symsphere.warps import WEDGE_MAPS, square_to_triangle_pdf
 
 METHOD_CODES = kernels.METHOD_CODES
+
+
+def _words(sampler):
+    """render()'s strategy, points and method for an earlier sampler name (the cases' names: their seeds
+    come from their index, so that they stay those of docs/results/render-validation.md)."""
+    strategy, points, method = strategies.SAMPLER_SPELLINGS[sampler]
+    return dict(strategy=strategy, points=points, method=method)
+
 
 FAMILY_SIGNIFICANCE = 0.01
 # The interlaced samplers' pairs last: the seeds of the others (from their index) stay those of docs/results/render-validation.md.
@@ -123,139 +129,6 @@ def test_the_kernels_frame_is_frames_frame():
     for n, f in zip(normals, compiled, strict=False):
         np.testing.assert_array_equal(f, frames.frame(n))
         np.testing.assert_allclose(f @ f.T, np.eye(3), atol=1e-15)
-
-
-# --- the samplers ----------------------------------------------------------------
-
-_ORBIT_SAMPLERS = [
-    ("symmetric", K.SYMMETRIC), ("symmetric_sobol", K.SYMMETRIC_SOBOL),
-    ("symmetric_sobol_interlaced2", K.SYMMETRIC_SOBOL_INTERLACED2),
-    ("symmetric_sobol_interlaced3", K.SYMMETRIC_SOBOL_INTERLACED3),
-]  # fmt: skip
-
-
-@pytest.mark.parametrize("full, n", [(False, 24), (True, 48)])
-@pytest.mark.parametrize("name, sampler", _ORBIT_SAMPLERS)
-@pytest.mark.parametrize("method", ["equal_area", "paper1"])
-def test_symmetric_groups_take_every_orbit_member_of_one_base(name, sampler, method, full, n):
-    code = METHOD_CODES[method]
-    groups = 3
-    for depth in (0, 1, 5):
-        out = P.pattern_directions(sampler, code, full, np.uint64(7), 1234, depth, groups * n)
-        bases = []
-        for g in range(groups):
-            block = out[g * n : (g + 1) * n, :3]
-            members, base = fold(block, domain="sphere")
-            # one base point for the whole group...
-            np.testing.assert_allclose(base, np.broadcast_to(base[0], base.shape), rtol=0, atol=1e-15)
-            # ...and every member of its orbit exactly once (hemisphere: the 24 upper ones)
-            assert sorted(members.tolist()) == list(range(n))
-            np.testing.assert_array_equal(block[np.argsort(members)], orbit(base[0], domain="sphere")[:n])
-            # weight = |cos| / (pi pdf), pdf = triangle pdf / n
-            pdf = square_to_triangle_pdf(base[0], method) / n
-            np.testing.assert_allclose(out[g * n : (g + 1) * n, 3], np.abs(block[:, 2]) / (np.pi * pdf), rtol=1e-12)
-            bases.append(base[0])
-        assert len({tuple(b) for b in bases}) == groups  # a fresh base point per group
-
-
-def test_symmetric_members_are_shuffled_between_vertices():
-    """Sample s must not keep member s mod 24 at every vertex (that would confine it to one triangle)."""
-    members = []
-    for depth in range(6):
-        out = P.pattern_directions(K.SYMMETRIC, 0, False, np.uint64(3), 99, depth, 24)
-        members.append(fold(out[:, :3], domain="sphere")[0])
-    assert len({tuple(m) for m in members}) > 1
-
-
-_INTERLACED_CODES = [
-    K.SYMMETRIC_SOBOL_INTERLACED2, K.SYMMETRIC_SOBOL_INTERLACED3,
-    K.SYMMETRIC_COSINE_SOBOL_INTERLACED2, K.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
-]  # fmt: skip
-_ALL_CODES = [
-    K.UNIFORM, K.COSINE, K.ORBIT, K.SYMMETRIC, K.SYMMETRIC_SOBOL, K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL,
-    *_INTERLACED_CODES,
-]  # fmt: skip
-_COSINE_CODES = (
-    K.COSINE, K.SYMMETRIC_COSINE, K.SYMMETRIC_COSINE_SOBOL, K.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
-    K.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
-)  # fmt: skip
-
-
-@pytest.mark.parametrize("full", [False, True])
-@pytest.mark.parametrize("sampler", _ALL_CODES)
-def test_sampled_directions_weights_and_pdfs(sampler, full):
-    """Weights |cos| / (pi pdf) and pdfs of every sampler against their closed forms (orbit: warps.square_to_triangle_pdf)."""
-    code = METHOD_CODES["paper1"]
-    out = P.pattern_directions(sampler, code, full, np.uint64(11), 5, 2, 480)
-    directions, weights, pdfs = out[:, :3], out[:, 3], out[:, 4]
-    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=0, atol=1e-14)
-    if not full:
-        assert np.all(directions[:, 2] >= 0)
-    else:
-        assert np.any(directions[:, 2] < 0)
-    z = np.abs(directions[:, 2])
-    if sampler in _COSINE_CODES:
-        expected_weight, expected_pdf = np.full_like(z, 2.0 if full else 1.0), z / ((2 if full else 1) * np.pi)
-    elif sampler == K.UNIFORM:
-        expected_weight, expected_pdf = (4.0 if full else 2.0) * z, np.full_like(z, 1 / ((4 if full else 2) * np.pi))
-    else:
-        _, base = fold(directions, domain="sphere")
-        expected_pdf = square_to_triangle_pdf(base, "paper1") / (48 if full else 24)
-        expected_weight = z / (np.pi * expected_pdf)
-    np.testing.assert_allclose(weights, expected_weight, rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(pdfs, expected_pdf, rtol=1e-12, atol=1e-15)
-    # bsdf_pdf, which MIS evaluates at light-sampled directions, is the same density
-    np.testing.assert_allclose(P.bsdf_pdfs(sampler, code, full, directions), expected_pdf, rtol=1e-12, atol=1e-15)
-
-
-@pytest.mark.parametrize("full, n", [(False, 8), (True, 16)])
-@pytest.mark.parametrize(
-    "sampler",
-    [
-        K.SYMMETRIC_COSINE,
-        K.SYMMETRIC_COSINE_SOBOL,
-        K.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
-        K.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
-    ],
-)
-def test_symmetric_cosine_groups_take_the_images_of_one_wedge_point(sampler, full, n):
-    """Groups of 8 (16) samples: the 8 z-keeping signed permutations (x {z, -z}) of one cosine wedge point."""
-    groups = 4
-    for depth in (0, 3):
-        out = P.pattern_directions(sampler, 0, full, np.uint64(5), 77, depth, groups * n)
-        bases = []
-        for g in range(groups):
-            block = out[g * n : (g + 1) * n, :3]
-            ax, ay = np.abs(block[:, 0]), np.abs(block[:, 1])
-            base = np.column_stack([np.maximum(ax, ay), np.minimum(ax, ay), np.abs(block[:, 2])])
-            np.testing.assert_array_equal(base, np.broadcast_to(base[0], base.shape))
-            images = base[0] @ WEDGE_MAPS  # (8, 3)
-            if full:
-                images = np.vstack([images, images * [1, 1, -1]])
-            assert sorted(map(tuple, block)) == sorted(map(tuple, images))  # every image once
-            bases.append(tuple(base[0]))
-        assert len(set(bases)) == groups
-
-
-def test_paper_map_weights_use_their_density():
-    out = P.pattern_directions(K.ORBIT, METHOD_CODES["paper2"], False, np.uint64(1), 0, 0, 240)
-    _, base = fold(out[:, :3], domain="sphere")
-    expected = np.abs(out[:, 2]) * 24 / (np.pi * square_to_triangle_pdf(base, "paper2"))
-    np.testing.assert_allclose(out[:, 3], expected, rtol=1e-12)
-
-
-def test_bsdf_pdfs_integrate_to_one():
-    """Monte Carlo over uniform directions: the integral of bsdf_pdf over its domain is 1 (equal-area orbit, classic)."""
-    rng = np.random.default_rng(4)
-    directions = rng.normal(size=(400_000, 3))
-    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    cases = [(s, full) for s in (K.UNIFORM, K.COSINE, K.ORBIT, K.SYMMETRIC_COSINE) for full in (False, True)]
-    critical = stats.norm.isf(_sidak(len(cases)) / 2)
-    for sampler, full in cases:
-        d = directions if full else np.column_stack([directions[:, 0], directions[:, 1], np.abs(directions[:, 2])])
-        values = P.bsdf_pdfs(sampler, METHOD_CODES["equal_area"], full, d) * (4 * np.pi if full else 2 * np.pi)
-        error = values.std(ddof=1) / math.sqrt(values.size)
-        assert abs(values.mean() - 1) < critical * max(error, 1e-12), (sampler, full, values.mean(), error)
 
 
 # --- MIS ---------------------------------------------------------------------------
@@ -547,7 +420,7 @@ def test_direct_lighting_matches_the_closed_form(light, sampler, direct_referenc
     """NEE + MIS on a diffuse plane under a sphere or a square light equals (rho / pi) E per pixel (t-test per block)."""
     reference = direct_references[light]
     seed = 100 * _DIRECT_SAMPLERS.index(sampler) + (light == "quad")
-    image = render(_direct_scene(light), width=24, height=16, spp=64, sampler=sampler, seed=seed).image
+    image = render(_direct_scene(light), width=24, height=16, spp=64, **_words(sampler), seed=seed).image
     np.testing.assert_array_equal(image[..., 0], image[..., 2])  # grey
     residual = (image[..., 0] - reference).reshape(2, 8, 3, 8).transpose(0, 2, 1, 3).reshape(6, 64)
     t = residual.mean(axis=1) / (residual.std(axis=1, ddof=1) / 8)
@@ -564,7 +437,7 @@ def test_nee_beats_bsdf_sampling_on_the_small_light():
     errors = {}
     for integrator in INTEGRATORS:
         image = render(
-            _direct_scene("sphere"), width=12, height=8, spp=32, sampler="cosine", seed=5, integrator=integrator
+            _direct_scene("sphere"), width=12, height=8, spp=32, strategy="cosine", seed=5, integrator=integrator
         )
         errors[integrator] = np.sqrt(np.mean((image.image[..., 0] - reference) ** 2))
     assert errors["path"] < 0.25 * errors["bsdf"], errors
@@ -585,7 +458,7 @@ def test_furnace_radiance_is_le_over_one_minus_rho(integrator, sampler, rho, tra
     emission = 0.7
     scene = furnace(albedo=rho, emission=emission, translucent=translucent)
     seed = round(1000 * rho) + translucent + 7 * (integrator == "path")
-    result = render(scene, width=32, height=32, spp=48, sampler=sampler, seed=seed, integrator=integrator)
+    result = render(scene, width=32, height=32, spp=48, **_words(sampler), seed=seed, integrator=integrator)
     image = result.image
     np.testing.assert_array_equal(image[..., 0], image[..., 1])  # grey scene, same paths for every channel
     pixels = image[..., 0].ravel()
@@ -605,7 +478,7 @@ _REPLICATES = 8
 def _replicate_stats(scene, integrator, sampler, spp, seed0):
     images = np.stack(
         [
-            render(scene, width=_W, height=_H, spp=spp, sampler=sampler, seed=seed0 + r, integrator=integrator).image
+            render(scene, width=_W, height=_H, spp=spp, **_words(sampler), seed=seed0 + r, integrator=integrator).image
             for r in range(_REPLICATES)
         ]
     )
@@ -673,15 +546,15 @@ def test_the_disk_cache_guard_covers_every_module_the_kernel_inlines():
 
     names = {Path(p).name for p in kernel_dependencies(K.render_pass)}
     # the warps' modules whose formulas it inlines: the uniform and cosine maps, the cosine wedge
-    assert {"_integrator.py", "_emitters.py", "_random.py", "_kernels.py", "frames.py"} <= names
+    assert {"_integrator.py", "_directions.py", "_emitters.py", "_random.py", "_kernels.py", "frames.py"} <= names
     assert {"_uniform.py", "_concentric.py", "_wedge.py", "_triangle.py"} <= names
     assert "_probes.py" not in names
     assert {"_probes.py", "_integrator.py", "_emitters.py"} <= {Path(p).name for p in kernel_dependencies(P.first_hits)}
 
 
 def test_the_disk_cache_guard_also_covers_the_emitters_cached_functions(tmp_path):
-    # The kernel calls cached numba functions of _emitters.py, which LLVM inlines into it: numba keys
-    # their cache on _emitters.py alone, so the guard must also drop theirs when _random.py or frames.py
+    # The kernel calls cached numba functions of _emitters.py and _directions.py, which LLVM inlines into
+    # it: numba keys their cache on their own module alone, so the guard must also drop theirs when _random.py or frames.py
     # change. The guard leaves its digest next to each module's cache entries: in a new process with an
     # empty cache directory, preparing the kernels writes both.
     import os
@@ -692,7 +565,7 @@ def test_the_disk_cache_guard_also_covers_the_emitters_cached_functions(tmp_path
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=120)
     stamps = {p.name for p in tmp_path.rglob("*.deps-sha256")}
-    assert {"_integrator.deps-sha256", "_emitters.deps-sha256"} <= stamps
+    assert {"_integrator.deps-sha256", "_directions.deps-sha256", "_emitters.deps-sha256"} <= stamps
 
 
 COLD_RENDER = """

@@ -1,7 +1,7 @@
 """Shirley & Chiu's concentric disk and its lift, the cosine hemisphere (square_to_concentric_disk,
 square_to_cosine_hemisphere).
 
-The contract every warp keeps is in test_contract.py.
+The contract every warp keeps is in test_registry.py.
 """
 
 import numpy as np

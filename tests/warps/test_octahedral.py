@@ -1,6 +1,6 @@
 """Clarberg's octahedral maps (square_to_octahedral_sphere, square_to_octahedral_hemisphere).
 
-The contract every warp keeps is in test_contract.py.
+The contract every warp keeps is in test_registry.py.
 """
 
 import numpy as np

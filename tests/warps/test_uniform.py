@@ -1,7 +1,7 @@
 """The hat-box maps (square_to_uniform_sphere, square_to_uniform_hemisphere): corners, densities, errors.
 
 The contract every warp keeps (round trips, Jacobian, normalisation, chi-square, numba = numpy) is in
-test_contract.py.
+test_registry.py.
 """
 
 import numpy as np

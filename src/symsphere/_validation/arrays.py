@@ -31,6 +31,8 @@ __all__ = [
     "check_samples",
     "check_triangle",
     "check_unit_directions",
+    "off_unit",
+    "unit_bounds",
     "check_uv",
 ]
 
@@ -179,15 +181,32 @@ def check_unit_directions(d: object, name: str = "d") -> FloatArray:
     arr = check_directions(d, name)
     if arr.size:
         wide = arr.astype(np.float64, copy=False)
-        with np.errstate(over="ignore", under="ignore"):  # an overflow (inf) or underflow (0) is out of range
-            squares = np.einsum("...i,...i->...", wide, wide)  # one pass; finite, as checked above
-        bad = (squares < (1.0 - UNIT_TOLERANCE) ** 2) | (squares > (1.0 + UNIT_TOLERANCE) ** 2)
+        bad = off_unit(wide, UNIT_TOLERANCE)
         if np.any(bad):
             norm = math.hypot(*wide[bad][0].tolist())  # the first bad vector's, without overflow in its squares
             raise ValueError(
                 f"'{name}' must be unit vectors (norm 1 within {UNIT_TOLERANCE:g}); got a norm of {norm:.6g}"
             )
     return arr
+
+
+def off_unit(wide: npt.NDArray[np.float64], tolerance: float) -> npt.NDArray[np.bool_]:
+    """Which vectors of *wide* (float64, shape (..., 3)) are not unit vectors: their norm farther than
+    *tolerance* from 1, or not finite.  The one test of unit length in the package (the checks of
+    arguments here, and :func:`symsphere.stats.chi2_test`'s of a sampler's output, with its own
+    tolerance): the squared norm in one pass against :func:`unit_bounds`, no square root.
+    """
+    lo, hi = unit_bounds(tolerance)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # an overflow (inf) or underflow (0) is off
+        squares = np.einsum("...i,...i->...", wide, wide)
+    within: npt.NDArray[np.bool_] = (squares >= lo) & (squares <= hi)
+    return ~within
+
+
+def unit_bounds(tolerance: float) -> tuple[float, float]:
+    """``((1 - tolerance)**2, (1 + tolerance)**2)``: a vector's norm is within *tolerance* of 1 when its
+    squared norm is within these (:func:`off_unit`, and the compiled check of streamed directions)."""
+    return (1.0 - tolerance) ** 2, (1.0 + tolerance) ** 2
 
 
 def check_samples(samples: object, name: str = "samples") -> FloatArray:

@@ -22,6 +22,8 @@ from pathlib import Path
 from types import FrameType
 from typing import Any, NoReturn, TypeVar
 
+from .._signals import INTERRUPTS
+
 __all__ = [
     "CLEAN_EXIT_SIGNALS",
     "DISTRIBUTED_EXTRA",
@@ -37,7 +39,6 @@ __all__ = [
     "add_cluster_options",
     "check_duration",
     "check_pending",
-    "deferred_signals",
     "close_client",
     "cluster_client",
     "describe_os_error",
@@ -67,7 +68,8 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
-CLEAN_EXIT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+CLEAN_EXIT_SIGNALS = tuple(signum for signum in INTERRUPTS if signum != signal.SIGINT)
+"""SIGTERM and SIGHUP (where the platform has them): raised as :class:`Terminated`."""
 
 
 def raise_terminated(signum: int, frame: FrameType | None) -> NoReturn:
@@ -147,7 +149,7 @@ def signals_as_interrupts(pending: list[int]) -> Iterator[None]:
         if not (isinstance(report.exc_type, type) and issubclass(report.exc_type, KeyboardInterrupt)):
             previous_hook(report)
 
-    previous = {signum: signal.signal(signum, handler) for signum in (signal.SIGINT, *CLEAN_EXIT_SIGNALS)}
+    previous = {signum: signal.signal(signum, handler) for signum in INTERRUPTS}
     previous_hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
         yield
@@ -225,7 +227,7 @@ def exit_now(status: int, argv: Sequence[str] | None) -> int:
 
 
 def ignore_signals() -> None:
-    for signum in (signal.SIGINT, *CLEAN_EXIT_SIGNALS):
+    for signum in INTERRUPTS:
         signal.signal(signum, signal.SIG_IGN)
 
 
@@ -282,26 +284,3 @@ _WAIT_THREAD = "symsphere-wait"
 def abandoned_work() -> bool:
     """Whether a call of :func:`wait_interruptibly` is still running in its thread (abandoned on a signal)."""
     return any(thread.name == _WAIT_THREAD and thread.is_alive() for thread in threading.enumerate())
-
-
-@contextlib.contextmanager
-def deferred_signals() -> Iterator[None]:
-    """Within the block (main thread): SIGINT, SIGTERM and SIGHUP are recorded, not handled; after it, each
-    goes to its handler (the CLI's raises).  For code a Python exception must not cross: importing Mitsuba
-    runs Python from inside nanobind's module initialisation, where a KeyboardInterrupt ended the process
-    with "terminate called after throwing an instance of 'nanobind::python_error'" (SIGABRT) or SIGSEGV."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    arrived: list[int] = []
-    kinds = (signal.SIGINT, *CLEAN_EXIT_SIGNALS)
-    previous = {signum: signal.signal(signum, lambda signum, frame: arrived.append(signum)) for signum in kinds}
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        for signum in dict.fromkeys(arrived):  # also after an error in the block: the signal is what ended it
-            handler = previous[signum]
-            if callable(handler):
-                handler(signum, None)

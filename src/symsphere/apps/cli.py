@@ -7,7 +7,7 @@ Examples
     symsphere sample --n 4800 --seed 1 --out directions.npy
     symsphere sample --n 4800 --domain hemisphere --normal 0 1 0 --out hemi.csv
     symsphere demo --out symsphere-demo
-    symsphere render --scene cornell --width 256 --height 192 --spp 96 --sampler symmetric_sobol --out img.png
+    symsphere render --scene cornell --width 256 --height 192 --spp 96 --strategy symmetric --points sobol --out img.png
     symsphere --version
 
 Exit status: 0 on success, 2 for invalid arguments (the message names the
@@ -45,6 +45,7 @@ from .._validation import check_count, check_nonnegative, check_output_path, che
 from ..integrands import INTEGRANDS, Integrand
 from ..io import DIRECTION_SUFFIXES, check_suffix, stream_directions
 from ..points import BLOCK, POINT_SETS
+from ..symmetry import orbit_size
 from ..warps import METHODS
 from ._notices import compile_notice
 from ._process import (
@@ -360,7 +361,7 @@ def _run_sample(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     seed = check_seed(seed, "--seed")
     options = dict(method=args.method, points=args.points, rng=seed, dtype=np.dtype(args.dtype))
-    count = 48 if args.domain == "sphere" else 24
+    count = orbit_size(args.domain)
     check_count(args.n, "n", multiple=count)  # named as the library's sample functions name it, not n_total
     check_duration(args.n / FASTEST_DIRECTIONS_PER_SECOND, f"--n {args.n}", args)
     chunk = args.chunk if args.chunk is not None else count * 2**16
@@ -399,7 +400,7 @@ def _run_sample(args: argparse.Namespace) -> int:
 def _cluster_blocks(client: Any, args: argparse.Namespace, options: dict[str, Any], chunk: int) -> _Blocks:
     """blocks(out) for stream_directions: chunks computed on the cluster, in order, a few in flight."""
     distributed = distributed_module()
-    count = 48 if args.domain == "sphere" else 24
+    count = orbit_size(args.domain)
     chunk = max(count * BLOCK, chunk - chunk % (count * BLOCK))  # cluster chunks are whole blocks
     if args.domain == "sphere":
         array = distributed.sample_sphere(args.n, chunks=chunk, **options)

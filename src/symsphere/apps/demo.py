@@ -251,7 +251,7 @@ def _render(path: Path, seed: int) -> str:
     """A small render of smallpt's Cornell box with the paper's scheme; the report's closing section."""
     from ..render import render, save_png  # function-level: ~0.3 s to import, and numba kernels
 
-    result = render("cornell", width=64, height=48, spp=48, sampler="symmetric_sobol", seed=seed)
+    result = render("cornell", width=64, height=48, spp=48, strategy="symmetric", points="sobol", seed=seed)
     save_png(path, result.image)
     return "\n".join(
         [
@@ -259,10 +259,10 @@ def _render(path: Path, seed: int) -> str:
             "## A render with the symmetric scheme",
             "",
             f"![Cornell box](render.png)  smallpt's Cornell box, {result.width}×{result.height}, {result.spp} paths "
-            f"per pixel, directions at diffuse vertices by the paper's scheme (`symmetric_sobol`: groups of 24 paths "
+            f"per pixel, directions at diffuse vertices by the paper's scheme (strategy `symmetric`, points `sobol`: groups of 24 paths "
             f"share a base point per bounce, from an Owen-scrambled Sobol' sequence, and take its 24 orbit members; "
             f"equal-area map; seed {seed}).  "
-            "`symsphere render --help` for more; docs/reference/renderer.md for the samplers.",
+            "`symsphere render --help` for more; docs/reference/renderer.md for the strategies.",
             "",
         ]
     )

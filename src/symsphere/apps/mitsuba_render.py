@@ -2,7 +2,8 @@
 
 The scene's own integrator sets ``max_depth``, ``rr_depth`` and ``hide_emitters`` (Mitsuba's ``path``
 defaults where it is not a path tracer); the direction sampling at Lambertian vertices comes from
-``--sampler`` (:data:`SAMPLER_STRATEGIES`).  The image has the file's resolution and the file's sample
+``--strategy`` and ``--points`` (the words of :mod:`symsphere._strategies`; :data:`SAMPLER_STRATEGIES`
+maps the deprecated ``--sampler`` onto them).  The image has the file's resolution and the file's sample
 count unless ``--width``, ``--height`` or ``--spp`` ask otherwise; width and height reach the file as its
 parameters ``width`` and ``height`` (``<default name="width" .../>``, as the shipped scenes declare them):
 a file whose film has a fixed size refuses them.  Given only one of the two, the other keeps the file's
@@ -35,8 +36,10 @@ from xml.parsers import expat
 
 import numpy as np
 
+from .._signals import deferred as deferred_signals
+from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import MAX_PATHS, check_count, memory_pixel_limit, read_regular_file
-from ._process import deferred_signals, wait_interruptibly
+from ._process import wait_interruptibly
 
 __all__ = [
     "DEFAULT_VARIANT",
@@ -58,7 +61,8 @@ SAMPLER_STRATEGIES = {
     "symmetric_cosine_sobol": ("symmetric_cosine", "sobol"),
     "symmetric_sobol": ("symmetric", "sobol"),
 }
-"""dict: ``--sampler`` -> (strategy, points) of ``symsphere_path`` for a Mitsuba scene file (sorted by name)."""
+"""dict: the deprecated ``--sampler`` (one release) -> (strategy, points) of ``symsphere_path`` for a Mitsuba
+scene file (sorted by name)."""
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 """The Mitsuba variant of ``--variant``'s default: Dr.Jit's LLVM back end, RGB, on every machine."""
@@ -239,7 +243,8 @@ def render_scene_file(
     width: int | None,
     height: int | None,
     spp: int | None,
-    sampler: str,
+    strategy: str,
+    points: str,
     method: str | None,
     seed: int,
     variant: str = DEFAULT_VARIANT,
@@ -251,18 +256,19 @@ def render_scene_file(
 ) -> dict[str, Any]:
     """Render the Mitsuba scene file *path*; returns the image and what the CLI reports.
 
-    Raises ValueError (one line, naming the file or the option) for a missing Mitsuba, an unknown sampler
-    or variant, a file that is not a regular file or nests too deep, a file Mitsuba cannot load (with
+    Raises ValueError (one line, naming the file or the option) for a missing Mitsuba, a strategy and
+    points that ``symsphere_path`` does not take, an unknown variant, a file that is not a regular file or nests too deep, a file Mitsuba cannot load (with
     Mitsuba's reason), a scene that cannot render (no sensor, an empty or too large film, a non-finite
     parameter), an spp the strategy cannot use, or an image with non-finite pixels.  *check_duration*
     is called with the estimated seconds before the render (at the fastest rate) and again after the
     first pass (at the measured rate); *between_passes* after every pass (the CLI raises a pending
     signal there); *report* with a line to show when the render will take more than a minute.
     """
-    if sampler not in SAMPLER_STRATEGIES:
-        raise ValueError(
-            f"--sampler {sampler!r} is not available for Mitsuba scenes; use one of {sorted(SAMPLER_STRATEGIES)}"
-        )
+    if strategy not in words("plugin"):
+        raise ValueError(f"--strategy {strategy!r} is not available for Mitsuba scenes; use one of {words('plugin')}")
+    if points not in SAMPLING_STRATEGIES[strategy].plugin_points:
+        allowed = SAMPLING_STRATEGIES[strategy].plugin_points
+        raise ValueError(f"--points {points!r} does not apply to --strategy {strategy} here; use one of {allowed}")
     path = check_scene_file(path)
     where = f"scene file {str(path)!r}"
     for name, value in (("--width", width), ("--height", height), ("--spp", spp), ("--threads", threads)):
@@ -292,7 +298,7 @@ def render_scene_file(
     if threads is not None:
         dr.set_thread_count(threads)
     try:
-        return _render(mi, path, params, spp, sampler, method, seed, variant, check_duration, progress,
+        return _render(mi, path, params, spp, (strategy, points), method, seed, variant, check_duration, progress,
                        between_passes, report)  # fmt: skip
     finally:  # the process's Dr.Jit pool as it was (Mitsuba's EXR writer hangs with one thread)
         if threads is not None:
@@ -304,7 +310,7 @@ def _render(
     path: Path,
     params: dict[str, int],
     spp: int | None,
-    sampler: str,
+    sampling: tuple[str, str],
     method: str | None,
     seed: int,
     variant: str,
@@ -349,7 +355,7 @@ def _render(
             depth[key] = -1 if key == "max_depth" and value >= 2**32 - 1 else value
     if re.search(r"hide_emitters\s*=\s*(1|true)", own):
         depth["hide_emitters"] = True
-    strategy, points = SAMPLER_STRATEGIES[sampler]
+    strategy, points = sampling
     options = {"type": "symsphere_path", "strategy": strategy, "points": points, **depth}
     if method is not None:
         options["method"] = method

@@ -3,7 +3,9 @@
 ``symsphere render --help`` lists the options of the built-in, ``.toml`` and ``.json`` scenes;
 ``symsphere render --scene FILE.xml --help`` those of a Mitsuba 3 scene file (rendered with
 ``symsphere_path``, see :mod:`symsphere.apps.mitsuba_render`).  Every option is either honoured or refused
-in one line for each kind of scene; choices are listed in a stable order.
+in one line for each kind of scene; choices are listed in a stable order.  The direction sampling is
+``--strategy`` x ``--points`` x ``--method``, the words of both renderers (:mod:`symsphere._strategies`);
+the earlier ``--sampler`` still works for one release, with a line on stderr naming the new options.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import cast
 
 import numpy as np
 
+from .._strategies import SAMPLER_SPELLINGS, SAMPLING_STRATEGIES, from_sampler, words
 from .._validation import (
     MAX_PATHS,
     check_count,
@@ -74,7 +77,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
         help="path-trace a scene (built-in, .toml/.json, or Mitsuba 3 .xml) with a chosen direction sampler",
         description=(
             "Path-trace a built-in scene (cornell: smallpt's Cornell box; furnace; translucent) or a "
-            ".toml/.json scene file, sampling directions at diffuse vertices with SAMPLER, on all cores.  "
+            ".toml/.json scene file, sampling directions at diffuse vertices by STRATEGY and its POINTS, on all cores.  "
             "Writes the tone-mapped sRGB image to --out (.png) and the linear HDR mean radiance next to "
             "it (.pfm and .npy, same stem).  Every file appears only when complete."
         ),
@@ -86,23 +89,14 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
     render.add_argument("--height", type=int, default=None, help="default: 192")
     render.add_argument(
         "--spp", type=int, default=None,
-        help="samples (camera paths) per pixel; symmetric samplers form whole orbits for multiples of 24 "
+        help="samples (camera paths) per pixel; the symmetric strategy forms whole orbits for multiples of 24 "
         "(48 with translucent materials) (default: 96)",
     )  # fmt: skip
-    render.add_argument(
-        "--sampler", choices=_numba_samplers(), default="symmetric_sobol",
-        help="direction sampling at diffuse vertices: the paper's scheme inside a pixel (symmetric, with "
-        "random or Owen-scrambled Sobol' base points), i.i.d. orbit samplers per map, or the classic uniform "
-        "and cosine references (default: %(default)s)",
-    )  # fmt: skip
+    _add_sampling_options(render, "render")
     render.add_argument(
         "--integrator", choices=("path", "bsdf"), default="path",
         help="path: next-event estimation and BSDF sampling combined by multiple importance sampling; "
         "bsdf: BSDF sampling only, smallpt's estimator (default: %(default)s)",
-    )  # fmt: skip
-    render.add_argument(
-        "--method", choices=METHODS, default=None,
-        help="map onto the triangle for the symmetric samplers (default: equal_area)",
     )  # fmt: skip
     render.add_argument("--filter", choices=("box", "tent"), default=None, help="pixel filter (default: box)")
     render.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
@@ -121,7 +115,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
 
 
 def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from .mitsuba_render import DEFAULT_VARIANT, SAMPLER_STRATEGIES
+    from .mitsuba_render import DEFAULT_VARIANT
 
     render = verbs.add_parser(
         "render",
@@ -129,7 +123,7 @@ def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParse
         description=(
             "Render a Mitsuba 3 scene file with the integrator symsphere_path (needs the extra 'mitsuba'): "
             "the file's sensor, film, emitters and BSDFs, its integrator's max_depth, rr_depth and "
-            "hide_emitters, and SAMPLER's directions at diffuse vertices.  Writes the tone-mapped sRGB image "
+            "hide_emitters, and the directions of STRATEGY at diffuse vertices.  Writes the tone-mapped sRGB image "
             "to --out (.png) and the linear HDR mean radiance next to it (.pfm, .npy and .exr, same stem).  "
             "Every file appears only when complete; Ctrl-C stops the render within a second."
         ),
@@ -145,15 +139,7 @@ def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParse
         "--spp", type=int, default=None,
         help="samples per pixel, rendered in passes of about 4 million paths (default: the file's sampler's)",
     )  # fmt: skip
-    render.add_argument(
-        "--sampler", choices=tuple(SAMPLER_STRATEGIES), default="symmetric_sobol",
-        help="direction sampling at Lambertian vertices, as symsphere_path's strategy and points; bsdf is "
-        "Mitsuba's own sampling (default: %(default)s)",
-    )  # fmt: skip
-    render.add_argument(
-        "--method", choices=METHODS, default=None,
-        help="map onto the triangle for the symmetric samplers (default: equal_area)",
-    )  # fmt: skip
+    _add_sampling_options(render, "plugin")
     render.add_argument(
         "--variant", default=DEFAULT_VARIANT,
         help="Mitsuba variant: an llvm_ad_* variant (rgb, mono, spectral), cuda_ad_* where a CUDA device "
@@ -177,12 +163,80 @@ def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParse
     render.set_defaults(handler=_run_render)
 
 
-def _numba_samplers() -> tuple[str, ...]:
-    # Function-level: symsphere.render takes ~0.3 s to import; the renderer module alone gives the tuple
-    # without loading the kernels.
-    from ..render.renderer import SAMPLERS
+# --strategy, --points, --sampler (deprecated), --method: the help of each, for the numba renderer and the plugin
+_SAMPLING_HELP = {
+    "render": (
+        "direction sampling at diffuse vertices: the paper's scheme inside a pixel (symmetric: orbits of 24 on T0; "
+        "symmetric_cosine: 8 images of a cosine-weighted base point), i.i.d. orbit members (orbit), or the classic "
+        "uniform and cosine references (default: symmetric)",
+        "the strategy's base points: sobol (Owen-scrambled Sobol', the default of the symmetric strategies), random "
+        "(the default, and the only choice, of the others), sobol_interlaced2 or sobol_interlaced3 (higher-order "
+        "nets, symmetric strategies)",
+        "map onto the triangle for the strategies symmetric and orbit (default: equal_area)",
+    ),
+    "plugin": (
+        "direction sampling at Lambertian vertices, symsphere_path's strategy; bsdf is Mitsuba's own sampling "
+        "(default: symmetric)",
+        "the strategy's base points, symsphere_path's points: sobol (the default of the symmetric strategies) or "
+        "random (the default of the others; bsdf takes the file's sampler's points)",
+        "map onto the triangle for the strategy symmetric (default: equal_area)",
+    ),
+}
 
-    return SAMPLERS
+
+def _add_sampling_options(render: argparse.ArgumentParser, program: str) -> None:
+    """The options of the direction sampling, in the words of :mod:`symsphere._strategies`."""
+    if program == "render":
+        old = tuple(SAMPLER_SPELLINGS)
+    else:
+        from .mitsuba_render import SAMPLER_STRATEGIES  # (the registry's words: no Mitsuba import)
+
+        old = tuple(SAMPLER_STRATEGIES)
+    strategy, points, method = _SAMPLING_HELP[program]
+    render.add_argument("--strategy", choices=words(program), default=None, help=strategy)
+    render.add_argument("--points", choices=_points(program), default=None, help=points)
+    render.add_argument("--method", choices=METHODS, default=None, help=method)
+    deprecated = "deprecated (one release): the earlier one-word spelling of --strategy and --points"
+    render.add_argument("--sampler", choices=old, default=None, help=deprecated)
+
+
+def _points(program: str) -> tuple[str, ...]:
+    """The base points some strategy of *program* takes, sorted."""
+    records = SAMPLING_STRATEGIES.values()
+    return tuple(sorted({p for s in records for p in (s.render_points if program == "render" else s.plugin_points)}))
+
+
+def _sampling(args: argparse.Namespace, program: str) -> tuple[str, str, str | None]:
+    """(strategy, points, method) of the command line: the words, or the deprecated ``--sampler`` (with a
+    line on stderr naming the words); a combination one renderer does not take is refused naming options."""
+    strategy, points, method = args.strategy, args.points, args.method
+    if args.sampler is not None:
+        if strategy is not None or points is not None:
+            raise UsageError("--sampler is the deprecated spelling of --strategy and --points; give one or the other")
+        if program == "render":
+            strategy, points, method, _ = from_sampler(args.sampler, method)
+        else:
+            from .mitsuba_render import SAMPLER_STRATEGIES
+
+            strategy, points = SAMPLER_STRATEGIES[args.sampler]
+        new = f"--strategy {strategy} --points {points}" + (
+            f" --method {method}" if method is not None and args.method is None else ""
+        )
+        print(f"symsphere render: --sampler is deprecated; use {new}", file=sys.stderr)
+    record = SAMPLING_STRATEGIES[strategy or "symmetric"]
+    allowed = record.render_points if program == "render" else record.plugin_points
+    if points is None:  # the renderer's default where this one takes it: Sobol' for the symmetric strategies
+        points = (
+            record.render_points[0] if record.render_points[:1] and record.render_points[0] in allowed else allowed[0]
+        )
+    if points not in allowed:
+        raise UsageError(
+            f"--points {points} does not apply to --strategy {record.name}; use one of {', '.join(allowed)}"
+        )
+    if program == "render" and args.method is not None and not record.takes_method:
+        takers = " and ".join(name for name in words("render") if SAMPLING_STRATEGIES[name].takes_method)
+        raise UsageError(f"--method applies only to --strategy {takers}; drop it for --strategy {record.name}")
+    return record.name, points, method
 
 
 def _run_render(args: argparse.Namespace) -> int:
@@ -224,13 +278,15 @@ def _run_render(args: argparse.Namespace) -> int:
             f"{pixels * args.spp} paths (--width x --height x --spp on {threads} threads)",
             args,
         )
+    strategy, points, method = _sampling(args, "render")
     options = dict(
         width=args.width,
         height=args.height,
         spp=args.spp,
-        sampler=args.sampler,
+        strategy=strategy,
+        points=points,
         integrator=args.integrator,
-        method=args.method,
+        method=method,
         pixel_filter=args.filter,
         seed=args.seed,
         progress=not args.no_progress,
@@ -247,14 +303,14 @@ def _run_render(args: argparse.Namespace) -> int:
     args.outputs.watch(outputs)
     paths = write_outputs(result, out, exposure=args.exposure)  # all three files or none; errors name the file
     args.outputs.done = True
-    method = f" ({result.method})" if result.method else ""
+    method = f", method {result.method}" if result.method else ""
     if client is None:
         where = f"on {result.threads} threads (+{result.startup_seconds:.2f} s compile/load)"
     else:
         where = f"in all, on a Dask cluster of {result.threads} workers (wall time, compilation included)"
     print(
         f"rendered {result.scene} {result.width}x{result.height} at {result.spp} spp, {result.integrator} integrator, "
-        f"{result.sampler} sampler{method}, "
+        f"strategy {result.strategy}, points {result.points}{method}, "
         f"seed {result.seed}: {result.paths} paths in {result.seconds:.2f} s = "
         f"{result.paths_per_second / 1e6:.2f} Mpaths/s {where}; wrote {', '.join(str(p) for p in paths)}"
     )
@@ -303,8 +359,9 @@ def _run_mitsuba_render(args: argparse.Namespace) -> int:
     def say(line: str) -> None:
         print(f"symsphere render: {line}", file=sys.stderr)
 
+    strategy, points, method = _sampling(args, "plugin")
     r = render_scene_file(
-        args.scene, width=args.width, height=args.height, spp=args.spp, sampler=args.sampler, method=args.method,
+        args.scene, width=args.width, height=args.height, spp=args.spp, strategy=strategy, points=points, method=method,
         seed=seed, variant=args.variant, threads=args.threads, check_duration=long_work,
         progress=not args.no_progress, between_passes=lambda: check_pending(args), report=say,
     )  # fmt: skip

@@ -27,7 +27,7 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
 as :mod:`symsphere.render`'s samplers; ``bsdf`` takes the scene sampler's points (choose a QMC sampler
 there), so it refuses ``points='sobol'``.  The grouping is the renderer's
-(``symsphere.render._integrator.sample_local``): with n = 24 (symmetric) or 8 (symmetric_cosine),
+(``symsphere.render._directions.sample_local``): with n = 24 (symmetric) or 8 (symmetric_cosine),
 sample s of a pixel is in group g = s // n; at vertex ``depth`` the group shares one base point
 B(g, depth) and one offset o(g, depth) uniform in 0..n-1, and sample s takes orbit member
 ``(s mod n + o) mod n``: the n samples of a group take all n images of B in turn, while each path on
@@ -50,13 +50,14 @@ consecutive lanes instead, keyed from the scene's sampler.
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Any
 
 import drjit as dr
 import mitsuba as mi
 
+from .._constants import BASE_U, BASE_V, INV_2PI, INV_PI
+from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import check_choice
 from ..warps import METHODS
 from . import _lights, _random
@@ -72,16 +73,15 @@ __all__ = [
     "lambertian_codes",
 ]
 
-STRATEGIES = ("bsdf", "cosine", "symmetric", "symmetric_cosine")
-POINTS = ("random", "sobol")
-GROUP_SIZES = {"bsdf": 1, "cosine": 1, "symmetric": 24, "symmetric_cosine": 8}
+# the registry's words that symsphere_path takes (symsphere._strategies: the renderer's too)
+STRATEGIES = words("plugin")
+POINTS = tuple(dict.fromkeys(p for s in STRATEGIES for p in SAMPLING_STRATEGIES[s].plugin_points))
+GROUP_SIZES = {strategy: SAMPLING_STRATEGIES[strategy].group for strategy in STRATEGIES}
 # the strategies with groups; they, and cosine with Sobol' points, replace the BSDF's sample at Lambertian
 # vertices (bsdf, and cosine with random points, take the BSDF's own sample: see the module docstring)
 _SYMMETRIC_STRATEGIES = tuple(strategy for strategy, size in GROUP_SIZES.items() if size > 1)
 _COSINE_DENSITY = ("cosine", "symmetric_cosine")  # density |cos| / pi: the weight f cos / p is R
-_BASE_U = 0x2545F4914F6CDD1D  # the renderer's tags that split a group key into u and v
-_BASE_V = 0x5851F42D4C957F2D
-_INV_PI = 1.0 / math.pi
+_INV_PI = INV_PI
 _REPLACE_GRAD: Any = dr.replace_grad  # its stub says it returns None
 
 
@@ -301,17 +301,17 @@ class _PathMethods:
         member = s - n * group + _random.below(h, n)  # (s mod n + offset) mod n
         member = dr.select(member >= n, member - n, member)
         if self.points == "random":
-            u = _random.u01(_random.mix64(h ^ _BASE_U))
-            v = _random.u01(_random.mix64(h ^ _BASE_V))
+            u = _random.u01(_random.mix64(h ^ BASE_U))
+            v = _random.u01(_random.mix64(h ^ BASE_V))
         else:
             fu, fv = _random.owen_sobol2(group, vertex_key)
             u, v = _random.fraction(fu), _random.fraction(fv)
         if self.strategy == "cosine":  # points='sobol' (random: the BSDF's own sample); n = 1, group = s
             wo = mi.warp.square_to_cosine_hemisphere(mi.Point2f(u, v))
-            return wo, wo.z * _INV_PI
+            return wo, wo.z * INV_PI
         if self.strategy == "symmetric_cosine":
             x, y, z = orbit_member(*cosine_wedge_point(u, v), member, members=8)
-            return mi.Vector3f(x, y, z), z * _INV_PI
+            return mi.Vector3f(x, y, z), z * INV_PI
         bx, by, bz = triangle_point(u, v, self.method)
         density = triangle_density(bx, by, bz, self.method)
         x, y, z = orbit_member(bx, by, bz, member, members=24)
@@ -321,9 +321,9 @@ class _PathMethods:
         """The strategy's density of the local direction *wo* (on the side of wi), for MIS."""
         same_side = wo.z * wi_z > 0
         if self.strategy in _COSINE_DENSITY:  # density |cos| / pi
-            return dr.select(same_side, dr.abs(wo.z) * _INV_PI, 0.0)
+            return dr.select(same_side, dr.abs(wo.z) * INV_PI, 0.0)
         if self.method == "equal_area":
-            return dr.select(same_side, 1.0 / (2.0 * math.pi), 0.0)
+            return dr.select(same_side, INV_2PI, 0.0)
         a, b, c = dr.abs(wo.x), dr.abs(wo.y), dr.abs(wo.z)
         lo_ab, hi_ab = dr.minimum(a, b), dr.maximum(a, b)
         base = (dr.maximum(lo_ab, dr.minimum(hi_ab, c)), dr.minimum(lo_ab, c), dr.maximum(hi_ab, c))
@@ -440,9 +440,7 @@ class _PathMethods:
                 if dr.hint(self.strategy in _COSINE_DENSITY, mode="scalar"):
                     weight_local = bsdf_weight  # pdf_local = |z| / pi: the weight is R
                 else:
-                    weight_local = dr.select(
-                        pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * _INV_PI / pdf_local), 0.0
-                    )
+                    weight_local = dr.select(pdf_local > 0.0, bsdf_weight * (dr.abs(local.z) * INV_PI / pdf_local), 0.0)
                 bsdf_pdf = dr.select(lambertian, self._density(wo, si.wi.z), bsdf_pdf)
                 bsdf_sample.wo = dr.select(lambertian, local, bsdf_sample.wo)
                 bsdf_sample.pdf = dr.select(lambertian, pdf_local, bsdf_sample.pdf)

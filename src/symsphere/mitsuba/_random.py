@@ -1,6 +1,6 @@
 """Counter-based random numbers and Owen-scrambled Sobol' points in Dr.Jit, for ``symsphere_path``.
 
-The Dr.Jit form of :mod:`symsphere.render._random`, for JIT variants (``mi.UInt64`` / ``mi.UInt32``
+The Dr.Jit form of :mod:`symsphere._random.hashes` and :mod:`symsphere._random.owen_sobol`, for JIT variants (``mi.UInt64`` / ``mi.UInt32``
 arrays; wrap-around arithmetic): splitmix64's finaliser :func:`mix64` (Steele, Lea & Flood 2014),
 the per-pixel key :func:`pixel_key`, Lemire's :func:`below`, and the point ``index`` of the
 Owen-scrambled, index-shuffled 2D Sobol' sequence :func:`owen_sobol2` (Burley 2020: reverse the
@@ -11,9 +11,8 @@ version is pinned to::
     nested_uniform_scramble(x, s1), nested_uniform_scramble(y, s2)
 
 with the seeds s0, s1, s2 taken from the 64-bit key as the renderer takes them.  The constants are
-the renderer's (restated: they are private there); tests/mitsuba/test_integrator.py checks these
-functions bit for bit against :mod:`symsphere.render._random`.  Floats are the top 24 bits (float32
-has 24), in [0, 1).
+imported from :mod:`symsphere._random`; tests/mitsuba/test_integrator.py checks these functions bit
+for bit against the numba forms there.  Floats are the top 24 bits (float32 has 24), in [0, 1).
 """
 
 from __future__ import annotations
@@ -22,14 +21,13 @@ from typing import Any
 
 import mitsuba as mi
 
-from .. import _splitmix
+from .._random import splitmix
+from .._random.owen_sobol import LAINE_KARRAS, MASK32
 
 __all__ = ["GOLDEN", "ODD", "mix64", "pixel_key", "below", "u01", "owen_sobol2", "fraction"]
 
-GOLDEN, ODD = int(_splitmix.GOLDEN), int(_splitmix.ODD)  # SplitMix64's constants, as Python ints
-_MIX1, _MIX2 = int(_splitmix.MIX1), int(_splitmix.MIX2)
-_LK = (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6)  # Laine-Karras constants (Burley 2020, listing 2)
-_M32 = 0xFFFFFFFF
+GOLDEN, ODD = int(splitmix.GOLDEN), int(splitmix.ODD)  # SplitMix64's constants, as Python ints
+_MIX1, _MIX2 = int(splitmix.MIX1), int(splitmix.MIX2)
 
 
 # The second Sobol' dimension (direction numbers v_j = v_{j-1} ^ (v_{j-1} >> 1), v_0 = 2^31: bit 31 - k of v_j
@@ -40,20 +38,20 @@ _SUPERSET_STEPS = ((1, 0x55555555), (2, 0x33333333), (4, 0x0F0F0F0F), (8, 0x00FF
 
 
 def mix64(z: Any) -> Any:
-    """splitmix64's finaliser (``symsphere._splitmix.mix64``) on a UInt64 array."""
+    """splitmix64's finaliser (``symsphere._random.splitmix.mix64``) on a UInt64 array."""
     z = (z ^ (z >> 30)) * _MIX1
     z = (z ^ (z >> 27)) * _MIX2
     return z ^ (z >> 31)
 
 
 def pixel_key(seed: Any, pixel: Any) -> Any:
-    """``render._random.pixel_key``: the key of one pixel (UInt64)."""
+    """``_random.hashes.pixel_key``: the key of one pixel (UInt64)."""
     seed = mi.UInt64(seed)
     return mix64(mix64(seed + GOLDEN) ^ (mi.UInt64(pixel) * GOLDEN + 1))
 
 
 def below(bits: Any, n: int) -> Any:
-    """``render._random.below``: a UInt64 to a UInt32 in 0..n-1 (multiply-shift on the top 32 bits)."""
+    """``_random.hashes.below``: a UInt64 to a UInt32 in 0..n-1 (multiply-shift on the top 32 bits)."""
     return mi.UInt32(((bits >> 32) * n) >> 32)
 
 
@@ -72,32 +70,32 @@ def _reverse32(x: Any) -> Any:
 
 def _laine_karras(x: Any, seed: Any) -> Any:
     x = x + seed
-    for c in _LK:
+    for c in LAINE_KARRAS:
         x = x ^ (x * c)
     return x
 
 
 def _scramble(x: Any, seed: Any) -> Any:
-    """``render._random.nested_uniform_scramble`` of a UInt32 fraction."""
+    """``_random.owen_sobol.nested_uniform_scramble`` of a UInt32 fraction."""
     return _reverse32(_laine_karras(_reverse32(x), seed))
 
 
 def owen_sobol2(index: Any, key: Any) -> tuple[Any, Any]:
     """Point *index* (UInt32) of the Owen-scrambled, index-shuffled 2D Sobol' sequence of the UInt64 *key*.
 
-    Returns the two UInt32 fractions (``render._random.owen_sobol2`` returns them divided by 2^32).
+    Returns the two UInt32 fractions (``_random.owen_sobol.owen_sobol2`` returns them divided by 2^32).
     The reference form's bit reversals cancel in pairs: with ``i`` the shuffled index, the first
     coordinate (van der Corput, ``reverse(i)``) scrambled is ``reverse(laine_karras(i, s1))``; the
     second, ``reverse(laine_karras(superset(i), s2))`` (``_SUPERSET_STEPS``).
     """
     h1 = mix64(key ^ GOLDEN)
     h2 = mix64(key ^ _MIX1)
-    i = _scramble(mi.UInt32(index), mi.UInt32(h1 & _M32))
+    i = _scramble(mi.UInt32(index), mi.UInt32(h1 & MASK32))
     r = i
     for shift, mask in _SUPERSET_STEPS:
         r = r ^ ((r >> shift) & mask)
     x = _reverse32(_laine_karras(i, mi.UInt32(h1 >> 32)))
-    y = _reverse32(_laine_karras(r, mi.UInt32(h2 & _M32)))
+    y = _reverse32(_laine_karras(r, mi.UInt32(h2 & MASK32)))
     return x, y
 
 

@@ -21,9 +21,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .._typing import Domain
 from .._validation import check_choice
-from ..symmetry import SIGNS, SOURCES
-from ..symmetry import fold as numpy_fold
+from ..symmetry import FOLD_TABLE, SIGNS, SOURCES, orbit_size
 from ..warps import METHODS, strip_order
 
 __all__ = [
@@ -222,7 +222,7 @@ def _weak_order(a: Any, b: Any) -> Any:
 
 
 def _fold_key(x: Any, y: Any, z: Any) -> Any:
-    """The sign pattern of d and the weak order of |d| as one key < 729 (symmetry's fold key)."""
+    """The sign pattern of d and the weak order of |d| as one key < 729: :func:`symsphere.symmetry.fold_key`."""
     ax, ay, az = dr.abs(x), dr.abs(y), dr.abs(z)
     key = 0
     for part in (_sign(x), _sign(y), _sign(z), _weak_order(ax, ay), _weak_order(ax, az), _weak_order(ay, az)):
@@ -230,23 +230,8 @@ def _fold_key(x: Any, y: Any, z: Any) -> Any:
     return key
 
 
-def _fold_table() -> np.ndarray:
-    # Every key is realised on the grid {-3, ..., 3}^3 (as in symmetry): its k is what the public
-    # symmetry.fold returns there (the lowest table index whose image is exact).
-    grid = np.array(np.meshgrid(*[np.arange(-3, 4.0)] * 3, indexing="ij")).reshape(3, -1).T
-    k, _ = numpy_fold(grid)
-    sign = np.sign(grid).astype(np.int64)
-    a = np.abs(grid)
-    keys = np.zeros(len(grid), dtype=np.int64)
-    for part in (sign[:, 0], sign[:, 1], sign[:, 2], np.sign(a[:, 0] - a[:, 1]), np.sign(a[:, 0] - a[:, 2]),
-                 np.sign(a[:, 1] - a[:, 2])):  # fmt: skip
-        keys = keys * 3 + (part.astype(np.int64) + 1)
-    table = np.zeros(3**6, dtype=np.uint32)
-    table[keys] = k
-    return table
-
-
-_FOLD_TABLE = _fold_table()
+# symmetry's table, as the UInt32 a gather reads (a key no vector has is never looked up).
+_FOLD_TABLE = np.maximum(FOLD_TABLE, 0).astype(np.uint32)
 
 
 def _lookup(table: np.ndarray, index: Any) -> Any:
@@ -305,9 +290,10 @@ def triangle_to_square(v: Any, method: str = "equal_area") -> Any:
     return mi.Point2f(*_triangle_uv(v.x, v.y, v.z, _method(method)))
 
 
-def _strip_forward(sample: Any, method: str, count: int) -> Any:
+def _strip_forward(sample: Any, method: str, domain: Domain) -> Any:
     # square_warps._forward: strip j = floor(count u) onto triangle strip_order[j], odd strips mirrored
     method = _method(method)
+    count = orbit_size(domain)
     t = sample.x * count
     j_float = dr.minimum(dr.floor(t), count - 1)
     local = t - j_float
@@ -319,25 +305,26 @@ def _strip_forward(sample: Any, method: str, count: int) -> Any:
         odd = (j & 1) == 1
     local_u = _clip(dr.select(odd, 1.0 - local, local), 0.0, 1.0)
     bx, by, bz = triangle_point(local_u, sample.y, method)
-    k = _lookup(strip_order("sphere" if count == 48 else "hemisphere"), j)
+    k = _lookup(strip_order(domain), j)
     return _vector(*orbit_member(bx, by, bz, k))
 
 
-def _strip_pdf(v: Any, method: str, count: int) -> Any:
-    # sampling.sphere_pdf / hemisphere_pdf: square_to_triangle_pdf(fold(d)) / count, 0 below the equator for 24
+def _strip_pdf(v: Any, method: str, domain: Domain) -> Any:
+    # sampling.sphere_pdf / hemisphere_pdf: square_to_triangle_pdf(fold(d)) / count, 0 below the equator
     bx, by, bz = _base(v.x, v.y, v.z)
-    density = triangle_density(bx, by, bz, _method(method)) / count
-    if count == 24:
+    density = triangle_density(bx, by, bz, _method(method)) / orbit_size(domain)
+    if domain == "hemisphere":
         density = dr.select(v.z >= 0.0, density, 0.0)
     return density
 
 
-def _strip_inverse(v: Any, method: str, count: int) -> Any:
+def _strip_inverse(v: Any, method: str, domain: Domain) -> Any:
     # square_warps._inverse: fold, invert the map, put u' back into the strip of triangle k
     method = _method(method)
+    count = orbit_size(domain)
     k, base = fold(v)
     lu, lv = _triangle_uv(base.x, base.y, base.z, method)
-    strips = np.argsort(strip_order("sphere" if count == 48 else "hemisphere")).astype(np.uint32)
+    strips = np.argsort(strip_order(domain)).astype(np.uint32)
     j = _lookup(strips, k)
     lu = _clip(lu, 0.0, 1.0)
     odd = (j % 2 == 1) if isinstance(j, int) else ((j & 1) == 1)
@@ -347,32 +334,32 @@ def _strip_inverse(v: Any, method: str, count: int) -> Any:
 
 def square_to_sphere(sample: Any, method: str = "equal_area") -> Any:
     """The whole-sphere bijection through the 48 triangles: :func:`symsphere.warps.square_to_sphere`."""
-    return _strip_forward(sample, method, 48)
+    return _strip_forward(sample, method, "sphere")
 
 
 def square_to_sphere_pdf(v: Any, method: str = "equal_area") -> Any:
     """Density of :func:`square_to_sphere`: :func:`symsphere.warps.square_to_sphere_pdf`."""
-    return _strip_pdf(v, method, 48)
+    return _strip_pdf(v, method, "sphere")
 
 
 def sphere_to_square(v: Any, method: str = "equal_area") -> Any:
     """Inverse of :func:`square_to_sphere`: :func:`symsphere.warps.sphere_to_square`."""
-    return _strip_inverse(v, method, 48)
+    return _strip_inverse(v, method, "sphere")
 
 
 def square_to_hemisphere(sample: Any, method: str = "equal_area") -> Any:
     """The hemisphere bijection through the 24 triangles: :func:`symsphere.warps.square_to_hemisphere`."""
-    return _strip_forward(sample, method, 24)
+    return _strip_forward(sample, method, "hemisphere")
 
 
 def square_to_hemisphere_pdf(v: Any, method: str = "equal_area") -> Any:
     """Density of :func:`square_to_hemisphere`: :func:`symsphere.warps.square_to_hemisphere_pdf`."""
-    return _strip_pdf(v, method, 24)
+    return _strip_pdf(v, method, "hemisphere")
 
 
 def hemisphere_to_square(v: Any, method: str = "equal_area") -> Any:
     """Inverse of :func:`square_to_hemisphere`: :func:`symsphere.warps.hemisphere_to_square`."""
-    return _strip_inverse(v, method, 24)
+    return _strip_inverse(v, method, "hemisphere")
 
 
 def square_to_cosine_wedge(sample: Any) -> Any:

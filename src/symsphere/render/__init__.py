@@ -3,13 +3,14 @@
 A path tracer (numba, all cores) with two estimators -- ``integrator="path"``
 (next-event estimation and BSDF sampling combined by multiple importance
 sampling, the default) and ``integrator="bsdf"`` (BSDF sampling only,
-smallpt's) -- whose direction sampling at diffuse vertices is a parameter: the
-paper's symmetric scheme (orbits of 24 directions on the hemisphere, 48 on the
-sphere for Lambertian transmission) with random, Owen-scrambled Sobol' or
-interlaced (higher-order) scrambled Sobol' base points, the i.i.d. orbit
-samplers of each map, the classic uniform and cosine-weighted references, and
-the symmetric cosine-weighted samplers (the 8 signed permutations that keep z).  Every (integrator, sampler) pair is
-unbiased and converges to the same image.
+smallpt's) -- whose direction sampling at diffuse vertices is ``strategy`` x
+``points`` x ``method`` (the words of the Mitsuba plugin ``symsphere_path``): the
+paper's symmetric scheme (``symmetric``: orbits of 24 directions on the hemisphere,
+48 on the sphere for Lambertian transmission) with random, Owen-scrambled Sobol' or
+interlaced (higher-order) scrambled Sobol' base points, i.i.d. orbit members
+(``orbit``) of each map, the classic ``uniform`` and ``cosine``-weighted references,
+and ``symmetric_cosine`` (the 8 signed permutations that keep z).  Every integrator
+and way of sampling is unbiased and converges to the same image.
 
 >>> from symsphere.render import render, write_outputs
 >>> result = render("cornell", width=64, height=48, spp=24, seed=1)   # doctest: +SKIP
@@ -23,6 +24,7 @@ from .renderer import (
     FILTERS,
     INTEGRATORS,
     SAMPLERS,
+    STRATEGIES,
     SYMMETRIC_SAMPLERS,
     RenderPlan,
     RenderResult,
@@ -55,6 +57,7 @@ __all__ = [
     "MATERIAL_KINDS",
     "SAMPLERS",
     "SCENES",
+    "STRATEGIES",
     "SYMMETRIC_SAMPLERS",
     "Camera",
     "HalfSpace",

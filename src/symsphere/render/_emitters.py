@@ -28,8 +28,8 @@ angle, ``p_w = d^2 / (|cos_l| A)``.  :func:`emitter_pdf` makes the same case
 analysis for a hit found by BSDF sampling.
 
 The local frame (:func:`rows_to_world`, the scalar twin of :func:`symsphere.frames.to_world`, in
-the frame of :func:`symsphere.frames.frame_rows`) and :data:`INV_2PI` are shared with the
-integrator, which imports them from here.
+the frame of :func:`symsphere.frames.frame_rows`) is shared with the integrator, which imports it
+from here; 1/(2 pi) is :data:`symsphere._constants.INV_2PI`.
 """
 
 from __future__ import annotations
@@ -41,14 +41,14 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
+from .._constants import INV_2PI, TWO_POW_M53
+from .._random.hashes import next_u64, u01
 from .._threads import route_compiles
 from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
-from ._random import next_u64, u01
 
 __all__ = [
     "INLINED",
-    "INV_2PI",
     "choose_light",
     "disk_point",
     "emitter_pdf",
@@ -58,7 +58,6 @@ __all__ = [
     "spherical_rectangle",
 ]
 
-INV_2PI = 0.5 / math.pi
 # The numba options of the scalar functions that take the scene's tables (here and in the integrator):
 # compiled once each, cached, no reference counting of their array arguments (they allocate nothing),
 # and the kernels' error model (a division by zero gives inf or NaN, as in numpy, not an exception).
@@ -68,7 +67,7 @@ TABLE_FUNCTION: dict[str, Any] = dict(_nrt=False, cache=True, error_model="numpy
 INLINED: dict[str, Any] = dict(TABLE_FUNCTION, forceinline=True)
 _PI = math.pi
 _MIN_RECTANGLE_SOLID_ANGLE = 1e-3  # below it a rectangle is sampled by area (pbrt-v4's threshold)
-_ONE_MINUS_EPSILON = 1.0 - 2.0**-53
+_ONE_MINUS_EPSILON = 1.0 - TWO_POW_M53
 _S32 = np.uint64(32)
 _M32 = np.uint64(0xFFFFFFFF)
 _TWO_M31 = 2.0**-31

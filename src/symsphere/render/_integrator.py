@@ -1,18 +1,13 @@
 """The path-tracing kernels: two estimators of the rendering equation, one numba kernel.
 
-The renderer's numba code is here, except the emitters
+The renderer's numba code is here, except the direction sampling at diffuse vertices
+(:mod:`symsphere.render._directions`: the strategies and their densities), the emitters
 (:mod:`symsphere.render._emitters`: sampling, densities, selection, the power
-heuristic), the random-number plumbing (:mod:`symsphere.render._random`) and
+heuristic), the random-number plumbing (:mod:`symsphere._random`) and
 the small kernels for the tests (:mod:`symsphere.render._probes`).  The
 functions of the hot path are numba functions of their own (``INLINED``: typed and compiled
-once each, cached), which LLVM inlines into the one kernel that :func:`render_pass` runs.  Direction sampling at diffuse
-vertices goes through scalar library functions -- the maps and the orbit
-(``triangle_point``, ``triangle_density``, ``orbit_member`` of
-:mod:`symsphere._kernels`), the classic uniform and cosine maps
-(``uniform_hemisphere_point`` etc. of :mod:`symsphere.warps`), the frame
-(:func:`symsphere.frames.frame_rows`) and the cosine-weighted wedge map
-(:func:`symsphere.warps.cosine_wedge_point`) -- so
-no formula is restated.
+once each, cached), which LLVM inlines into the one kernel that :func:`render_pass` runs.  The
+frame at a vertex is :func:`symsphere.frames.frame_rows`, so no formula is restated.
 
 Estimators (``integrator``)
 ---------------------------
@@ -58,22 +53,6 @@ update at vertex v (0-based), if ``v + 1 >= rr_depth`` the path survives with
 probability ``q = min(max(throughput), 0.95)`` and is divided by q.
 ``max_depth`` (default 1024) is a safety net far beyond where roulette has
 ended every path (survival after depth 1024 is below 0.95**1019 ~ 1e-23).
-
-Samplers (codes)
-----------------
-``UNIFORM`` classic uniform directions (``warps.uniform_hemisphere_point``,
-``uniform_sphere_point``); ``COSINE`` Shirley-Chiu concentric disk + Malley
-(``warps.cosine_hemisphere_point``; the full sphere: a side with probability
-1/2); ``ORBIT`` a random base point mapped onto T0 and a uniformly random
-orbit member, i.i.d.; ``SYMMETRIC`` the paper's pattern inside a pixel with
-random base points; ``SYMMETRIC_SOBOL`` the same with Owen-scrambled Sobol'
-base points; ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` the same
-pattern with the 8 signed permutations that keep z (16 with the side through
-transmission) and a cosine-weighted map onto the wedge 0 <= phi <= pi/4;
-``SYMMETRIC_SOBOL_INTERLACED2/3`` and ``SYMMETRIC_COSINE_SOBOL_INTERLACED2/3``
-the two patterns with interlaced (higher-order) scrambled Sobol' base points.  See
-:func:`sample_local` for the exact mapping of (sample, vertex) to (group,
-member, base point).
 """
 
 from __future__ import annotations
@@ -86,18 +65,14 @@ from numba import get_num_threads, njit, types
 from numba.extending import register_jitable
 
 from .._compile_ahead import compile_ahead, is_cached
-from .._kernels import orbit_member, triangle_density, triangle_point
+from .._constants import INV_PI
 from .._numba_cache import invalidate_if_changed
-from .._splitmix import GOLDEN, ODD, mix64
+from .._random.hashes import next_u64, path_state, pixel_key, u01
 from .._threads import route_compiles, run_kernel, start_threads
 from ..frames import frame_rows
-from ..warps import cosine_hemisphere_point, cosine_wedge_point, uniform_hemisphere_point, uniform_sphere_point
-from ._emitters import INLINED, INV_2PI, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
-from ._random import below, next_u64, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, u01
+from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
+from ._emitters import INLINED, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
 
-UNIFORM, COSINE, ORBIT, SYMMETRIC, SYMMETRIC_SOBOL, SYMMETRIC_COSINE, SYMMETRIC_COSINE_SOBOL = range(7)
-SYMMETRIC_SOBOL_INTERLACED2, SYMMETRIC_SOBOL_INTERLACED3 = 7, 8
-SYMMETRIC_COSINE_SOBOL_INTERLACED2, SYMMETRIC_COSINE_SOBOL_INTERLACED3 = 9, 10
 PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
 BOX, TENT = 0, 1
@@ -117,175 +92,9 @@ CAMERA_COLUMNS = 13  # position, unit forward, right and up spanning the image p
 KERNEL_OPTIONS: dict[str, Any] = dict(cache=True, error_model="numpy", nogil=True, fastmath=False)
 # The pass kernel: no reference counting (it allocates nothing; see render/_emitters.py)
 _PASS_KERNEL_OPTIONS: dict[str, Any] = dict(KERNEL_OPTIONS, _nrt=False)
-_INV_PI = 1.0 / math.pi
-_INV_4PI = 0.25 / math.pi
+_INV_PI = INV_PI  # the kernels' spelling
 _RR_CAP = 0.95
 _SHADOW_TOLERANCE = 1e-6  # relative: a shadow ray reaches the sampled point if nothing is hit this much before it
-_BASE_U = np.uint64(0x2545F4914F6CDD1D)  # distinct tags that split a group key into u and v
-_BASE_V = np.uint64(0x5851F42D4C957F2D)
-_GOLDEN, _ODD = GOLDEN, ODD  # SplitMix64's constants (symsphere._splitmix), as the kernels name them
-_ONE = np.uint64(1)
-
-
-@register_jitable
-def fixed_sampler(sampler):
-    """*sampler* if it is UNIFORM, COSINE or ORBIT, else -1: a symmetric sampler (its base-point source,
-    random, Sobol' or interlaced, is then read from *sampler* itself)."""
-    if sampler == UNIFORM or sampler == COSINE or sampler == ORBIT:
-        return sampler
-    return -1
-
-
-@register_jitable
-def is_cosine(sampler):
-    """The symmetric cosine samplers and the i.i.d. cosine sampler: pdf cos / pi (sphere |cos| / (2 pi))."""
-    return (
-        sampler == COSINE or sampler == SYMMETRIC_COSINE or sampler == SYMMETRIC_COSINE_SOBOL
-        or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED3
-    )  # fmt: skip
-
-
-@njit(**INLINED)
-def sample_local(sampler, fixed, cosine, code, full, key, s, depth, state):
-    """A direction about the local pole (0, 0, 1), its weight ``|cos| / (pi pdf)`` and its pdf.
-
-    Parameters
-    ----------
-    sampler, code : int
-        Sampler code and map code (``METHOD_CODES``; used by the orbit samplers).
-    fixed, cosine : int, bool
-        ``fixed_sampler(sampler)`` and ``is_cosine(sampler)``, computed once per kernel call: the
-        sampler family; *sampler* itself then only chooses the symmetric samplers' base-point source.
-    full : bool
-        Sample the whole sphere (Lambertian transmission) rather than the
-        upper hemisphere.
-    key : uint64
-        The pixel's key (:func:`~symsphere.render._random.pixel_key`).
-    s, depth : int
-        Sample index within the pixel, vertex index along the path (0 = first hit).
-    state : uint64
-        The path's random stream.
-
-    Returns
-    -------
-    (x, y, z, weight, pdf, state)
-        For a BSDF ``f = c / pi`` the throughput factor is ``c * weight``;
-        pdf (solid angle) is what :func:`bsdf_pdf` returns for (x, y, z): the
-        marginal density of one sample, the one MIS needs.
-
-    Notes
-    -----
-    With n = 24 (hemisphere) or 48 (sphere), the symmetric samplers put
-    sample s in group ``g = s // n``.  At vertex *depth* the group shares one
-    base point B(g, depth) (``SYMMETRIC``: two hashes of (pixel, depth, n,
-    g); ``SYMMETRIC_SOBOL``: point g of the Owen-scrambled, index-shuffled
-    Sobol' sequence seeded by (pixel, depth, n); ``..._INTERLACED2/3``: point g
-    of the interlaced one, :func:`~symsphere.render._random.owen_sobol_interlaced`)
-    and one offset o(g, depth)
-    uniform in 0..n-1 (a third hash), and sample s takes orbit member
-    ``(s mod n + o) mod n``.  The n
-    samples of a complete group take all n members of B in turn; each sample
-    on its own gets a uniform member of a fresh, independent base point at
-    every vertex, so each path has exactly the distribution of the i.i.d.
-    ``ORBIT`` sampler (unbiased sample by sample, for any spp).  Without the
-    offset a sample would keep member s mod n at every vertex, confined to
-    one triangle of every local frame: biased.
-
-    ``SYMMETRIC_COSINE`` and ``SYMMETRIC_COSINE_SOBOL`` do the same with
-    n = 8 members, the signed permutations (x, y, z) -> (+-x, +-y, z),
-    (+-y, +-x, z) (``orbit_member`` 0..7), which keep z and hence the cosine
-    density; through transmission n = 16, members 8..15 being the same maps
-    followed by z -> -z (``orbit_member`` 24..31).  The base point is the
-    cosine-weighted map onto the wedge 0 <= phi <= pi/4
-    (:func:`symsphere.warps.cosine_wedge_point`), whose
-    8 images tile the hemisphere: each sample is cosine-distributed.
-    """
-    if fixed == UNIFORM:
-        state, b1 = next_u64(state)
-        state, b2 = next_u64(state)
-        if full:
-            x, y, z = uniform_sphere_point(u01(b1), u01(b2))
-            return x, y, z, 4.0 * abs(z), _INV_4PI, state
-        x, y, z = uniform_hemisphere_point(u01(b1), u01(b2))
-        return x, y, z, 2.0 * z, INV_2PI, state
-    if fixed == COSINE:
-        state, b1 = next_u64(state)
-        state, b2 = next_u64(state)
-        x, y, z = cosine_hemisphere_point(u01(b1), u01(b2))
-        if full:
-            state, b3 = next_u64(state)
-            if b3 >> np.uint64(63):
-                z = -z
-            return x, y, z, 2.0, abs(z) * INV_2PI, state
-        return x, y, z, 1.0, z * _INV_PI, state
-    if cosine:
-        n = 16 if full else 8
-    else:
-        n = 48 if full else 24
-    if fixed == ORBIT:
-        state, b1 = next_u64(state)
-        state, b2 = next_u64(state)
-        state, b3 = next_u64(state)
-        u = u01(b1)
-        v = u01(b2)
-        member = below(b3, n)
-    else:
-        if cosine:  # literal divisors: no integer division instruction
-            group = s // 16 if full else s // 8
-        else:
-            group = s // 48 if full else s // 24
-        vertex_key = mix64(key ^ (np.uint64(depth) * _GOLDEN + np.uint64(n)))  # (pixel, vertex, orbit size)
-        h = mix64(vertex_key ^ ((np.uint64(group) + _ONE) * _ODD))  # ... and group
-        member = s - n * group + below(h, n)  # (s mod n + offset) mod n, both terms < n
-        if member >= n:
-            member -= n
-        if sampler == SYMMETRIC or sampler == SYMMETRIC_COSINE:
-            u = u01(mix64(h ^ _BASE_U))
-            v = u01(mix64(h ^ _BASE_V))
-        elif sampler == SYMMETRIC_SOBOL or sampler == SYMMETRIC_COSINE_SOBOL:
-            u, v = owen_sobol2(group, vertex_key)  # point `group` of the sequence scrambled for this (pixel, vertex, n)
-        else:  # the same, interlaced
-            factor = 2 if sampler == SYMMETRIC_SOBOL_INTERLACED2 or sampler == SYMMETRIC_COSINE_SOBOL_INTERLACED2 else 3
-            u, v = owen_sobol_interlaced(group, vertex_key, factor)
-    if cosine:
-        bx, by, bz = cosine_wedge_point(u, v)
-        x, y, z = orbit_member(bx, by, bz, member if member < 8 else member + 16)  # 8..15 -> 24..31: z -> -z
-        if full:
-            return x, y, z, 2.0, abs(z) * INV_2PI, state
-        return x, y, z, 1.0, z * _INV_PI, state
-    bx, by, bz = triangle_point(u, v, code)
-    density = triangle_density(bx, by, bz, code)
-    x, y, z = orbit_member(bx, by, bz, member)
-    if density > 0.0:
-        weight = abs(z) * n * _INV_PI / density  # density = +inf at the paper maps' vertex: weight 0
-    else:
-        weight = 0.0  # unreachable: triangle_point clamps into T0, where the density is positive
-    return x, y, z, weight, density / n, state
-
-
-@njit(**INLINED)
-def bsdf_pdf(fixed, cosine, code, full, x, y, z):
-    """The solid-angle density with which *sampler* draws the local unit direction (x, y, z).
-
-    The marginal density of one sample (what :func:`sample_local` returns as
-    pdf): 1/(2 pi) (sphere 1/(4 pi)) for ``UNIFORM``; z / pi (sphere
-    |z| / (2 pi)) for ``COSINE`` and the symmetric cosine samplers;
-    ``triangle_density(fold(x, y, z)) / n`` for the orbit samplers, fold =
-    sorting |x|, |y|, |z| into T0 = {z >= x >= y >= 0}.  Hemisphere samplers:
-    only for z >= 0.
-    """
-    if fixed == UNIFORM:
-        return _INV_4PI if full else INV_2PI
-    if cosine:
-        return abs(z) * INV_2PI if full else z * _INV_PI
-    a, b, c = abs(x), abs(y), abs(z)  # a three-element sorting network: a >= b >= c
-    if a < b:
-        a, b = b, a
-    if b < c:
-        b, c = c, b
-    if a < b:
-        a, b = b, a
-    return triangle_density(b, c, a, code) / (48 if full else 24)
 
 
 @register_jitable
@@ -724,6 +533,7 @@ def prepare_kernels() -> None:
     if not _ready:
         invalidate_if_changed(_render_rows)  # the module's cache directory
         invalidate_if_changed(sample_emitter)  # the emitters' own cached functions (they inline _random, frames)
+        invalidate_if_changed(sample_local)  # the direction sampling's own (it inlines the maps, _random)
         start_threads()
         _ready = True
 

@@ -1,13 +1,13 @@
 """Small kernels for the tests and the documentation: the integrator's scalar functions over arrays.
 
 Each runs one function of the path tracer (as the kernel, which LLVM inlines it into) -- the samplers
-(:func:`~symsphere.render._integrator.sample_local`,
-:func:`~symsphere.render._integrator.bsdf_pdf`), the intersection
+(:func:`~symsphere.render._directions.sample_local`,
+:func:`~symsphere.render._directions.bsdf_pdf`), the intersection
 (:func:`~symsphere.render._integrator.intersect`), the emitters
 (:func:`~symsphere.render._emitters.sample_emitter`,
 :func:`~symsphere.render._emitters.emitter_pdf`) and the Sobol' points
-(:func:`~symsphere.render._random.owen_sobol2`,
-:func:`~symsphere.render._random.owen_sobol_interlaced`) -- over many inputs, so that
+(:func:`~symsphere._random.owen_sobol.owen_sobol2`,
+:func:`~symsphere._random.owen_sobol.owen_sobol_interlaced`) -- over many inputs, so that
 the tests see exactly what the kernel computes.  Call :func:`prepare_kernels`
 before the first of them runs.
 """
@@ -18,11 +18,13 @@ import numpy as np
 from numba import njit
 
 from .._numba_cache import invalidate_if_changed
+from .._random.hashes import path_state, pixel_key
+from .._random.owen_sobol import interlace_fractions, owen_sobol2, owen_sobol_interlaced, sobol_coordinate
 from .._threads import route_compiles
 from . import _integrator
+from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
 from ._emitters import emitter_pdf, sample_emitter
-from ._integrator import KERNEL_OPTIONS, bsdf_pdf, fixed_sampler, intersect, is_cosine, plain_spheres, sample_local
-from ._random import interlace_fractions, owen_sobol2, owen_sobol_interlaced, path_state, pixel_key, sobol_coordinate
+from ._integrator import KERNEL_OPTIONS, intersect, plain_spheres
 
 __all__ = [
     "bsdf_pdfs",
@@ -40,7 +42,7 @@ __all__ = [
 def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
     """Local directions, weights and pdfs (columns x, y, z, weight, pdf) of samples 0..samples-1 of *pixel*.
 
-    The same :func:`~symsphere.render._integrator.sample_local` the integrator calls, with each sample's
+    The same :func:`~symsphere.render._directions.sample_local` the integrator calls, with each sample's
     own stream advanced as if its path had reached *depth* with no other
     random draws; for the symmetric samplers the stream is not used.
     """
@@ -61,7 +63,7 @@ def pattern_directions(sampler, code, full, seed, pixel, depth, samples):
 
 @njit(**KERNEL_OPTIONS)
 def bsdf_pdfs(sampler, code, full, directions):
-    """:func:`~symsphere.render._integrator.bsdf_pdf` of each local unit direction (rows of *directions*)."""
+    """:func:`~symsphere.render._directions.bsdf_pdf` of each local unit direction (rows of *directions*)."""
     out = np.empty(directions.shape[0])
     for i in range(directions.shape[0]):
         out[i] = bsdf_pdf(
@@ -125,7 +127,7 @@ def sobol_points(count, key):
 def interlaced_points(count, key, factor, scrambled):
     """The first *count* interlaced Sobol' points (factor 2 or 3): scrambled with *key*, or not (key unused).
 
-    Scrambled: :func:`~symsphere.render._random.owen_sobol_interlaced`, as the
+    Scrambled: :func:`~symsphere._random.owen_sobol.owen_sobol_interlaced`, as the
     kernel draws them.  Unscrambled: the reference, natural-order points
     ``interlace_fractions(sobol_coordinate(i, 0), ...)``.
     """

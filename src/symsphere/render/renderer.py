@@ -1,10 +1,17 @@
-"""``render``: path-trace a scene with a chosen integrator and direction sampler, on all cores."""
+"""``render``: path-trace a scene with a chosen integrator and direction sampling, on all cores.
+
+The direction at a diffuse vertex is chosen by the words of :mod:`symsphere._strategies` (those of the
+Mitsuba plugin): ``strategy`` (:data:`STRATEGIES`), ``points`` (its base points) and ``method`` (the map
+onto T0).  The earlier one-word ``sampler=`` names (:data:`SAMPLERS`) still work, with a
+DeprecationWarning naming the words.
+"""
 
 from __future__ import annotations
 
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
@@ -15,7 +22,8 @@ import numba
 import numpy as np
 
 from .._kernels import METHOD_CODES
-from .._typing import Float64Array
+from .._strategies import SAMPLER_SPELLINGS, legacy_sampler, resolve, words
+from .._typing import Float64Array, MapMethod
 from .._validation import (
     MAX_PATHS,
     MAX_PIXELS,
@@ -28,6 +36,7 @@ from .._validation import (
     memory_pixel_limit,
     short_repr,
 )
+from . import _directions as _d
 from . import _integrator as _k
 from .image import IMAGE_SUFFIXES, save_image_set
 from .scene import Scene
@@ -37,6 +46,7 @@ __all__ = [
     "FILTERS",
     "INTEGRATORS",
     "SAMPLERS",
+    "STRATEGIES",
     "SYMMETRIC_SAMPLERS",
     "RenderPlan",
     "RenderResult",
@@ -52,70 +62,55 @@ BYTES_PER_PIXEL = 160
 (the sum, a pass and the mean in float64 RGB, the filter weights, the encoded outputs); images whose
 pixels would not fit in the machine's memory are refused before any allocation."""
 
-SAMPLERS = (
-    "symmetric",
-    "symmetric_sobol",
-    "equal_area",
-    "paper1",
-    "paper2",
-    "uniform",
-    "cosine",
-    "symmetric_cosine",
-    "symmetric_cosine_sobol",
-    "symmetric_sobol_interlaced2",
-    "symmetric_sobol_interlaced3",
-    "symmetric_cosine_sobol_interlaced2",
-    "symmetric_cosine_sobol_interlaced3",
-)
-"""Direction samplers at diffuse vertices (see docs/reference/renderer.md):
+STRATEGIES = words("render")
+"""The direction sampling at diffuse vertices (``strategy=``; the registry
+:data:`symsphere._strategies.SAMPLING_STRATEGIES`; see docs/reference/renderer.md):
 
-``symmetric``        the paper's scheme inside a pixel: groups of 24 (48 through
-                     transmission) samples share a random base point per vertex and
-                     take its orbit members in turn;
-``symmetric_sobol``  the same with base points from a per-pixel, per-vertex
-                     Owen-scrambled 2D Sobol' sequence (Burley 2020);
-``equal_area``, ``paper1``, ``paper2``
-                     i.i.d.: a random base point mapped onto T0 by that map and a
-                     uniformly random orbit member, weighted by 1/pdf;
-``uniform``          classic independent uniform directions;
-``cosine``           cosine-weighted (Shirley–Chiu concentric disk + Malley);
-``symmetric_cosine``, ``symmetric_cosine_sobol``
-                     cosine-weighted symmetric sampling: groups of 8 (16 through
-                     transmission) samples share a base point of a cosine-weighted
-                     map onto the wedge 0 <= phi <= pi/4 and take its images under
-                     the 8 signed permutations that keep z (x {z, -z}) in turn;
-                     random or Owen-scrambled Sobol' base points;
-``symmetric_sobol_interlaced2``, ``symmetric_sobol_interlaced3``,
-``symmetric_cosine_sobol_interlaced2``, ``symmetric_cosine_sobol_interlaced3``
-                     ``symmetric_sobol`` and ``symmetric_cosine_sobol`` with the
-                     base points of the point sets ``'sobol_interlaced2'`` and
-                     ``'sobol_interlaced3'`` of :mod:`symsphere.points`: 4 or 6
-                     Sobol' dimensions, each Owen-scrambled, interlaced digit by
-                     digit into 2 (higher-order digital nets, Dick 2011).
+``symmetric``         the paper's scheme inside a pixel: groups of 24 (48 through
+                      transmission) samples share a base point per vertex, mapped
+                      onto T0 by ``method``, and take its orbit members in turn;
+``symmetric_cosine``  cosine-weighted symmetric sampling: groups of 8 (16 through
+                      transmission) samples share a base point of a cosine-weighted
+                      map onto the wedge 0 <= phi <= pi/4 and take its images under
+                      the 8 signed permutations that keep z (x {z, -z}) in turn;
+``orbit``             i.i.d.: a random base point mapped onto T0 by ``method`` and a
+                      uniformly random orbit member, weighted by 1/pdf;
+``uniform``           classic independent uniform directions;
+``cosine``            cosine-weighted (Shirley–Chiu concentric disk + Malley).
+
+Base points (``points=``) of the two symmetric strategies: ``'sobol'`` (the
+default: a per-pixel, per-vertex Owen-scrambled 2D Sobol' sequence, Burley 2020),
+``'random'`` (hashes), ``'sobol_interlaced2'``, ``'sobol_interlaced3'`` (4 or 6
+Sobol' dimensions, each Owen-scrambled, interlaced digit by digit into 2:
+higher-order digital nets, Dick 2011, as the point sets of :mod:`symsphere.points`);
+the i.i.d. strategies take ``'random'`` only.
 """
+
+SAMPLERS = tuple(SAMPLER_SPELLINGS)
+"""The deprecated ``sampler=`` names (one release): each is a (strategy, points, method) of
+:data:`symsphere._strategies.SAMPLER_SPELLINGS`, e.g. ``'symmetric_cosine_sobol'`` is
+``strategy='symmetric_cosine', points='sobol'`` and ``'paper1'`` is ``strategy='orbit', method='paper1'``."""
 
 INTEGRATORS = ("path", "bsdf")
 """``path``: next-event estimation + BSDF sampling, combined by MIS (power heuristic);
 ``bsdf``: BSDF sampling only (smallpt's estimator)."""
 
 SYMMETRIC_SAMPLERS = ("symmetric", "symmetric_sobol", "symmetric_sobol_interlaced2", "symmetric_sobol_interlaced3")
-"""The samplers that take a ``method`` (the map onto T0)."""
+"""The deprecated samplers that take a ``method`` (the map onto T0): ``strategy='symmetric'``."""
 FILTERS = ("box", "tent")
 """Pixel filters: ``box`` (uniform in the pixel) and ``tent`` (smallpt's 2 x 2 subpixel tent)."""
-_SAMPLER_CODES = {
-    "symmetric": _k.SYMMETRIC,
-    "symmetric_sobol": _k.SYMMETRIC_SOBOL,
-    "equal_area": _k.ORBIT,
-    "paper1": _k.ORBIT,
-    "paper2": _k.ORBIT,
-    "uniform": _k.UNIFORM,
-    "cosine": _k.COSINE,
-    "symmetric_cosine": _k.SYMMETRIC_COSINE,
-    "symmetric_cosine_sobol": _k.SYMMETRIC_COSINE_SOBOL,
-    "symmetric_sobol_interlaced2": _k.SYMMETRIC_SOBOL_INTERLACED2,
-    "symmetric_sobol_interlaced3": _k.SYMMETRIC_SOBOL_INTERLACED3,
-    "symmetric_cosine_sobol_interlaced2": _k.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
-    "symmetric_cosine_sobol_interlaced3": _k.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
+_SAMPLING_CODES = {  # (strategy, points) -> the kernel's code (render/_directions.py)
+    ("symmetric", "random"): _d.SYMMETRIC,
+    ("symmetric", "sobol"): _d.SYMMETRIC_SOBOL,
+    ("symmetric", "sobol_interlaced2"): _d.SYMMETRIC_SOBOL_INTERLACED2,
+    ("symmetric", "sobol_interlaced3"): _d.SYMMETRIC_SOBOL_INTERLACED3,
+    ("symmetric_cosine", "random"): _d.SYMMETRIC_COSINE,
+    ("symmetric_cosine", "sobol"): _d.SYMMETRIC_COSINE_SOBOL,
+    ("symmetric_cosine", "sobol_interlaced2"): _d.SYMMETRIC_COSINE_SOBOL_INTERLACED2,
+    ("symmetric_cosine", "sobol_interlaced3"): _d.SYMMETRIC_COSINE_SOBOL_INTERLACED3,
+    ("orbit", "random"): _d.ORBIT,
+    ("uniform", "random"): _d.UNIFORM,
+    ("cosine", "random"): _d.COSINE,
 }
 _INTEGRATOR_CODES = {"path": _k.PATH, "bsdf": _k.BSDF}
 # The numba kernels' module is typed by numba, not mypy (pyproject.toml): its one entry point, typed here.
@@ -129,23 +124,25 @@ class RenderSettings:
 
     Attributes
     ----------
-    width, height, spp, sampler, method, pixel_filter, seed, integrator
-        The arguments of :func:`render` (``method`` None for samplers without one; ``seed`` the one
-        used, drawn from fresh entropy if none was given).
+    width, height, spp, strategy, points, method, pixel_filter, seed, integrator
+        The arguments of :func:`render` (``points`` and ``method`` filled in with their defaults,
+        ``method`` None for the strategies without one; ``seed`` the one used, drawn from fresh
+        entropy if none was given).
 
     Examples
     --------
     >>> from symsphere.render import RenderSettings, plan_passes
-    >>> plan = plan_passes("furnace", 4, 4, 3, "cosine", None, "box", 7)
-    >>> plan.settings() == RenderSettings(width=4, height=4, spp=3, sampler="cosine", method=None,
-    ...                                   pixel_filter="box", seed=7, integrator="path")
+    >>> plan = plan_passes("furnace", 4, 4, 3, strategy="cosine", seed=7)
+    >>> plan.settings() == RenderSettings(width=4, height=4, spp=3, strategy="cosine", points="random",
+    ...                                   method=None, pixel_filter="box", seed=7, integrator="path")
     True
     """
 
     width: int
     height: int
     spp: int
-    sampler: str
+    strategy: str
+    points: str
     method: str | None
     pixel_filter: str
     seed: int
@@ -154,6 +151,14 @@ class RenderSettings:
     def settings(self) -> RenderSettings:
         """These settings alone, as a :class:`RenderSettings` (from a plan or a result: equal for the same render)."""
         return RenderSettings(**{f.name: getattr(self, f.name) for f in fields(RenderSettings)})
+
+    @property
+    def sampler(self) -> str | None:
+        """Deprecated: the one-word ``sampler=`` name of (strategy, points, method); use those."""
+        warnings.warn(
+            "'sampler' is deprecated; use 'strategy', 'points' and 'method'", DeprecationWarning, stacklevel=2
+        )
+        return legacy_sampler(self.strategy, self.points, self.method)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -166,9 +171,9 @@ class RenderResult(RenderSettings):
         float64, mean linear radiance per pixel (unclamped).
     scene : str
         The scene's name.
-    width, height, spp, sampler, method, pixel_filter, seed, integrator
+    width, height, spp, strategy, points, method, pixel_filter, seed, integrator
         The arguments of :func:`render`: the fields of :class:`RenderSettings`
-        (``method`` None for samplers without one); ``result.settings()`` gives them alone.
+        (``method`` None for the strategies without one); ``result.settings()`` gives them alone.
     seconds : float
         Wall time of the path tracing (after compilation / cache load).
     startup_seconds : float
@@ -181,7 +186,7 @@ class RenderResult(RenderSettings):
     Examples
     --------
     >>> from symsphere.render import render
-    >>> result = render("furnace", width=8, height=6, spp=8, sampler="cosine", seed=1)
+    >>> result = render("furnace", width=8, height=6, spp=8, strategy="cosine", seed=1)
     >>> result.image.shape, result.paths, result.integrator
     ((6, 8, 3), 384, 'path')
     """
@@ -217,17 +222,15 @@ def render(
     width: int = 256,
     height: int = 192,
     spp: int = 96,
-    sampler: Literal[
-        "symmetric", "symmetric_sobol", "equal_area", "paper1", "paper2", "uniform", "cosine",
-        "symmetric_cosine", "symmetric_cosine_sobol", "symmetric_sobol_interlaced2", "symmetric_sobol_interlaced3",
-        "symmetric_cosine_sobol_interlaced2", "symmetric_cosine_sobol_interlaced3",
-    ] = "symmetric_sobol",
+    strategy: Literal["cosine", "orbit", "symmetric", "symmetric_cosine", "uniform"] = "symmetric",
+    points: Literal["random", "sobol", "sobol_interlaced2", "sobol_interlaced3"] | None = None,
     method: Literal["equal_area", "paper1", "paper2"] | None = None,
     pixel_filter: Literal["box", "tent"] = "box",
     seed: int | None = None,
     threads: int | None = None,
     progress: bool = False,
     integrator: Literal["path", "bsdf"] = "path",
+    sampler: str | None = None,
 ) -> RenderResult:  # fmt: skip
     """Path-trace *scene* and return the mean radiance per pixel.
 
@@ -237,15 +240,19 @@ def render(
         A :class:`~symsphere.render.Scene`, a built-in scene name (``'cornell'``,
         ``'furnace'``, ``'translucent'``) or a ``.toml``/``.json`` scene file.
     width, height, spp : int
-        Image size and samples (camera paths) per pixel.  The symmetric
-        samplers form complete orbits when spp is a multiple of 24 (48 if the
-        scene has translucent materials; 8 and 16 for the symmetric cosine
-        samplers); any spp is unbiased.
-    sampler : str
-        One of :data:`SAMPLERS`: the direction sampler at diffuse vertices.
+        Image size and samples (camera paths) per pixel.  The strategy
+        ``symmetric`` forms complete orbits when spp is a multiple of 24 (48 if the
+        scene has translucent materials; 8 and 16 for ``symmetric_cosine``);
+        any spp is unbiased.
+    strategy : str
+        One of :data:`STRATEGIES`: the direction sampling at diffuse vertices.
+    points : str, optional
+        The strategy's base points: ``'sobol'`` (the default of the two symmetric
+        strategies), ``'random'`` (the default, and the only choice, of the others),
+        ``'sobol_interlaced2'``, ``'sobol_interlaced3'`` (symmetric strategies).
     method : {'equal_area', 'paper1', 'paper2'}, optional
-        The map from the square onto T0 for the symmetric samplers (default
-        ``'equal_area'``).  The other samplers do not take it.
+        The map from the square onto T0 for the strategies ``symmetric`` and
+        ``orbit`` (default ``'equal_area'``).  The others do not take it.
     pixel_filter : {'box', 'tent'}
         ``'box'``: uniform within the pixel; ``'tent'``: smallpt's (a random
         2 x 2 subpixel, a tent of radius one subpixel).
@@ -260,6 +267,11 @@ def render(
         ``'path'``: next-event estimation and BSDF sampling combined by
         multiple importance sampling (power heuristic); ``'bsdf'``: BSDF
         sampling only (smallpt's estimator).  Both converge to the same image.
+    sampler : str, optional
+        Deprecated (one release): one of :data:`SAMPLERS`, the earlier one-word
+        spelling of *strategy* and *points* (and of *method* for the i.i.d. orbit
+        samplers); a DeprecationWarning names the new spelling.  Not with
+        *strategy* or *points*.
 
     Returns
     -------
@@ -274,7 +286,11 @@ def render(
     >>> render("furnace", width=4, height=4, spp=4, seed=1, integrator="bsdf").integrator
     'bsdf'
     """
-    plan = plan_passes(scene, width, height, spp, sampler, method, pixel_filter, seed, integrator)
+    chosen = resolve(sampler, strategy, points, method, "render", stacklevel=2)
+    plan = plan_passes(
+        scene, width, height, spp, method=chosen[2], pixel_filter=pixel_filter, seed=seed, integrator=integrator,
+        strategy=chosen[0], points=chosen[1],
+    )  # fmt: skip
     progress = check_bool(progress, "progress")
     if threads is not None:
         threads = check_count(threads, "threads")
@@ -319,13 +335,13 @@ class RenderPlan(RenderSettings):
     Examples
     --------
     >>> from symsphere.render import plan_passes
-    >>> plan = plan_passes("cornell", 8, 6, 10, "cosine", None, "box", 1)
+    >>> plan = plan_passes("cornell", 8, 6, 10, strategy="cosine", seed=1)
     >>> plan.passes, plan.pass_range(0)
     (1, (0, 10))
     """
 
     scene: Scene
-    arguments: tuple[Any, ...] = field(repr=False)  # the kernel's scene and sampler arguments: arrays and codes
+    arguments: tuple[Any, ...] = field(repr=False)  # the kernel's scene and sampling arguments: arrays and codes
     per_pass: int
 
     @property
@@ -389,21 +405,25 @@ def plan_passes(
     width: int,
     height: int,
     spp: int,
-    sampler: str,
-    method: str | None,
-    pixel_filter: str,
-    seed: int | None,
+    sampler: str | None = None,
+    method: str | None = None,
+    pixel_filter: str = "box",
+    seed: int | None = None,
     integrator: Literal["path", "bsdf"] = "path",
+    *,
+    strategy: str = "symmetric",
+    points: str | None = None,
 ) -> RenderPlan:
     """Validate the arguments of :func:`render` and split its samples into passes of ~2e5 paths.
 
-    The positional order is that of :func:`render`'s keywords; raises
+    The arguments are :func:`render`'s; the fifth, *sampler*, is the deprecated one-word
+    spelling of *strategy* and *points* (a DeprecationWarning names them).  Raises
     ValueError naming a bad argument.
 
     Examples
     --------
     >>> from symsphere.render import plan_passes, render_passes
-    >>> plan = plan_passes("furnace", 4, 4, 3, "cosine", None, "box", 7, "bsdf")
+    >>> plan = plan_passes("furnace", 4, 4, 3, strategy="cosine", seed=7, integrator="bsdf")
     >>> [image.shape for image in render_passes(plan, 0, plan.passes)]
     [(4, 4, 3)]
     """
@@ -418,24 +438,10 @@ def plan_passes(
         width * height, "width * height", limit, f"({width} x {height} pixels, held in memory in float64){memory}"
     )
     check_size(spp, "spp", MAX_PATHS // (width * height), f"for {width}x{height} pixels (paths are counted in int64)")
-    if not isinstance(sampler, str) or sampler not in SAMPLERS:
-        raise ValueError(f"'sampler' must be one of {', '.join(SAMPLERS)}; got {short_repr(sampler)}")
+    strategy, points, method = resolve(sampler, strategy, points, method, "render", stacklevel=2)
     if not isinstance(integrator, str) or integrator not in INTEGRATORS:
         raise ValueError(f"'integrator' must be one of {', '.join(INTEGRATORS)}; got {short_repr(integrator)}")
-    if method is not None and not isinstance(method, str):
-        raise TypeError(f"'method' must be a str or None; got {short_repr(method)}")
-    if method is not None and sampler not in SYMMETRIC_SAMPLERS:
-        raise ValueError(
-            f"'method' applies only to the samplers {', '.join(SYMMETRIC_SAMPLERS)}; "
-            f"for {sampler!r} leave it out (the i.i.d. orbit samplers are named after their map)"
-        )
-    if sampler in SYMMETRIC_SAMPLERS:
-        method = "equal_area" if method is None else method
-        if method not in METHOD_CODES:
-            raise ValueError(f"'method' must be one of {', '.join(METHOD_CODES)}; got {short_repr(method)}")
-        code = METHOD_CODES[method]
-    else:
-        code = METHOD_CODES[sampler] if sampler in METHOD_CODES else 0  # the i.i.d. orbit samplers: their map
+    code = METHOD_CODES[cast(MapMethod, method)] if method is not None else 0
     if not isinstance(pixel_filter, str) or pixel_filter not in FILTERS:
         raise ValueError(f"'pixel_filter' must be one of {', '.join(FILTERS)}; got {short_repr(pixel_filter)}")
     if seed is None:
@@ -446,15 +452,16 @@ def plan_passes(
     arguments = (
         a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"], a["lights"],
         a["light_pmf"], a["camera"], a["background"], a["eps"], a["rr_depth"], a["max_depth"],
-        _INTEGRATOR_CODES[integrator], _SAMPLER_CODES[sampler], code, FILTERS.index(pixel_filter), key,
+        _INTEGRATOR_CODES[integrator], _SAMPLING_CODES[strategy, points], code, FILTERS.index(pixel_filter), key,
     )  # fmt: skip
     return RenderPlan(
         scene=scene,
         width=width,
         height=height,
         spp=spp,
-        sampler=sampler,
-        method=method if sampler in SYMMETRIC_SAMPLERS else None,
+        strategy=strategy,
+        points=points,
+        method=method,
         pixel_filter=pixel_filter,
         seed=seed,
         arguments=arguments,
@@ -469,7 +476,7 @@ def render_passes(plan: RenderPlan, first_pass: int, stop_pass: int) -> list[Flo
     Examples
     --------
     >>> from symsphere.render import plan_passes, render_passes
-    >>> plan = plan_passes("furnace", 4, 4, 2, "cosine", None, "box", 7)
+    >>> plan = plan_passes("furnace", 4, 4, 2, strategy="cosine", seed=7)
     >>> len(render_passes(plan, 0, 1))
     1
     """
@@ -503,7 +510,7 @@ def write_outputs(result: RenderResult, out: str | os.PathLike[str], exposure: f
     --------
     >>> import tempfile, pathlib
     >>> from symsphere.render import render, write_outputs
-    >>> result = render("furnace", width=4, height=4, spp=2, sampler="cosine", seed=1)
+    >>> result = render("furnace", width=4, height=4, spp=2, strategy="cosine", seed=1)
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     [p.name for p in write_outputs(result, pathlib.Path(folder) / "f.png")]
     ['f.png', 'f.pfm', 'f.npy']

@@ -43,145 +43,20 @@ Examples
 (True, 1.0)
 """
 
-from ._concentric import (
-    concentric_disk_point,
-    concentric_disk_to_square,
-    cosine_hemisphere_point,
-    cosine_hemisphere_to_square,
-    square_to_concentric_disk,
-    square_to_concentric_disk_pdf,
-    square_to_cosine_hemisphere,
-    square_to_cosine_hemisphere_pdf,
-)
-from ._octahedral import (
-    octahedral_hemisphere_to_square,
-    octahedral_sphere_point,
-    octahedral_sphere_to_square,
-    square_to_octahedral_hemisphere,
-    square_to_octahedral_hemisphere_pdf,
-    square_to_octahedral_sphere,
-    square_to_octahedral_sphere_pdf,
-)
+# isort: off
+# Each module below holds maps and registers their Warp records; the order of these lines is the order of
+# WARPS (and of the table above).  Adding a warp is its module and one line here.
 from ._record import Warp
 from ._registry import WARPS, get_warp
-from ._scheme import (
-    hemisphere_to_square,
-    sphere_to_square,
-    square_to_hemisphere,
-    square_to_hemisphere_pdf,
-    square_to_sphere,
-    square_to_sphere_pdf,
-    strip_order,
-)
-from ._spherical_rectangle import (
-    rectangle_frame,
-    rectangle_point,
-    spherical_rectangle_to_square,
-    square_to_spherical_rectangle,
-    square_to_spherical_rectangle_pdf,
-)
-from ._spherical_triangle import (
-    T0_VERTICES,
-    arvo_triangle_to_square,
-    spherical_triangle_to_square,
-    square_to_arvo_triangle,
-    square_to_arvo_triangle_pdf,
-    square_to_spherical_triangle,
-    square_to_spherical_triangle_pdf,
-)
-from ._triangle import (
-    METHODS,
-    TRIANGLE_WARPS,
-    square_to_triangle,
-    square_to_triangle_pdf,
-    triangle_to_square,
-    triangle_warp,
-)
-from ._uniform import (
-    square_to_uniform_hemisphere,
-    square_to_uniform_hemisphere_pdf,
-    square_to_uniform_sphere,
-    square_to_uniform_sphere_pdf,
-    uniform_hemisphere_point,
-    uniform_hemisphere_to_square,
-    uniform_sphere_point,
-    uniform_sphere_to_square,
-)
-from ._wedge import (
-    WEDGE_MAPS,
-    cosine_wedge_density,
-    cosine_wedge_point,
-    cosine_wedge_to_square,
-    cosine_wedge_uv,
-    square_to_cosine_wedge,
-    square_to_cosine_wedge_pdf,
-)
+from ._registry import namespace as _namespace
+from ._triangle import *  # noqa: F403
+from ._spherical_triangle import *  # noqa: F403
+from ._scheme import *  # noqa: F403
+from ._wedge import *  # noqa: F403
+from ._uniform import *  # noqa: F403
+from ._octahedral import *  # noqa: F403
+from ._concentric import *  # noqa: F403
+from ._spherical_rectangle import *  # noqa: F403
+# isort: on
 
-__all__ = [
-    # the record and the registry
-    "Warp",
-    "WARPS",
-    "get_warp",
-    # T0: the scheme's maps
-    "METHODS",
-    "TRIANGLE_WARPS",
-    "triangle_warp",
-    "square_to_triangle",
-    "square_to_triangle_pdf",
-    "triangle_to_square",
-    # the scheme as one bijection
-    "square_to_sphere",
-    "square_to_sphere_pdf",
-    "sphere_to_square",
-    "square_to_hemisphere",
-    "square_to_hemisphere_pdf",
-    "hemisphere_to_square",
-    "strip_order",
-    # the cosine wedge
-    "WEDGE_MAPS",
-    "square_to_cosine_wedge",
-    "square_to_cosine_wedge_pdf",
-    "cosine_wedge_to_square",
-    "cosine_wedge_point",
-    "cosine_wedge_density",
-    "cosine_wedge_uv",
-    # hat-box
-    "square_to_uniform_sphere",
-    "square_to_uniform_sphere_pdf",
-    "uniform_sphere_to_square",
-    "uniform_sphere_point",
-    "square_to_uniform_hemisphere",
-    "square_to_uniform_hemisphere_pdf",
-    "uniform_hemisphere_to_square",
-    "uniform_hemisphere_point",
-    # octahedral
-    "square_to_octahedral_sphere",
-    "square_to_octahedral_sphere_pdf",
-    "octahedral_sphere_to_square",
-    "octahedral_sphere_point",
-    "square_to_octahedral_hemisphere",
-    "square_to_octahedral_hemisphere_pdf",
-    "octahedral_hemisphere_to_square",
-    # concentric disk and cosine hemisphere
-    "square_to_concentric_disk",
-    "square_to_concentric_disk_pdf",
-    "concentric_disk_to_square",
-    "concentric_disk_point",
-    "square_to_cosine_hemisphere",
-    "square_to_cosine_hemisphere_pdf",
-    "cosine_hemisphere_to_square",
-    "cosine_hemisphere_point",
-    # Arvo's spherical triangles
-    "T0_VERTICES",
-    "square_to_spherical_triangle",
-    "square_to_spherical_triangle_pdf",
-    "spherical_triangle_to_square",
-    "square_to_spherical_rectangle",
-    "square_to_spherical_rectangle_pdf",
-    "spherical_rectangle_to_square",
-    "rectangle_frame",
-    "rectangle_point",
-    "square_to_arvo_triangle",
-    "square_to_arvo_triangle_pdf",
-    "arvo_triangle_to_square",
-]
+__all__ = ["Warp", "WARPS", "get_warp", *_namespace(__name__)]  # each module's names are listed once, in its __all__

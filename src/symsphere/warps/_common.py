@@ -1,21 +1,83 @@
-"""What the warps' modules share: the checked entry points and the numba-aware branch.
+"""What the warps' modules share: the checked entry points, the elementwise decorator, the numba-aware branch.
 
 Private module; its names are public within the package only.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload
+from numba.extending import overload, register_jitable
 
 from .._typing import Float64Array, FloatArray
-from .._validation import check_unit_directions, check_uv
+from .._validation import check_real_arrays, check_unit_directions, check_uv
 
-__all__ = ["checked_forward", "checked_inverse", "pick", "wrap_unit"]
+__all__ = [
+    "checked_forward",
+    "checked_inverse",
+    "elementwise",
+    "formula",
+    "on_rows",
+    "pick",
+    "unit_square_args",
+    "wrap_unit",
+]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def unit_square_args(u: Any, v: Any) -> list[Any]:
+    """*u*, *v* as finite float64 in [0, 1] that broadcast together, else ValueError naming 'u' or 'v'."""
+    return check_real_arrays((u, "u"), (v, "v"), unit_interval=True)
+
+
+def elementwise(check: Callable[..., Any] = unit_square_args) -> Callable[[F], F]:
+    """Give a scalar formula, written once, its checked Python form and its numba form.
+
+    The decorated function is the formula: numpy ufuncs and :func:`pick` only, so that it runs on float64
+    arrays (numpy) and on scalars (numba).  The name it is bound to becomes the public function: called from
+    Python it first passes its arguments through *check* (which returns them converted, or raises naming
+    them) and then runs the formula; inside a numba kernel it *is* the formula, unchecked (an ``overload``).
+    The bare formula itself, :func:`formula` of the public function, is ``register_jitable``: other formulas
+    call it in numba and numpy alike, and the array maps (``square_to_X``) apply it to trusted rows
+    (:func:`on_rows`).  Mitsuba's ``warp.h`` and pbrt-v4's ``sampling.h`` write each map once as a small pure
+    function; this is that, with the two entry points numpy and numba need.
+    """
+
+    def decorate(bare: F) -> F:
+        register_jitable(bare)
+
+        @functools.wraps(bare)
+        def checked(*args: Any) -> Any:
+            return bare(*check(*args))
+
+        overload(checked, jit_options={}, inline="never", strict=False)(lambda *args: bare)
+        _FORMULAS[checked] = bare
+        return checked  # type: ignore[return-value]  # functools.wraps keeps bare's signature and doc
+
+    return decorate
+
+
+_FORMULAS: dict[Callable[..., Any], Callable[..., Any]] = {}
+
+
+def formula(public: F) -> F:
+    """The bare formula of an :func:`elementwise` function (unchecked; ``register_jitable`` for numba)."""
+    return cast(F, _FORMULAS[public])
+
+
+def on_rows(point: Callable[..., Any]) -> Callable[[Float64Array], Float64Array]:
+    """The array map of an elementwise formula ``point(u, v)``: float64 rows (..., 2) to (..., k), unchecked."""
+    bare = _FORMULAS.get(point, point)
+
+    def rows(uv: Float64Array) -> Float64Array:
+        return np.stack(bare(uv[..., 0], uv[..., 1]), axis=-1)
+
+    return rows
 
 
 def checked_forward(forward: Callable[[Float64Array], Float64Array], uv: npt.ArrayLike) -> FloatArray:

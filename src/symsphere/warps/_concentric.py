@@ -16,11 +16,13 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload, register_jitable
 
+from .._constants import INV_PI
 from .._typing import Float64Array, FloatArray
-from .._validation import as_float_array, check_real_arrays, check_unit_directions, check_uv
-from ._common import checked_forward, checked_inverse, pick
+from .._validation import as_float_array, check_unit_directions, check_uv
+from ._common import checked_forward, checked_inverse, elementwise, formula, on_rows, pick
+from ._record import Warp
+from ._registry import register
 
 __all__ = [
     "square_to_concentric_disk",
@@ -76,7 +78,7 @@ def square_to_concentric_disk_pdf(p: npt.ArrayLike) -> Float64Array:
     array([1., 0.])
     """
     a64 = _check_plane_points(p).astype(np.float64)
-    return np.where(np.hypot(a64[..., 0], a64[..., 1]) <= 1.0, 1.0 / math.pi, 0.0)
+    return np.where(np.hypot(a64[..., 0], a64[..., 1]) <= 1.0, INV_PI, 0.0)
 
 
 def concentric_disk_to_square(p: npt.ArrayLike) -> FloatArray:
@@ -105,6 +107,16 @@ def concentric_disk_to_square(p: npt.ArrayLike) -> FloatArray:
     return _concentric_inverse(a64).astype(arr.dtype, copy=False)
 
 
+def _check_plane_points(p: npt.ArrayLike) -> FloatArray:
+    arr = as_float_array(p, "p")
+    if arr.ndim == 0 or arr.shape[-1] != 2:
+        raise ValueError(f"'p' must have shape (..., 2), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("'p' must be finite (no NaN or inf)")
+    return arr
+
+
+@elementwise()
 def concentric_disk_point(u: Any, v: Any) -> tuple[Any, Any]:
     """Elementwise Shirley & Chiu (1997): concentric squares of [0, 1]^2 -> concentric circles of the disk.
 
@@ -116,21 +128,6 @@ def concentric_disk_point(u: Any, v: Any) -> tuple[Any, Any]:
     >>> [float(c) for c in concentric_disk_point(1.0, 0.5)]
     [1.0, 0.0]
     """
-    point: tuple[Any, Any] = _concentric_disk_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
-    return point
-
-
-def _check_plane_points(p: npt.ArrayLike) -> FloatArray:
-    arr = as_float_array(p, "p")
-    if arr.ndim == 0 or arr.shape[-1] != 2:
-        raise ValueError(f"'p' must have shape (..., 2), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("'p' must be finite (no NaN or inf)")
-    return arr
-
-
-@register_jitable
-def _concentric_disk_point(u: Any, v: Any) -> Any:
     a = 2.0 * u - 1.0
     b = 2.0 * v - 1.0
     wide = np.abs(a) >= np.abs(b)
@@ -143,8 +140,8 @@ def _concentric_disk_point(u: Any, v: Any) -> Any:
     return r * pick(wide, c, s), r * pick(wide, s, c)
 
 
-def _concentric(uv: Float64Array) -> Float64Array:
-    return np.stack(_concentric_disk_point(uv[..., 0], uv[..., 1]), axis=-1)
+_concentric = on_rows(concentric_disk_point)
+_concentric_disk_point = formula(concentric_disk_point)  # the bare formula, for the lifted map below
 
 
 def _concentric_inverse(p: Float64Array) -> Float64Array:
@@ -159,6 +156,13 @@ def _concentric_inverse(p: Float64Array) -> Float64Array:
     a = np.where(wide, r, other)
     b = np.where(wide, other, r)
     return np.clip(np.stack([0.5 * (a + 1.0), 0.5 * (b + 1.0)], axis=-1), 0.0, 1.0)
+
+
+register(
+    Warp(name="concentric_disk", domain="disk", uniform=True, forward=square_to_concentric_disk,
+         pdf=square_to_concentric_disk_pdf, inverse=concentric_disk_to_square, point=concentric_disk_point,
+         reference="Shirley & Chiu 1997"),
+)  # fmt: skip
 
 
 # --- the cosine-weighted hemisphere -------------------------------------------------------
@@ -208,6 +212,7 @@ def cosine_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
     return checked_inverse(_cosine_hemisphere_inverse, d, hemisphere=True)
 
 
+@elementwise()
 def cosine_hemisphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     """Elementwise: the concentric disk lifted to the hemisphere (Malley), z = sqrt((1 - rho)(1 + rho)).
 
@@ -219,32 +224,21 @@ def cosine_hemisphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     >>> [float(c) for c in cosine_hemisphere_point(0.5, 0.5)]
     [0.0, 0.0, 1.0]
     """
-    point: tuple[Any, Any, Any] = _cosine_hemisphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
-    return point
-
-
-@register_jitable
-def _cosine_hemisphere_point(u: Any, v: Any) -> Any:
     x, y = _concentric_disk_point(u, v)
     rho = np.maximum(np.abs(2.0 * u - 1.0), np.abs(2.0 * v - 1.0))
     z = np.sqrt(np.maximum((1.0 - rho) * (1.0 + rho), 0.0))
     return x, y, z
 
 
-def _cosine_hemisphere(uv: Float64Array) -> Float64Array:
-    return np.stack(_cosine_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+_cosine_hemisphere = on_rows(cosine_hemisphere_point)
 
 
 def _cosine_hemisphere_inverse(d: Float64Array) -> Float64Array:
     return _concentric_inverse(d[..., :2])
 
 
-# Inside numba kernels (the path tracer): the bare formulas.
-@overload(concentric_disk_point, jit_options={}, inline="never", strict=False)
-def _concentric_disk_point_in_kernels(u: Any, v: Any) -> Any:
-    return _concentric_disk_point
-
-
-@overload(cosine_hemisphere_point, jit_options={}, inline="never", strict=False)
-def _cosine_hemisphere_point_in_kernels(u: Any, v: Any) -> Any:
-    return _cosine_hemisphere_point
+register(
+    Warp(name="cosine_hemisphere", domain="hemisphere", uniform=False, forward=square_to_cosine_hemisphere,
+         pdf=square_to_cosine_hemisphere_pdf, inverse=cosine_hemisphere_to_square, point=cosine_hemisphere_point,
+         reference="Shirley & Chiu 1997 (concentric map) + Malley's method; pbrt-v4 SampleCosineHemisphere"),
+)  # fmt: skip

@@ -12,16 +12,18 @@ by 45 degrees onto the diamond (constant Jacobian 1/2) and lifts it: density 1/(
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload, register_jitable
+from numba.extending import register_jitable
 
+from .._constants import INV_2PI, INV_4PI
 from .._typing import Float64Array, FloatArray
-from .._validation import check_directions, check_real_arrays
-from ._common import checked_forward, checked_inverse, pick
+from .._validation import check_directions
+from ._common import checked_forward, checked_inverse, elementwise, on_rows, pick
+from ._record import Warp
+from ._registry import register
 
 __all__ = [
     "square_to_octahedral_sphere",
@@ -32,9 +34,6 @@ __all__ = [
     "square_to_octahedral_hemisphere_pdf",
     "octahedral_hemisphere_to_square",
 ]
-
-_INV_4PI = 1.0 / (4.0 * math.pi)
-_INV_2PI = 1.0 / (2.0 * math.pi)
 
 
 # --- the sphere ---------------------------------------------------------------------------
@@ -75,7 +74,7 @@ def square_to_octahedral_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
     1.0
     """
     d = check_directions(d, "d")
-    return np.full(d.shape[:-1], _INV_4PI)
+    return np.full(d.shape[:-1], INV_4PI)
 
 
 def octahedral_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -96,22 +95,6 @@ def octahedral_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     return checked_inverse(_octahedral_sphere_inverse, d)
 
 
-def octahedral_sphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
-    """Elementwise :func:`square_to_octahedral_sphere`: (u, v) to (x, y, z); numba compiles it.
-
-    Scalars or arrays (broadcasting together) of [0, 1] in, checked as for
-    :func:`symsphere.warps.uniform_sphere_point` (inside a numba kernel: not checked).
-
-    Examples
-    --------
-    >>> from symsphere.warps import octahedral_sphere_point
-    >>> [float(c) for c in octahedral_sphere_point(1.0, 0.5)]
-    [1.0, 0.0, 0.0]
-    """
-    point: tuple[Any, Any, Any] = _octahedral_sphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
-    return point
-
-
 @register_jitable
 def _octant_lift(p: Any, q: Any, upper: Any) -> Any:
     """Lift the octant point with L1 coordinates (p, q) >= 0, r = p + q <= 1.
@@ -129,8 +112,19 @@ def _octant_lift(p: Any, q: Any, upper: Any) -> Any:
     return ax, ay, z
 
 
-@register_jitable
-def _octahedral_sphere_point(u: Any, v: Any) -> Any:
+@elementwise()
+def octahedral_sphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
+    """Elementwise :func:`square_to_octahedral_sphere`: (u, v) to (x, y, z); numba compiles it.
+
+    Scalars or arrays (broadcasting together) of [0, 1] in, checked as for
+    :func:`symsphere.warps.uniform_sphere_point` (inside a numba kernel: not checked).
+
+    Examples
+    --------
+    >>> from symsphere.warps import octahedral_sphere_point
+    >>> [float(c) for c in octahedral_sphere_point(1.0, 0.5)]
+    [1.0, 0.0, 0.0]
+    """
     # The inner diamond goes onto the upper hemisphere; the corner triangles fold below.
     a = 2.0 * u - 1.0
     b = 2.0 * v - 1.0
@@ -143,8 +137,7 @@ def _octahedral_sphere_point(u: Any, v: Any) -> Any:
     return np.copysign(ax, a), np.copysign(ay, b), z
 
 
-def _octahedral_sphere(uv: Float64Array) -> Float64Array:
-    return np.stack(_octahedral_sphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+_octahedral_sphere = on_rows(octahedral_sphere_point)
 
 
 def _octant_unlift(d: Float64Array) -> tuple[Float64Array, Float64Array, npt.NDArray[np.bool_]]:
@@ -165,6 +158,13 @@ def _octahedral_sphere_inverse(d: Float64Array) -> Float64Array:
     a = np.copysign(aa, d[..., 0])
     b = np.copysign(ab, d[..., 1])
     return np.clip(np.stack([0.5 * (a + 1.0), 0.5 * (b + 1.0)], axis=-1), 0.0, 1.0)
+
+
+register(
+    Warp(name="octahedral_sphere", domain="sphere", uniform=True, forward=square_to_octahedral_sphere,
+         pdf=square_to_octahedral_sphere_pdf, inverse=octahedral_sphere_to_square, point=octahedral_sphere_point,
+         reference="Clarberg, Fast equal-area mapping of the (hemi)sphere using SIMD, JGT 2008"),
+)  # fmt: skip
 
 
 # --- the hemisphere -----------------------------------------------------------------------
@@ -198,7 +198,7 @@ def square_to_octahedral_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     array([1., 0.])
     """
     d = check_directions(d, "d")
-    return np.where(d[..., 2] >= 0, _INV_2PI, 0.0)
+    return np.where(d[..., 2] >= 0, INV_2PI, 0.0)
 
 
 def octahedral_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -232,7 +232,8 @@ def _octahedral_hemisphere_inverse(d: Float64Array) -> Float64Array:
     return np.clip(np.stack([0.5 * (a + 1.0), 0.5 * (b + 1.0)], axis=-1), 0.0, 1.0)
 
 
-# Inside numba kernels (the study's compiled peers): the bare formula.
-@overload(octahedral_sphere_point, jit_options={}, inline="never", strict=False)
-def _octahedral_sphere_point_in_kernels(u: Any, v: Any) -> Any:
-    return _octahedral_sphere_point
+register(
+    Warp(name="octahedral_hemisphere", domain="hemisphere", uniform=True, forward=square_to_octahedral_hemisphere,
+         pdf=square_to_octahedral_hemisphere_pdf, inverse=octahedral_hemisphere_to_square,
+         reference="Clarberg, JGT 2008 (hemisphere variant)"),
+)  # fmt: skip

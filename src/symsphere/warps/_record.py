@@ -9,7 +9,9 @@ from typing import Any, Literal, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
-from .._typing import Float64Array, FloatArray
+from .._typing import DTypeLike, Float64Array, FloatArray, PointsLike, RNGLike
+from .._validation import check_count, check_dtype
+from ..points import check_points, unit_square_points
 
 __all__ = ["Warp", "WarpDomain"]
 
@@ -18,9 +20,12 @@ WarpDomain: TypeAlias = Literal["sphere", "hemisphere", "triangle", "wedge", "di
 the wedge W = {x >= y >= 0, z >= 0}, or the unit disk (points of the plane)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Warp:
     """A map of the unit square onto a domain: its triple forward/pdf/inverse and what it preserves.
+
+    Each warp's module states its record, by keyword, beside the triple it describes, and registers it
+    (:func:`symsphere.warps.WARPS` is built from those records).
 
     Attributes
     ----------
@@ -31,7 +36,7 @@ class Warp:
         W = {x >= y >= 0, z >= 0}, or the unit disk (points of the plane, shape (..., 2)).
     uniform : bool
         Whether the density is constant on the domain.
-    orbit_size : int
+    orbit_size : int, default 1
         How many images of the domain under the scheme's symmetries tile the sphere or
         hemisphere a sampler covers with it: 48 for T0 (the sphere), 8 for the wedge (the
         hemisphere), 1 for a map onto the whole sphere, hemisphere or disk.
@@ -65,13 +70,45 @@ class Warp:
     name: str
     domain: WarpDomain
     uniform: bool
-    orbit_size: int
     forward: Callable[[npt.ArrayLike], FloatArray]
     pdf: Callable[[npt.ArrayLike], FloatArray]
     inverse: Callable[[npt.ArrayLike], FloatArray]
+    orbit_size: int = 1
     point: Callable[..., Any] | None = None
     density: Callable[..., Any] | None = None
     reference: str = ""
+
+    def sample(
+        self, n: int, *, points: PointsLike = "random", rng: RNGLike = None, dtype: DTypeLike = np.float64
+    ) -> FloatArray:
+        """*n* points of the domain: :attr:`forward` of *n* points of the unit square (computed in float64).
+
+        Parameters
+        ----------
+        n : int
+            Number of points, positive.
+        points : str in symsphere.POINT_SETS or scipy.stats.qmc.QMCEngine
+            The points of the square: 'random', 'stratified' (n a square), 'sobol', 'halton',
+            'sobol_interlaced2', 'sobol_interlaced3', or an engine with ``d == 2``.
+        rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        dtype : {numpy.float64, numpy.float32}
+
+        Returns
+        -------
+        ndarray, shape (n, 3) (the disk: (n, 2))
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from symsphere.warps import WARPS
+        >>> d = WARPS["octahedral_sphere"].sample(1024, points="sobol", rng=0)
+        >>> d.shape, bool(np.allclose(d.mean(axis=0), 0, atol=0.01))
+        ((1024, 3), True)
+        """
+        n = check_count(n, "n")
+        dtype = check_dtype(dtype)
+        check_points(points)
+        return self.forward(unit_square_points(n, points, rng)).astype(dtype)
 
     def points(self, uv: Float64Array) -> Float64Array:
         """:attr:`point` on float64 points (..., 2) of the square, unchecked: directions (..., 3)."""

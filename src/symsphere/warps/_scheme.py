@@ -56,7 +56,9 @@ import numpy.typing as npt
 
 from .._typing import Domain, FloatArray, MapMethod
 from .._validation import check_choice, check_unit_directions, check_uv
-from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, base_point, fold
+from ..symmetry import DOMAINS, HEMISPHERE_MAPS, SPHERE_MAPS, base_point, fold, orbit_size
+from ._record import Warp
+from ._registry import register
 from ._triangle import METHODS, triangle_to_square, triangle_warp
 
 __all__ = [
@@ -101,7 +103,7 @@ def square_to_sphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> Flo
     >>> bool(np.allclose(square_to_sphere([(j + u) / 48, v]), orbit(square_to_triangle([u, v]))[k]))
     True
     """
-    return _forward(uv, method, SPHERE_MAPS)
+    return _forward(uv, method, "sphere")
 
 
 def square_to_sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -127,7 +129,7 @@ def square_to_sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> 
     >>> float(square_to_sphere_pdf([0.0, 0.6, -0.8]) * 4 * np.pi)
     1.0
     """
-    return _pdf(d, method, 48)
+    return _pdf(d, method, orbit_size("sphere"))
 
 
 def sphere_to_square(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -183,22 +185,14 @@ def square_to_hemisphere(uv: npt.ArrayLike, method: MapMethod = "equal_area") ->
     >>> d.shape, bool(np.all(d[:, 2] >= 0)), bool(np.allclose(np.linalg.norm(d, axis=1), 1))
     ((1000, 3), True, True)
     """
-    return _forward(uv, method, HEMISPHERE_MAPS)
+    return _forward(uv, method, "hemisphere")
 
 
 def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
     """Density (solid angle) of :func:`square_to_hemisphere` at directions *d*.
 
-    Parameters
-    ----------
-    d : array_like, shape (..., 3)
-        Unit directions.
-    method : {'equal_area', 'paper1', 'paper2'}
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``square_to_triangle_pdf(base, method) / 24`` for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`).
+    Arguments as for :func:`square_to_sphere_pdf`; the density is ``square_to_triangle_pdf(base, method) / 24``
+    for z >= 0, 0 below (as :func:`symsphere.hemisphere_pdf`), of shape ``d.shape[:-1]``.
 
     Examples
     --------
@@ -207,7 +201,7 @@ def square_to_hemisphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area")
     >>> square_to_hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * np.pi
     array([1., 0.])
     """
-    return _pdf(d, method, 24)
+    return _pdf(d, method, orbit_size("hemisphere"))
 
 
 def hemisphere_to_square(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -265,7 +259,7 @@ def strip_order(domain: Domain = "sphere") -> npt.NDArray[np.int64]:
     >>> sorted(strip_order("hemisphere")) == list(range(24))
     True
     """
-    order = _SPHERE_ORDER if check_choice(domain, "domain", DOMAINS) == "sphere" else _HEMISPHERE_ORDER
+    order = _ORDER[check_choice(domain, "domain", DOMAINS)]
     return order.copy()
 
 
@@ -300,15 +294,14 @@ def _walk_fans(maps: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
     return np.array(order, dtype=np.int64)
 
 
-_SPHERE_ORDER = _walk_fans(SPHERE_MAPS)
-_HEMISPHERE_ORDER = _walk_fans(HEMISPHERE_MAPS)
+_MAPS = {"sphere": SPHERE_MAPS, "hemisphere": HEMISPHERE_MAPS}
+_ORDER = {domain: _walk_fans(maps) for domain, maps in _MAPS.items()}
 
 
-def _forward(uv: npt.ArrayLike, method: MapMethod, maps: npt.NDArray[np.float64]) -> FloatArray:
+def _forward(uv: npt.ArrayLike, method: MapMethod, domain: Domain) -> FloatArray:
     uv = check_uv(uv)
     warp = triangle_warp(method)
-    count = len(maps)
-    order = _SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER
+    maps, order, count = _MAPS[domain], _ORDER[domain], orbit_size(domain)
     uv64 = uv.astype(np.float64)
     t = uv64[..., 0] * count
     j = np.minimum(np.floor(t), count - 1).astype(np.int64)
@@ -335,22 +328,43 @@ def scheme_pdf(d: FloatArray, method: MapMethod, count: int, dtype: npt.DTypeLik
     warp = triangle_warp(method)
     base = base_point(d)  # fold's base point, without the sub-domain index a density does not need
     density = warp.densities(base.astype(np.float64, copy=False)) / count
-    if count == 24:
+    if count == orbit_size("hemisphere"):
         on = d[..., 2] >= -_PLANE_ULPS * np.finfo(dtype).eps
         density = np.where(on, density, 0.0)
     return density.astype(dtype, copy=False)
 
 
-def _inverse(d: npt.ArrayLike, method: MapMethod, domain: str) -> FloatArray:
+def _inverse(d: npt.ArrayLike, method: MapMethod, domain: Domain) -> FloatArray:
     d = check_unit_directions(d, "d")
     method = check_choice(method, "method", METHODS)
-    count = 48 if domain == "sphere" else 24
+    count = orbit_size(domain)
     d64 = d.astype(np.float64)
-    if count == 24 and np.any(d64[..., 2] < 0):
+    if domain == "hemisphere" and np.any(d64[..., 2] < 0):
         raise ValueError("'d' must lie in the hemisphere z >= 0 (rotate other poles with symsphere.frames.to_local)")
     k, base = fold(d64)
     local = triangle_to_square(base.astype(np.float64, copy=False), method)
-    j = np.argsort(_SPHERE_ORDER if count == 48 else _HEMISPHERE_ORDER)[k]  # the strip of triangle k
+    j = np.argsort(_ORDER[domain])[k]  # the strip of triangle k
     local_u = np.clip(local[..., 0], 0.0, 1.0)
     u = (j + np.where(j % 2 == 1, 1.0 - local_u, local_u)) / count
     return np.stack([u, local[..., 1]], axis=-1).astype(d.dtype, copy=False)
+
+
+def _scheme_warp(domain: Domain, method: MapMethod) -> Warp:
+    """The bijection onto *domain* through the scheme's triangles, each by *method*."""
+    forward, pdf, inverse = (
+        (square_to_sphere, square_to_sphere_pdf, sphere_to_square)
+        if domain == "sphere"
+        else (square_to_hemisphere, square_to_hemisphere_pdf, hemisphere_to_square)
+    )
+    return Warp(
+        name=f"{domain}_{method}",
+        domain=domain,
+        uniform=method == "equal_area",
+        forward=lambda uv: forward(uv, method),
+        pdf=lambda d: pdf(d, method),
+        inverse=lambda d: inverse(d, method),
+        reference=f"the scheme's triangles as strips of the square, each by {method!r}",
+    )
+
+
+register(*(_scheme_warp(domain, method) for method in METHODS for domain in DOMAINS))

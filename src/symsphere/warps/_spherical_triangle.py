@@ -21,6 +21,8 @@ import numpy.typing as npt
 
 from .._typing import Float64Array, FloatArray
 from .._validation import check_directions, check_triangle, check_unit_directions, check_uv
+from ._record import Warp
+from ._registry import register
 
 _Setup: TypeAlias = "tuple[Float64Array, Float64Array, Float64Array, float, float, float]"
 
@@ -277,3 +279,9 @@ def _arvo_inverse(
 
 
 _T0_SETUP = _triangle_setup(T0_VERTICES)
+
+register(
+    Warp(name="arvo_triangle", domain="triangle", uniform=True, orbit_size=48, forward=square_to_arvo_triangle,
+         pdf=square_to_arvo_triangle_pdf, inverse=arvo_triangle_to_square,
+         reference="Arvo, Stratified sampling of spherical triangles, SIGGRAPH 1995"),
+)  # fmt: skip

@@ -32,9 +32,11 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import register_jitable
 
+from .._constants import T0_DENSITY
 from .._typing import BoolArray, Float64Array, FloatArray, MapMethod
 from .._validation import check_choice, check_directions, check_unit_directions, check_uv
 from ._record import Warp
+from ._registry import register
 
 __all__ = [
     "METHODS",
@@ -46,7 +48,6 @@ __all__ = [
 ]
 
 _SQRT2 = np.sqrt(2.0)
-TRIANGLE_AREA = np.pi / 12
 
 
 def square_to_triangle(uv: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray:
@@ -239,13 +240,13 @@ def sin_small(s: Float64Array) -> Float64Array:
 
 @register_jitable
 def _equal_area_density(x: Float64Array, y: Float64Array, z: Float64Array) -> FloatArray:
-    return _in_triangle(x, y, z) * (12 / np.pi)
+    return _in_triangle(x, y, z) * T0_DENSITY
 
 
 def _equal_area_inverse(p: Float64Array) -> Float64Array:
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     phi = np.clip(np.arctan2(y, x), 0.0, np.pi / 4)
-    u = np.clip((phi - np.arcsin(np.sin(phi) / _SQRT2)) * (12 / np.pi), 0.0, 1.0)
+    u = np.clip((phi - np.arcsin(np.sin(phi) / _SQRT2)) * T0_DENSITY, 0.0, 1.0)
     one_minus_cos = (x * x + y * y) / (1.0 + z)  # 1 - z for unit p, without cancellation
     v = np.clip(one_minus_cos / _one_minus_cos_theta_max(np.cos(phi)), 0.0, 1.0)
     return np.stack([u, v], axis=-1)
@@ -333,13 +334,13 @@ def _triangle_warp_record(method: MapMethod) -> Warp:
         return triangle_to_square(p, method)
 
     return Warp(
-        method,
-        "triangle",
-        method == "equal_area",
-        48,
-        forward,
-        pdf,
-        inverse,
+        name=method,
+        domain="triangle",
+        uniform=method == "equal_area",
+        orbit_size=48,
+        forward=forward,
+        pdf=pdf,
+        inverse=inverse,
         point=_POINTS[method],
         density=_DENSITIES[method],
         reference=_REFERENCES[method],
@@ -350,6 +351,7 @@ TRIANGLE_WARPS: dict[MapMethod, Warp] = {
     method: _triangle_warp_record(method) for method in ("equal_area", "paper1", "paper2")
 }
 """dict method -> :class:`~symsphere.warps.Warp`: the maps onto T0, the choices of ``method=``."""
+register(*TRIANGLE_WARPS.values())
 METHODS: tuple[MapMethod, ...] = tuple(TRIANGLE_WARPS)
 """tuple of str: the names of the maps onto T0, the choices of ``method=``.
 

@@ -11,16 +11,17 @@ ones numba compiles into the path tracer's kernels.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload, register_jitable
 
+from .._constants import INV_2PI, INV_4PI
 from .._typing import Float64Array, FloatArray
-from .._validation import check_directions, check_real_arrays
-from ._common import checked_forward, checked_inverse, wrap_unit
+from .._validation import check_directions
+from ._common import checked_forward, checked_inverse, elementwise, on_rows, wrap_unit
+from ._record import Warp
+from ._registry import register
 
 __all__ = [
     "square_to_uniform_sphere",
@@ -32,9 +33,6 @@ __all__ = [
     "uniform_hemisphere_to_square",
     "uniform_hemisphere_point",
 ]
-
-_INV_4PI = 1.0 / (4.0 * math.pi)
-_INV_2PI = 1.0 / (2.0 * math.pi)
 
 
 # --- the sphere ---------------------------------------------------------------------------
@@ -77,7 +75,7 @@ def square_to_uniform_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
     1.0
     """
     d = check_directions(d, "d")
-    return np.full(d.shape[:-1], _INV_4PI)
+    return np.full(d.shape[:-1], INV_4PI)
 
 
 def uniform_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -107,6 +105,7 @@ def uniform_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     return checked_inverse(_uniform_sphere_inverse, d)
 
 
+@elementwise()
 def uniform_sphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     """Elementwise: pbrt-v4 / Mitsuba, z = 1 - 2u, r = sqrt(1 - z^2) = 2 sqrt(u (1 - u)), phi = 2 pi v.
 
@@ -120,20 +119,13 @@ def uniform_sphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     >>> [round(float(c), 6) for c in uniform_sphere_point(0.25, 0.5)]
     [-0.866025, 0.0, 0.5]
     """
-    point: tuple[Any, Any, Any] = _uniform_sphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
-    return point
-
-
-@register_jitable
-def _uniform_sphere_point(u: Any, v: Any) -> Any:
     z = 1.0 - 2.0 * u
     r = 2.0 * np.sqrt(u * (1.0 - u))
     phi = 2.0 * np.pi * v
     return r * np.cos(phi), r * np.sin(phi), z
 
 
-def _uniform_sphere(uv: Float64Array) -> Float64Array:
-    return np.stack(_uniform_sphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+_uniform_sphere = on_rows(uniform_sphere_point)
 
 
 def _uniform_sphere_inverse(d: Float64Array) -> Float64Array:
@@ -143,6 +135,13 @@ def _uniform_sphere_inverse(d: Float64Array) -> Float64Array:
     u = np.where(z > 0, u_north, 0.5 * (1.0 - z))
     v = wrap_unit(np.arctan2(y, x) / (2.0 * np.pi))
     return np.stack([np.clip(u, 0.0, 1.0), v], axis=-1)
+
+
+register(
+    Warp(name="uniform_sphere", domain="sphere", uniform=True, forward=square_to_uniform_sphere,
+         pdf=square_to_uniform_sphere_pdf, inverse=uniform_sphere_to_square, point=uniform_sphere_point,
+         reference="Archimedes' hat-box map; pbrt-v4 SampleUniformSphere, Mitsuba 3 square_to_uniform_sphere"),
+)  # fmt: skip
 
 
 # --- the hemisphere -----------------------------------------------------------------------
@@ -173,7 +172,7 @@ def square_to_uniform_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     array([1., 0.])
     """
     d = check_directions(d, "d")
-    return np.where(d[..., 2] >= 0, _INV_2PI, 0.0)
+    return np.where(d[..., 2] >= 0, INV_2PI, 0.0)
 
 
 def uniform_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -188,6 +187,7 @@ def uniform_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
     return checked_inverse(_uniform_hemisphere_inverse, d, hemisphere=True)
 
 
+@elementwise()
 def uniform_hemisphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     """Elementwise: z = u, r = sqrt((1 - u)(1 + u)), phi = 2 pi v (pbrt-v4 SampleUniformHemisphere).
 
@@ -199,19 +199,12 @@ def uniform_hemisphere_point(u: Any, v: Any) -> tuple[Any, Any, Any]:
     >>> [round(float(c), 6) for c in uniform_hemisphere_point(0.5, 0.25)]
     [0.0, 0.866025, 0.5]
     """
-    point: tuple[Any, Any, Any] = _uniform_hemisphere_point(*check_real_arrays((u, "u"), (v, "v"), unit_interval=True))
-    return point
-
-
-@register_jitable
-def _uniform_hemisphere_point(u: Any, v: Any) -> Any:
     r = np.sqrt((1.0 - u) * (1.0 + u))
     phi = 2.0 * np.pi * v
     return r * np.cos(phi), r * np.sin(phi), u
 
 
-def _uniform_hemisphere(uv: Float64Array) -> Float64Array:
-    return np.stack(_uniform_hemisphere_point(uv[..., 0], uv[..., 1]), axis=-1)
+_uniform_hemisphere = on_rows(uniform_hemisphere_point)
 
 
 def _uniform_hemisphere_inverse(d: Float64Array) -> Float64Array:
@@ -220,12 +213,8 @@ def _uniform_hemisphere_inverse(d: Float64Array) -> Float64Array:
     return np.stack([u, v], axis=-1)
 
 
-# Inside numba kernels (the path tracer, the study): the bare formulas.
-@overload(uniform_sphere_point, jit_options={}, inline="never", strict=False)
-def _uniform_sphere_point_in_kernels(u: Any, v: Any) -> Any:
-    return _uniform_sphere_point
-
-
-@overload(uniform_hemisphere_point, jit_options={}, inline="never", strict=False)
-def _uniform_hemisphere_point_in_kernels(u: Any, v: Any) -> Any:
-    return _uniform_hemisphere_point
+register(
+    Warp(name="uniform_hemisphere", domain="hemisphere", uniform=True, forward=square_to_uniform_hemisphere,
+         pdf=square_to_uniform_hemisphere_pdf, inverse=uniform_hemisphere_to_square, point=uniform_hemisphere_point,
+         reference="pbrt-v4 SampleUniformHemisphere"),
+)  # fmt: skip

@@ -59,11 +59,13 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from numba.extending import overload
 
 from .._threads import route_compiles
 from .._validation import check_directions, check_real_arrays, check_unit_directions, check_uv
 from ..symmetry import HEMISPHERE_MAPS
+from ._common import elementwise, formula
+from ._record import Warp
+from ._registry import register
 
 __all__ = [
     "WEDGE_MAPS",
@@ -227,6 +229,7 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
 # functions check their arguments first; the formulas trust theirs.
 
 
+@elementwise()
 def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     """Elementwise forward map: (u, v) in [0, 1]^2 to the direction (x, y, z) in W.
 
@@ -260,12 +263,6 @@ def cosine_wedge_point(u: _Real, v: _Real) -> tuple[_Real, _Real, _Real]:
     >>> rim_distance(0.75, 0.3)     # sqrt(1 - u)
     0.5
     """
-    u, v = check_real_arrays((u, "u"), (v, "v"), unit_interval=True)
-    point: tuple[_Real, _Real, _Real] = _point(u, v)
-    return point
-
-
-def _point(u: Any, v: Any) -> Any:  # the formula (numpy or numba)
     r = np.sqrt(u)
     phi = v * _QUARTER_PI
     x = r * np.cos(phi)
@@ -273,6 +270,7 @@ def _point(u: Any, v: Any) -> Any:  # the formula (numpy or numba)
     return x, y, np.sqrt(1.0 - u)
 
 
+@elementwise(check=lambda x, y, z: _unit(x, y, z))
 def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     """Elementwise pdf: ``8 z / pi`` where x >= y >= 0 and z >= 0, else 0.
 
@@ -297,16 +295,11 @@ def cosine_wedge_density(x: _Real, y: _Real, z: _Real) -> _Real:
     >>> float(cosine_wedge_density(0.0, 0.6, 0.8))     # phi = pi/2: outside W
     0.0
     """
-    x, y, z = _unit(x, y, z)
-    density: _Real = _density(x, y, z)
-    return density
-
-
-def _density(x: Any, y: Any, z: Any) -> Any:  # the formula (numpy or numba)
     inside = (x >= y) & (y >= 0.0) & (z >= 0.0)
     return inside * (_WEDGE_DENSITY * np.maximum(z, 0.0))
 
 
+@elementwise(check=lambda x, y, z: _in_wedge(*_unit(x, y, z)))
 def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     """Elementwise inverse: a unit direction (x, y, z) of W to (u, v) in [0, 1]^2.
 
@@ -329,16 +322,6 @@ def cosine_wedge_uv(x: _Real, y: _Real, z: _Real) -> tuple[_Real, _Real]:
     >>> [round(float(c), 12) for c in cosine_wedge_uv(0.6, 0.0, 0.8)]
     [0.36, 0.0]
     """
-    x, y, z = _unit(x, y, z)
-    d = np.stack(np.broadcast_arrays(x, y, z), axis=-1)
-    tol = 8 * np.finfo(np.float64).eps
-    if not np.all((d[..., 0] - d[..., 1] >= -tol) & (d[..., 1] >= -tol) & (d[..., 2] >= -tol)):
-        raise ValueError("'x', 'y', 'z' must lie in the wedge W = {x >= y >= 0, z >= 0}")
-    uv: tuple[_Real, _Real] = _uv(x, y, z)
-    return uv
-
-
-def _uv(x: Any, y: Any, z: Any) -> Any:  # the formula (numpy or numba)
     u = np.minimum(x * x + y * y, 1.0)
     v = np.minimum(np.maximum(np.arctan2(y, x) * _FOUR_OVER_PI, 0.0), 1.0)
     return u, v
@@ -351,20 +334,25 @@ def _unit(x: _Real, y: _Real, z: _Real) -> tuple[Any, Any, Any]:
     return x, y, z
 
 
-# Inside numba kernels (the path tracer's cosine-weighted sampler): the bare formulas.
-@overload(cosine_wedge_point, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_point_in_kernels(u: Any, v: Any) -> Any:
-    return _point
+def _in_wedge(x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+    """x, y, z (unit vectors) that lie in W (within 8 eps), else ValueError naming them."""
+    d = np.stack(np.broadcast_arrays(x, y, z), axis=-1)
+    tol = 8 * np.finfo(np.float64).eps
+    if not np.all((d[..., 0] - d[..., 1] >= -tol) & (d[..., 1] >= -tol) & (d[..., 2] >= -tol)):
+        raise ValueError("'x', 'y', 'z' must lie in the wedge W = {x >= y >= 0, z >= 0}")
+    return x, y, z
 
 
-@overload(cosine_wedge_density, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_density_in_kernels(x: Any, y: Any, z: Any) -> Any:
-    return _density
+# The bare formulas, for the array maps above (their inputs are checked there).
+_point = formula(cosine_wedge_point)
+_density = formula(cosine_wedge_density)
+_uv = formula(cosine_wedge_uv)
 
-
-@overload(cosine_wedge_uv, jit_options={}, inline="never", strict=False)
-def _cosine_wedge_uv_in_kernels(x: Any, y: Any, z: Any) -> Any:
-    return _uv
+register(
+    Warp(name="cosine_wedge", domain="wedge", uniform=False, orbit_size=8, forward=square_to_cosine_wedge,
+         pdf=square_to_cosine_wedge_pdf, inverse=cosine_wedge_to_square, point=cosine_wedge_point,
+         density=cosine_wedge_density, reference="Malley's method on the disk sector 0 <= phi <= pi/4"),
+)  # fmt: skip
 
 
 route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)

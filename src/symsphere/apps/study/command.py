@@ -39,9 +39,9 @@ def add_study_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentPar
     """
     study = subparsers.add_parser(
         "study",
-        help="convergence study of every sampler, point set and integrand, written up as a report",
+        help="convergence study of every strategy (the scheme, the peers), points and integrand, written up as a report",
         description=(
-            "Measure, for every sampler x point set x integrand, the RMSE over independent repetitions "
+            "Measure, for every strategy x points x method (the scheme with each map, and the peers) x integrand, the RMSE over independent repetitions "
             "for n = 48*2^k, the convergence slope and the efficiency 1/(MSE x seconds); the spherical-cap "
             "L2 discrepancy of every point set (exact, by Stolarsky's invariance principle); chi-square "
             "p-values of the random samplers; and write report.md, report.html, CSV tables and PNG figures "

@@ -10,32 +10,19 @@ from __future__ import annotations
 import html
 import math
 import os
-from collections.abc import Iterable
 
 import numba
 
 from ... import __version__
-from ..._typing import Domain
 from ...integrands import INTEGRANDS
-from ...symmetry import orbit_size
 from .._format import format_p
 from .config import BASELINE, CONFIGS, FAMILY_SIGNIFICANCE, ROUNDING_LEVEL, StudyConfig, domains
 from .figures import density_samplers, warp_maps
+from .findings import best_randomized, comparison_rows, find_row, findings, lebedev_text, short_number
 from .results import CHI2_COLUMNS, CONVERGENCE_COLUMNS, DISCREPANCY_COLUMNS, SUMMARY_COLUMNS, Results, Row
 from .samplers import Sampler, all_samplers, samplers
 
 __all__ = ["report_html", "report_markdown"]
-
-_Label = tuple[str, str]  # (sampler name, points)
-_Comparison = tuple[_Label, _Label, str, dict[str, "float | None"]]
-
-
-def _g(x: float | None, digits: int = 3) -> str:
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "–"
-    if isinstance(x, float) and math.isinf(x):
-        return "∞"
-    return f"{x:.{digits}g}"
 
 
 def _slope_text(row: Row) -> str:
@@ -51,325 +38,7 @@ def _efficiency_text(row: Row) -> str:
         return "∞ (exact)"
     if math.isinf(row["efficiency"]):
         return "∞ (rounding level)"
-    return _g(row["relative_efficiency"])
-
-
-def _lookup(rows: list[Row], **match: object) -> Row | None:
-    for row in rows:
-        if all(row[k] == v for k, v in match.items()):
-            return row
-    return None
-
-
-def _row(rows: list[Row], **match: object) -> Row:
-    """The row of *rows* that matches (the caller knows there is one)."""
-    row = _lookup(rows, **match)
-    if row is None:  # pragma: no cover - a bug, not a user error
-        raise LookupError(f"no row with {match}")
-    return row
-
-
-def _mse_ratio(results: Results, integrand: str, a: _Label, b: _Label) -> float | None:
-    """MSE of b over MSE of a at the largest n (above 1: a is more accurate); None if a sampler is missing.
-
-    inf if a alone is exact (rounding level), 0 if b alone is, NaN if both are.
-    """
-    ra = _lookup(results.summary, integrand=integrand, sampler=a[0], points=a[1])
-    rb = _lookup(results.summary, integrand=integrand, sampler=b[0], points=b[1])
-    if ra is None or rb is None:
-        return None
-    a_exact = ra["status"] == "exact" or ra["rmse_at_n_max"] == 0
-    b_exact = rb["status"] == "exact" or rb["rmse_at_n_max"] == 0
-    if a_exact and b_exact:
-        return math.nan
-    if a_exact:
-        return math.inf
-    if b_exact:
-        return 0.0
-    ratio: float = (rb["rmse_at_n_max"] / ra["rmse_at_n_max"]) ** 2
-    return ratio
-
-
-_COMPARISONS = (
-    # (A, B, what it measures); A and B are (sampler, points)
-    (("symsphere_equal_area", "random"), ("classic", "random"), "orbits of 48 vs i.i.d. (same uniform density)"),
-    (("symsphere_equal_area", "random"), ("arvo", "random"), "closed form vs Arvo's map: same distribution, expect 1"),
-    (("symsphere_equal_area", "random"), ("symsphere_paper1", "random"), "the paper's map 1: variance penalty"),
-    (("symsphere_equal_area", "random"), ("symsphere_paper2", "random"), "the paper's map 2: variance penalty"),
-    (("symsphere_equal_area", "stratified"), ("symsphere_equal_area", "random"), "stratified vs random base points"),
-    (("symsphere_equal_area", "sobol"), ("symsphere_paper1", "sobol"), "QMC: paper map 1 vs equal_area"),
-    (("symsphere_equal_area", "sobol"), ("symsphere_paper2", "sobol"), "QMC: paper map 2 vs equal_area"),
-    (("symsphere_equal_area", "sobol"), ("classic", "sobol"), "QMC with orbits vs Sobol' on the classic map"),
-    (("symsphere_equal_area", "sobol"), ("octahedral", "sobol"), "QMC with orbits vs Sobol' on the octahedral map"),
-    (("symsphere_equal_area", "sobol"), ("fibonacci_rotated", "random"), "QMC with orbits vs rotated Fibonacci"),
-    (
-        ("symsphere_equal_area", "sobol_interlaced2"),
-        ("symsphere_equal_area", "sobol"),
-        "order-2 interlaced vs plain Sobol' base points",
-    ),
-    (
-        ("symsphere_equal_area", "sobol_interlaced3"),
-        ("symsphere_equal_area", "sobol"),
-        "order-3 interlaced vs plain Sobol' base points",
-    ),
-    (
-        ("symsphere_equal_area", "sobol_interlaced2"),
-        ("octahedral", "sobol_interlaced2"),
-        "order-2 points: orbits vs Clarberg's octahedral map",
-    ),
-    (
-        ("symsphere_equal_area", "sobol_interlaced2"),
-        ("fibonacci_rotated", "random"),
-        "order-2 QMC with orbits vs rotated Fibonacci",
-    ),
-    (
-        ("symsphere_equal_area", "sobol_interlaced2"),
-        ("lebedev_rotated", "random"),
-        "order-2 QMC with orbits vs rotated Lebedev (131)",
-    ),
-    (("symsphere_equal_area", "random"), ("classic_hemisphere", "random"), "hemisphere: orbits of 24 vs i.i.d."),
-    (("symsphere_equal_area", "random"), ("cosine", "random"), "hemisphere: uniform orbits vs cosine-weighted i.i.d."),
-    (("symsphere_equal_area", "sobol"), ("classic_hemisphere", "sobol"), "hemisphere QMC: orbits vs classic map"),
-    (("symsphere_equal_area", "sobol"), ("cosine", "sobol"), "hemisphere QMC: orbits vs cosine-weighted Sobol'"),
-)
-
-
-def _comparison_rows(results: Results) -> tuple[list[_Comparison], list[str]]:
-    config = results.config
-    rows: list[_Comparison] = []
-    for a, b, what in _COMPARISONS:
-        ratios: dict[str, float | None] = {}
-        for g in config.integrands:
-            ratios[g] = _mse_ratio(results, g, a, b)
-        if all(v is None for v in ratios.values()):
-            continue
-        rows.append((a, b, what, ratios))
-    return rows, [g for g in config.integrands if INTEGRANDS[g]]
-
-
-def _range_text(ratios: Iterable[float | None]) -> str:
-    values = [v for v in ratios if v is not None and math.isfinite(v) and v > 0]
-    if not values:
-        return "–"
-    low, high = min(values), max(values)
-    geometric = math.exp(sum(math.log(v) for v in values) / len(values))
-    if len(values) == 1:
-        return f"{_g(low)}"
-    return f"{_g(low)} to {_g(high)} (geometric mean {_g(geometric)})"
-
-
-def _complete(ratios: dict[str, float | None]) -> dict[str, float] | None:
-    """*ratios*, or None if a sampler is missing for one of them."""
-    if any(v is None for v in ratios.values()):
-        return None
-    return {g: v for g, v in ratios.items() if v is not None}
-
-
-def _findings(results: Results) -> list[str]:
-    """Sentences computed from the measurements (never assumed)."""
-    config = results.config
-    by_label: dict[_Label, Sampler] = {(s.name, s.points): s for s in all_samplers(config)}
-    out: list[str] = []
-    sphere = [g for g in config.integrands if INTEGRANDS[g].domain == "sphere"]
-    hemisphere = [g for g in config.integrands if INTEGRANDS[g].domain == "hemisphere"]
-
-    def ratios(a: _Label, b: _Label, names: list[str]) -> dict[str, float] | None:
-        return _complete({g: _mse_ratio(results, g, a, b) for g in names})
-
-    ea, ea_sobol = ("symsphere_equal_area", "random"), ("symsphere_equal_area", "sobol")
-    domain: Domain
-    for domain, names in (("sphere", sphere), ("hemisphere", hemisphere)):
-        baseline = BASELINE[domain]
-        count = orbit_size(domain)
-        r = ratios(ea, baseline, names)
-        if not names or r is None:
-            continue
-        exact = [g for g, v in r.items() if math.isinf(v)]
-        finite = {g: v for g, v in r.items() if math.isfinite(v)}
-        sentence = (
-            f"**Orbits of {count}, random points ({domain}).** At the largest n, the MSE of "
-            f"{'/'.join(baseline)} (i.i.d.) over that of equal_area with orbits is "
-            + (
-                f"{_range_text(finite.values())} ({', '.join(f'{g}: {_g(v)}' for g, v in finite.items())})"
-                if finite
-                else "infinite"
-            )
-        )
-        if exact:
-            sentence += f"; the scheme is exact (rounding level) on {', '.join(exact)}"
-        invariant = [g for g in finite if INTEGRANDS[g].invariant]
-        if invariant:
-            sentence += (
-                f". On the O_h-invariant {', '.join(invariant)} the orbit average is f itself, so the {count} "
-                f"evaluations of an orbit are worth one independent sample: about 1/{count} = {1 / count:.3f} "
-                "is expected there"
-            )
-        out.append(sentence + ".")
-    for method in ("paper1", "paper2"):
-        for points in ("random", "sobol"):
-            names = sphere + hemisphere
-            r = ratios(("symsphere_equal_area", points), (f"symsphere_{method}", points), names)
-            if names and r is not None:
-                finite_values = [v for v in r.values() if math.isfinite(v)]
-                if not finite_values:
-                    continue
-                out.append(
-                    f"**The paper's {method} map, {points} points.** Weighted by 1/pdf (unbiased), its MSE is "
-                    f"{_range_text(finite_values)} times that of equal_area at the largest n "
-                    f"({', '.join(f'{g}: {_g(v)}' for g, v in r.items())})."
-                )
-    for peer in ("classic", "octahedral"):
-        r = ratios(ea_sobol, (peer, "sobol"), sphere)
-        if sphere and r is not None:
-            finite_values = [v for v in r.values() if math.isfinite(v)]
-            if finite_values:
-                out.append(
-                    f"**QMC: orbits of scrambled Sobol' points vs Sobol' on the {peer} map.** MSE ratio "
-                    f"({peer}/equal_area) at the largest n: {_range_text(finite_values)} "
-                    f"({', '.join(f'{g}: {_g(v)}' for g, v in r.items())})."
-                )
-    slopes: list[str] = []
-    for name, points in (
-        ea,
-        ea_sobol,
-        ("classic", "random"),
-        ("classic", "sobol"),
-        ("octahedral", "sobol"),
-        ("fibonacci_rotated", "random"),
-    ):
-        rows = [
-            row
-            for row in results.summary
-            if row["sampler"] == name
-            and row["points"] == points
-            and row["integrand"] in sphere
-            and row["status"] != "exact"
-        ]
-        if rows:
-            slopes.append(f"{name}/{points}: " + ", ".join(f"{row['integrand']} {row['slope']:.2f}" for row in rows))
-    if slopes:
-        out.append(
-            "**Convergence slopes** (log RMSE vs log n on the sphere; cells at rounding level left out): "
-            + "; ".join(slopes)
-            + "."
-        )
-    fits = {(f["sampler"], f["points"]): f for f in results.discrepancy_fits}
-    parts: list[str] = []
-    for key in (
-        ea,
-        ea_sobol,
-        ("symsphere_paper1", "random"),
-        ("symsphere_paper1", "sobol"),
-        ("symsphere_paper2", "sobol"),
-        ("classic", "sobol"),
-        ("octahedral", "sobol"),
-        ("fibonacci_rotated", "random"),
-        ("classic", "random"),
-    ):
-        f = fits.get(key)
-        if f is None or f["fit"] is None:
-            continue
-        text = f"{key[0]}/{key[1]} {f['fit'].slope:.2f}"
-        if not by_label[key].uniform:
-            text += f" (with weights 1/pdf: {f['weighted_fit'].slope:.2f})"
-        parts.append(text)
-    if parts:
-        out.append(
-            "**Cap discrepancy** (slope of D against N; i.i.d. points give -0.5, the best possible order is "
-            "-0.75): " + "; ".join(parts) + "."
-        )
-    failed_uniform = sorted(
-        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "uniform" and not r["passed"]}
-    )
-    passed_own = sorted(
-        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "own pdf" and r["passed"]}
-    )
-    failed_own = sorted(
-        {f"{r['sampler']} ({r['domain']})" for r in results.chi2 if r["reference"] == "own pdf" and not r["passed"]}
-    )
-    if results.chi2:
-        sentence = "**χ².** Fail against the uniform density: " + (", ".join(failed_uniform) or "none")
-        sentence += "; pass against their own pdf: " + (", ".join(passed_own) or "none")
-        if failed_own:
-            sentence += "; fail against their own pdf: " + ", ".join(failed_own)
-        out.append(sentence + ".")
-    return out
-
-
-def _best_randomized(results: Results) -> list[str]:
-    """Per integrand: the most accurate randomized sampler at the largest n, and the most efficient one.
-
-    Randomized: every sampler whose estimate is random (the deterministic Fibonacci and Lebedev rules
-    excepted).  Ties at rounding level are all named.
-    """
-    config = results.config
-    labels = {(s.name, s.points): s for s in all_samplers(config)}
-    out = []
-    for g in config.integrands:
-        rows = [r for r in results.summary if r["integrand"] == g and labels[(r["sampler"], r["points"])].is_random]
-        if len(rows) < 2:
-            continue
-
-        def label(r: Row) -> str:
-            return f"{r['sampler']}/{r['points']}"
-
-        exact = [r for r in rows if r["status"] == "exact" or not math.isfinite(r["efficiency"])]
-        rest = [r for r in rows if r not in exact]
-        text = f"`{g}`: " + (
-            f"at rounding level with {', '.join(label(r) for r in exact)}; among the others, " if exact else ""
-        )
-        if len(rest) < 2:
-            out.append(text.removesuffix("; among the others, "))
-            continue
-        by_mse = sorted(rest, key=lambda r: r["rmse_at_n_max"])
-        by_time = sorted(rest, key=lambda r: -r["efficiency"])
-        mse_ratio = (by_mse[1]["rmse_at_n_max"] / by_mse[0]["rmse_at_n_max"]) ** 2
-        time_ratio = by_time[0]["efficiency"] / by_time[1]["efficiency"]
-        out.append(
-            text + f"at equal n {label(by_mse[0])} (MSE {_g(mse_ratio)}x below {label(by_mse[1])}); "
-            f"at equal time {label(by_time[0])} ({_g(time_ratio)}x the efficiency of {label(by_time[1])})"
-        )
-    return out
-
-
-def _lebedev_text(results: Results) -> list[str]:
-    """Per integrand: the deterministic Lebedev rule's error at its largest size against the best randomized
-    sampler at the same budget, and the n that sampler needs to match it."""
-    config = results.config
-    labels = {(s.name, s.points): s for s in all_samplers(config)}
-    rule = next((s for s in all_samplers(config) if s.name == "lebedev"), None)
-    if rule is None:
-        return []
-    k = next((k for k in config.ks if rule.n_for(k) == rule.n_for(config.ks[-1])), config.ks[-1])
-    out = []
-    for g in config.integrands:
-        lebedev = _lookup(results.convergence, integrand=g, sampler="lebedev", points=rule.points, k=k)
-        if lebedev is None:
-            continue
-        rows = [
-            r
-            for r in results.convergence
-            if r["integrand"] == g and r["k"] == k and labels[(r["sampler"], r["points"])].is_random
-        ]
-        if not rows:
-            continue
-        best = min(rows, key=lambda r: r["rmse"])
-        error = abs(lebedev["mean_error"])
-        if lebedev["rounding_level"]:
-            out.append(f"`{g}`: Lebedev at rounding level (n = {lebedev['n']})")
-            continue
-        series = [
-            r
-            for r in results.convergence
-            if r["integrand"] == g and r["sampler"] == best["sampler"] and r["points"] == best["points"]
-        ]
-        match = next((r["n"] for r in series if r["rmse"] <= error), None)
-        needs = f"reaches it at n = {match}" if match is not None else f"does not reach it by n = {series[-1]['n']}"
-        out.append(
-            f"`{g}`: Lebedev {_g(error)} (n = {lebedev['n']}); best randomized at n = {best['n']}: "
-            f"{best['sampler']}/{best['points']} {_g(best['rmse'])}, which {needs}"
-        )
-    return out
+    return short_number(row["relative_efficiency"])
 
 
 def report_markdown(results: Results) -> str:
@@ -450,34 +119,20 @@ def report_markdown(results: Results) -> str:
     for domain in domains(config):
         names = [g for g in config.integrands if INTEGRANDS[g].domain == domain]
         baseline = "/".join(BASELINE[domain])
-        lines += [
-            f"**{domain}** (1/(MSE·seconds) over that of `{baseline}`; above 1: better):",
-            "",
-            "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |",
-            "|---|" + "---:|" * len(names),
-        ]
-        for sampler in samplers(config, domain):
-            cells = [
-                _efficiency_text(_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
-                for g in names
-            ]
-            lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
-        lines += [
-            "",
-            f"**{domain}: convergence slopes** (log RMSE vs log n; ± standard error):",
-            "",
-            "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |",
-            "|---|" + "---:|" * len(names),
-        ]
-        for sampler in samplers(config, domain):
-            cells = [
-                _slope_text(_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points))
-                for g in names
-            ]
-            lines.append(f"| {sampler.label} | " + " | ".join(cells) + " |")
-        lines.append("")
+        for title, cell in (
+            (f"**{domain}** (1/(MSE·seconds) over that of `{baseline}`; above 1: better):", _efficiency_text),
+            (f"**{domain}: convergence slopes** (log RMSE vs log n; ± standard error):", _slope_text),
+        ):
+            lines += [title, "", "| sampler | " + " | ".join(f"`{g}`" for g in names) + " |"]
+            lines.append("|---|" + "---:|" * len(names))
+            for sampler in samplers(config, domain):
+                rows = [
+                    find_row(results.summary, integrand=g, sampler=sampler.name, points=sampler.points) for g in names
+                ]
+                lines.append(f"| {sampler.label} | " + " | ".join(cell(row) for row in rows) + " |")
+            lines.append("")
 
-    comparisons, names = _comparison_rows(results)
+    comparisons, names = comparison_rows(results)
     if comparisons:
         lines += [
             "## Comparisons: MSE(B) / MSE(A) at the largest n",
@@ -490,20 +145,20 @@ def report_markdown(results: Results) -> str:
             "|---|---|---|" + "---:|" * len(names),
         ]
         for a, b, what, ratios in comparisons:
-            cells = ["" if ratios[g] is None else _g(ratios[g]) for g in names]
+            cells = ["" if ratios[g] is None else short_number(ratios[g]) for g in names]
             lines.append(f"| {'/'.join(a)} | {'/'.join(b)} | {what} | " + " | ".join(cells) + " |")
         lines.append("")
 
     lines += ["## What the measurements say", ""]
-    lines += [f"- {sentence}" for sentence in _findings(results)]
-    best = _best_randomized(results)
+    lines += [f"- {sentence}" for sentence in findings(results)]
+    best = best_randomized(results)
     if best:
         lines.append(
             "- **The most accurate randomized method** (largest n; equal time: efficiency 1/(MSE·seconds)): "
             + "; ".join(best)
             + "."
         )
-    lebedev = _lebedev_text(results)
+    lebedev = lebedev_text(results)
     if lebedev:
         lines.append(
             "- **Lebedev (deterministic, exact to degree 131 at 5810 points) against the best randomized "
@@ -524,11 +179,13 @@ def report_markdown(results: Results) -> str:
         for row in results.summary:
             if row["integrand"] != g:
                 continue
-            last = _row(results.convergence, integrand=g, sampler=row["sampler"], points=row["points"], n=row["n_max"])
+            last = find_row(
+                results.convergence, integrand=g, sampler=row["sampler"], points=row["points"], n=row["n_max"]
+            )
             lines.append(
-                f"| {row['sampler']} | {row['points']} | {row['n_max']} | {_g(row['relative_rmse_at_n_max'])} | "
-                f"{_g(last['mean_error'])} ± {_g(last['mean_error_se'], 2)} | {_slope_text(row)} | "
-                f"{_g(row['median_seconds_at_n_max'])} | {_g(row['efficiency'])} | {_efficiency_text(row)} | "
+                f"| {row['sampler']} | {row['points']} | {row['n_max']} | {short_number(row['relative_rmse_at_n_max'])} | "
+                f"{short_number(last['mean_error'])} ± {short_number(last['mean_error_se'], 2)} | {_slope_text(row)} | "
+                f"{short_number(row['median_seconds_at_n_max'])} | {short_number(row['efficiency'])} | {_efficiency_text(row)} | "
                 f"{row['status']} |"
             )
         lines.append("")
@@ -550,15 +207,17 @@ def report_markdown(results: Results) -> str:
             "",
             "| point set | " + " | ".join(f"N = {n}" for n in ns) + " | slope |",
             "|---|" + "---:|" * (len(ns) + 1),
-            "| i.i.d. expectation √(1/(3N)) | " + " | ".join(_g(math.sqrt(1 / (3 * n))) for n in ns) + " | -0.50 |",
+            "| i.i.d. expectation √(1/(3N)) | "
+            + " | ".join(short_number(math.sqrt(1 / (3 * n))) for n in ns)
+            + " | -0.50 |",
         ]
         for (name, points), f in fits.items():
             rows = [r for r in results.discrepancy if r["sampler"] == name and r["points"] == points]
-            cells = [_g(r["discrepancy_rms"]) for r in rows]
+            cells = [short_number(r["discrepancy_rms"]) for r in rows]
             slope = f"{f['fit'].slope:.2f}" if f["fit"] is not None else "–"
             lines.append(f"| {name}/{points} | " + " | ".join(cells) + f" | {slope} |")
             if not by_label[(name, points)].uniform or by_label[(name, points)].is_rule:
-                cells = [_g(r["weighted_discrepancy_rms"]) for r in rows]
+                cells = [short_number(r["weighted_discrepancy_rms"]) for r in rows]
                 slope = f"{f['weighted_fit'].slope:.2f}" if f["weighted_fit"] is not None else "–"
                 weights = "the rule's weights" if by_label[(name, points)].is_rule else "weights 1/pdf"
                 lines.append(f"| {name}/{points}, {weights} | " + " | ".join(cells) + f" | {slope} |")
@@ -578,7 +237,7 @@ def report_markdown(results: Results) -> str:
         for row in results.chi2:
             lines.append(
                 f"| {row['sampler']} | {row['domain']} | {row['reference']} | {row['n_samples']} | "
-                f"{_g(row['statistic'], 6)} | {row['dof']} | {format_p(row['p_value'])} | "
+                f"{short_number(row['statistic'], 6)} | {row['dof']} | {format_p(row['p_value'])} | "
                 f"{'pass' if row['passed'] else '**FAIL**'} |"
             )
         lines.append("")

@@ -1,8 +1,11 @@
 """The study's samplers: the symmetric scheme (one per map and point set) and the peers, behind one interface.
 
-A :class:`Sampler` draws directions, evaluates its density and gives one estimate of an integral; the
-facts the study needs about it (rows per orbit, the multiple n must be, whether it is uniform) are read
-from :class:`symsphere.peers.Peer` fields for a peer and from the map and the domain for the scheme.
+A :class:`Sampler` is a ``strategy`` x ``points`` x ``method``, the words of the renderers
+(:mod:`symsphere._strategies`): the strategy ``symmetric`` (the scheme, with a map ``method``) or a peer
+of :data:`symsphere.peers.PEERS` by name.  It draws directions, evaluates its density and gives one
+estimate of an integral; the facts the study needs about it (rows per orbit, the multiple n must be,
+whether it is uniform) are read from :class:`symsphere.peers.Peer` fields for a peer and from the map
+and the domain for the scheme.
 """
 
 from __future__ import annotations
@@ -16,29 +19,33 @@ import numpy as np
 import numpy.typing as npt
 
 from ... import hemisphere_pdf, integrate, sample_hemisphere, sample_sphere, sphere_pdf
+from ..._compiled_peers import COMPILED_PEERS, compiled_sample
+from ..._strategies import SAMPLING_STRATEGIES
 from ..._typing import Domain, FloatArray, MapMethod, PointSet, RNGLike
 from ...peers import PEERS, Peer
 from ...symmetry import orbit_size
 from ...warps import triangle_warp
-from .compiled import COMPILED_PEERS, compiled_sample
 from .config import StudyConfig, domains
 
 __all__ = ["Sampler", "all_samplers", "samplers", "weighted"]
 
 SCHEME_PREFIX = "symsphere_"
-"""Names of the scheme's samplers: ``symsphere_<map>``."""
+"""Names of the scheme's samplers in the report: ``symsphere_<map>``."""
+
+SCHEME = SAMPLING_STRATEGIES["symmetric"].name
+"""The scheme's strategy: ``'symmetric'`` (the registry's word; the peers' strategies are their names)."""
 
 
 @dataclass(frozen=True)
 class Sampler:
-    """One sampler of the study: the symmetric scheme with a map, or a peer; with its base points.
+    """One sampler of the study: a strategy (the symmetric scheme with a map, or a peer) with its base points.
 
     Build it with :meth:`scheme` or :meth:`of_peer`.
 
     Attributes
     ----------
-    name : str
-        ``'symsphere_<method>'`` for the scheme, else the peer's name.
+    strategy : str
+        ``'symmetric'`` for the scheme, else the peer's name.
     points : str
         The base point set (:data:`symsphere.POINT_SETS`).
     domain : {'sphere', 'hemisphere'}
@@ -48,7 +55,7 @@ class Sampler:
         None for the scheme.
     """
 
-    name: str
+    strategy: str
     points: PointSet
     domain: Domain
     method: MapMethod | None = None
@@ -57,12 +64,17 @@ class Sampler:
     @classmethod
     def scheme(cls, method: MapMethod, points: PointSet, domain: Domain) -> Sampler:
         """The symmetric scheme with the map *method* and base *points* on *domain*."""
-        return cls(f"{SCHEME_PREFIX}{method}", points, domain, method=method)
+        return cls(SCHEME, points, domain, method=method)
 
     @classmethod
     def of_peer(cls, peer: Peer, points: PointSet) -> Sampler:
         """The peer sampler *peer* with base *points*."""
         return cls(peer.name, points, peer.domain, peer=peer)
+
+    @property
+    def name(self) -> str:
+        """The report's name: ``'symsphere_<method>'`` for the scheme, else the peer's name."""
+        return f"{SCHEME_PREFIX}{self._method}" if self.is_scheme else self.strategy
 
     @property
     def _peer(self) -> Peer:
@@ -134,7 +146,7 @@ class Sampler:
 
         The scheme: :func:`symsphere.integrate` with ``replicates=1`` (None for random points); a peer:
         :meth:`symsphere.peers.Peer.estimate`, ``mean(f / pdf)`` over its n directions (a rule:
-        ``sum(w f)``), the directions from a compiled kernel (:mod:`.compiled`) for the peers of
+        ``sum(w f)``), the directions from a compiled kernel (:mod:`symsphere._compiled_peers`) for the peers of
         ``COMPILED_PEERS``.
         """
         if self.is_scheme:
@@ -149,7 +161,7 @@ class Sampler:
         d = compiled_sample(peer, n, rng, self.points)
         if peer.rule_weights is not None:  # self.is_rule
             return float(np.sum(peer.rule_weights(n) * f(d)))
-        # These peers are uniform on the sphere (tested in tests/apps/test_study_compiled.py): weight 4 pi, as
+        # These peers are uniform on the sphere (tested in tests/test_compiled_peers.py): weight 4 pi, as
         # the scheme's estimator, which evaluates no pdf for a uniform map either.
         return float(4 * np.pi * np.mean(f(d)))
 

@@ -90,7 +90,7 @@ def test_sobol_balance_warning_is_one_note_on_the_cli(tmp_path, verb):
 
 # --- the docs cite files that exist -----------------------------------------------------------
 
-_ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+_ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize(
@@ -138,7 +138,7 @@ def test_render_loads_lazily_and_dir_lists_it():
 def test_furnace_prints_mean_radiance_against_exact_and_is_not_white(tmp_path, capsys):
     png = tmp_path / "f.png"
     args = ["render", "--scene", "furnace", "--width", "8", "--height", "6", "--spp", "24", "--seed", "1"]
-    assert main([*args, "--sampler", "cosine", "--out", str(png), "--no-progress"]) == 0
+    assert main([*args, "--strategy", "cosine", "--out", str(png), "--no-progress"]) == 0
     out = capsys.readouterr().out
     match = re.search(r"furnace: mean radiance ([\d.]+) .* exact 2 ", out)
     assert match and abs(float(match.group(1)) - 2) < 0.1, out
@@ -159,12 +159,12 @@ def test_render_on_a_cluster_reports_workers_not_threads(tmp_path, capsys):
 
 def test_every_verb_lists_its_choices(capsys):
     from symsphere.apps.study import CONFIGS
-    from symsphere.render import SAMPLERS, SCENES
+    from symsphere.render import SAMPLERS, SCENES, STRATEGIES
 
     expected = {
         "sample": [*METHODS, *POINT_SETS, "sphere", "hemisphere"],
         "integrate": [*INTEGRANDS, *METHODS, *POINT_SETS],
-        "render": [*SCENES, *SAMPLERS, *METHODS],
+        "render": [*SCENES, *STRATEGIES, "sobol_interlaced2", *SAMPLERS, *METHODS],
         "study": list(CONFIGS),
         "demo": [*METHODS, "render.png"],
     }
@@ -235,5 +235,5 @@ def test_notebook_reprs():
     test = ss.stats.chi2_test(ss.stats.one_per_orbit(ss.sample_sphere(48 * 1000, rng=1), 48, rng=2),
                               ss.stats.uniform_pdf("sphere"))  # fmt: skip
     assert "PASSED" in test._repr_html_() and "<table>" in test._repr_html_()
-    image = ss.render.render("furnace", width=4, height=3, spp=8, sampler="cosine", seed=1)
+    image = ss.render.render("furnace", width=4, height=3, spp=8, strategy="cosine", seed=1)
     assert image._repr_png_()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,17 +1,9 @@
-"""Counter-based random numbers and Owen-scrambled Sobol' points for the render kernels.
+"""Owen-scrambled Sobol' points (2D and interlaced) as ``register_jitable`` scalar functions on ``uint64``.
 
-Everything here is a ``register_jitable`` scalar function on ``uint64``
-integers, so that the kernels in :mod:`symsphere.render._integrator` inline
-it.  All constants are ``np.uint64`` globals: numba turns ``uint64 + int64``
-into float64, so a bare integer literal would silently break the arithmetic.
-
-Random numbers
---------------
-No generator state is shared between pixels or samples: the stream of sample
-*s* of pixel *p* starts at ``path_state(pixel_key(seed, p), s)`` and advances
-by the splitmix64 increment (:mod:`symsphere._splitmix`: Steele, Lea & Flood 2014;
-finaliser variant 13 of Stafford).  An image is therefore a pure function of the seed, whatever the
-number of threads and however the samples are split into passes.
+The renderer's kernels (:mod:`symsphere.render`) inline them; the Dr.Jit form in
+:mod:`symsphere.mitsuba._random` imports the constants (:data:`LAINE_KARRAS`, :data:`MASK32`) from here.
+All constants are ``np.uint64`` globals: numba turns ``uint64 + int64`` into float64, so a bare integer
+literal would silently break the arithmetic.
 
 Owen-scrambled Sobol'
 ---------------------
@@ -46,14 +38,11 @@ from __future__ import annotations
 import numpy as np
 from numba.extending import register_jitable
 
-from .._splitmix import GOLDEN, MIX1, MIX2, ODD, mix64
+from .splitmix import GOLDEN, MIX1, MIX2, ODD, mix64
 
 __all__ = [
-    "next_u64",
-    "u01",
-    "below",
-    "pixel_key",
-    "path_state",
+    "LAINE_KARRAS",
+    "MASK32",
     "reverse_bits32",
     "nested_uniform_scramble",
     "sobol2",
@@ -63,18 +52,18 @@ __all__ = [
     "owen_sobol_interlaced",
 ]
 
-_S11 = np.uint64(11)
 _S32 = np.uint64(32)
 _ONE = np.uint64(1)
-_M32 = np.uint64(0xFFFFFFFF)
-_TWO_M53 = 2.0**-53
+MASK32 = 0xFFFFFFFF
+"""The low 32 bits (the fractions here are 32-bit)."""
+_M32 = np.uint64(MASK32)
 _TWO_M32 = 2.0**-32
 _TWO_M52 = 2.0**-52
 _TWO_M51 = 2.0**-51
 
-# Laine–Karras permutation constants (Burley 2020, listing 2): all even.
-_LK = np.array([0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6], dtype=np.uint64)
-_LK0, _LK1, _LK2, _LK3 = (np.uint64(c) for c in _LK)
+LAINE_KARRAS = (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6)
+"""The Laine–Karras permutation's multipliers (Burley 2020, listing 2): all even."""
+_LK0, _LK1, _LK2, _LK3 = (np.uint64(c) for c in LAINE_KARRAS)
 
 
 def _pascal_direction_numbers():
@@ -114,37 +103,6 @@ def _sobol_direction_numbers():
 
 
 _SOBOL6 = _sobol_direction_numbers()
-
-
-@register_jitable
-def next_u64(state):
-    """Advance a splitmix64 stream: returns (new state, 64 random bits)."""
-    state = state + GOLDEN
-    return state, mix64(state)
-
-
-@register_jitable
-def u01(bits):
-    """A uint64 to a double in [0, 1) (its top 53 bits)."""
-    return np.float64(bits >> _S11) * _TWO_M53
-
-
-@register_jitable
-def below(bits, n):
-    """A uint64 to an integer in 0..n-1 (Lemire's multiply-shift on the top 32 bits; n < 2**32)."""
-    return np.int64(((bits >> _S32) * np.uint64(n)) >> _S32)
-
-
-@register_jitable
-def pixel_key(seed, pixel):
-    """The key of one pixel: every random decision in the pixel derives from it."""
-    return mix64(mix64(seed + GOLDEN) ^ (np.uint64(pixel) * GOLDEN + _ONE))
-
-
-@register_jitable
-def path_state(key, sample):
-    """Initial splitmix64 state of sample *sample* of the pixel with key *key*."""
-    return mix64(key ^ ((np.uint64(sample) + _ONE) * ODD))
 
 
 @register_jitable

@@ -1,4 +1,4 @@
-"""Compiled samplers of the peers, so that the study's timings compare methods, not implementations.
+"""Compiled samplers of the peers, so that timings (the convergence study's) compare methods, not implementations.
 
 The scheme's directions come from symsphere's numba kernels (parallel over all threads); the library's
 peers (:mod:`symsphere.peers`) are vectorised numpy, one thread.  Here the peers the study times get
@@ -7,7 +7,7 @@ numba kernels too, parallel in the same way: the same base points (the library's
 rotations (scipy's ``Rotation.random`` from the same generator), and each map's own elementwise
 formula (:func:`symsphere.warps.octahedral_sphere_point`, :func:`symsphere.peers.fibonacci_point`, ...),
 compiled for one point at a time.  :func:`compiled_sample` returns what ``peer.sample`` returns, to rounding
-(tested in ``tests/apps/test_study_compiled.py``), for the peers of :data:`COMPILED_PEERS`.
+(tested in ``tests/test_compiled_peers.py``), for the peers of :data:`COMPILED_PEERS`.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from typing import Literal, TypedDict
 import numpy as np
 from numba import njit, prange
 
-from ..._threads import route_compiles, start_threads
-from ..._typing import Float64Array, FloatArray, PointSet, RNGLike
-from ..._validation import check_rng
-from ...peers import Peer, fibonacci_point, lebedev_size, sample_lebedev
-from ...points import BasePoints
-from ...warps import octahedral_sphere_point, uniform_sphere_point
+from ._threads import route_compiles, start_threads
+from ._typing import Float64Array, FloatArray, PointSet, RNGLike
+from ._validation import check_rng
+from .peers import Peer, fibonacci_point, lebedev_size, sample_lebedev
+from .points import BasePoints
+from .warps import octahedral_sphere_point, uniform_sphere_point
 
 __all__ = ["COMPILED_PEERS", "compiled_sample"]
 
@@ -92,7 +92,7 @@ def compiled_sample(peer: Peer, n: int, rng: RNGLike, points: PointSet = "random
     Examples
     --------
     >>> import numpy as np
-    >>> from symsphere.apps.study.compiled import compiled_sample
+    >>> from symsphere._compiled_peers import compiled_sample
     >>> from symsphere.peers import PEERS
     >>> peer = PEERS["octahedral"]
     >>> bool(np.allclose(compiled_sample(peer, 512, 3, "sobol"), peer.sample(512, rng=3, points="sobol"),

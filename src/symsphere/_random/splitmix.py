@@ -5,8 +5,8 @@ multipliers (variant 13 of Stafford's mixers); ``ODD``, an odd constant that key
 stream.  All are ``np.uint64`` (numba types them as uint64; ``int()`` gives the Python int).
 :func:`mix64` is the finaliser, a bijective avalanche of a uint64: compiled by numba into the kernels
 (``register_jitable``), and callable from Python on an ``np.uint64`` (:func:`mix64_int` for a Python
-int).  The Dr.Jit port (``symsphere.mitsuba._random``) restates the finaliser on Dr.Jit arrays with
-these constants.
+int).  The Dr.Jit port (``symsphere.mitsuba._random``) writes the finaliser on Dr.Jit arrays with
+these constants, imported from here.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba.extending import register_jitable
 
-from ._constants import GOLDEN_BITS
+from .._constants import GOLDEN_BITS
 
 __all__ = ["GOLDEN", "MIX1", "MIX2", "ODD", "mix64", "mix64_int"]
 
@@ -38,7 +38,7 @@ def mix64_int(key: int) -> int:
 
     Examples
     --------
-    >>> from symsphere._splitmix import mix64_int
+    >>> from symsphere._random.splitmix import mix64_int
     >>> hex(mix64_int(0x9E3779B97F4A7C15))  # SplitMix64's first output for seed 0
     '0xe220a8397b1dcdaf'
     """

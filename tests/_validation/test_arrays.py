@@ -1,4 +1,4 @@
-"""symsphere._validation: the checks every public function calls at its boundary."""
+"""symsphere._validation.arrays: the unit-direction check every direction function calls at its boundary."""
 
 from __future__ import annotations
 

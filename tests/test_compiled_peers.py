@@ -1,4 +1,4 @@
-"""The study's compiled peer samplers (symsphere.apps.study.compiled) reproduce the library's peers.
+"""symsphere._compiled_peers: the compiled peer samplers (the study's timings use them) reproduce the library's peers.
 
 The reference is the library's numpy implementation (symsphere.peers), itself tested against its
 papers in tests/test_peers.py: same base points, same rotations, same directions to rounding.
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from references import ELEMENTARY_ULPS, GAMMA3, assert_within_eps
 
-from symsphere.apps.study.compiled import COMPILED_PEERS, compiled_sample
+from symsphere._testing import compiled_peers
 from symsphere.peers import PEERS
 
 # How far a compiled peer (numba: libm's sin, cos) may be from the numpy peer (numpy's SIMD sin, cos),
@@ -45,20 +45,20 @@ def test_compiled_sample_is_the_peers_sample(name, points, n):
     peer = PEERS[name]
     for seed in (0, np.random.SeedSequence(5)):
         expected = peer.sample(n, rng=seed, points=points)
-        got = compiled_sample(peer, n, seed, points)
+        got = compiled_peers.compiled_sample(peer, n, seed, points)
         assert got.shape == (n, 3) and got.dtype == np.float64
         assert_within_eps(got, expected, PEER_EPS[name], scale=1)
 
 
 def test_compiled_sample_rejects_other_peers():
-    assert "gaussian" not in COMPILED_PEERS
+    assert "gaussian" not in compiled_peers.COMPILED_PEERS
     with pytest.raises(ValueError, match="'peer'"):
-        compiled_sample(PEERS["gaussian"], 10, 0)
+        compiled_peers.compiled_sample(PEERS["gaussian"], 10, 0)
 
 
 def test_compiled_peers_are_uniform_on_the_sphere():
     # The study weights the compiled peers' directions by 4 pi (no pdf evaluated): that needs these facts.
-    for name in COMPILED_PEERS:
+    for name in compiled_peers.COMPILED_PEERS:
         assert PEERS[name].domain == "sphere" and PEERS[name].uniform, name
 
 

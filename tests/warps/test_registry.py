@@ -284,3 +284,46 @@ def test_chi2(name):
     result = chi2_test(d, pdf, domain, bins=bins, significance=SIGNIFICANCE, test_count=CHI2_TESTS)
     assert result.passed, str(result)
     assert_power(result, MUST_DETECT_W)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_sample(name):
+    # Warp.sample is the forward map of the documented points of the square (symsphere.points), computed in
+    # float64 and cast: the same rows for every point set, in the domain, in the requested dtype.
+    from symsphere.points import unit_square_points
+
+    warp = WARPS[name]
+    for points, n in (("random", 64), ("stratified", 64), ("sobol", 64)):
+        d = warp.sample(n, points=points, rng=7, dtype=np.float32)
+        expected = warp.forward(unit_square_points(n, points, 7)).astype(np.float32)
+        assert d.dtype == np.float32 and d.shape == expected.shape
+        np.testing.assert_array_equal(d, expected)
+        assert np.all(_in_domain(d.astype(np.float64), warp.domain, tol=1e-6))
+    with pytest.raises(ValueError, match="'n'"):
+        warp.sample(0)
+    with pytest.raises(ValueError, match="not a valid points"):
+        warp.sample(4, points="grid")
+    with pytest.raises((TypeError, ValueError), match="'dtype'"):
+        warp.sample(4, dtype=np.int32)
+
+
+def test_namespace_lists_each_name_once():
+    # The namespace is built from the modules' __all__ (warps/__init__.py): nothing listed twice, every
+    # registered warp's triple reachable there by its own name, and the records keyword-only.
+    import symsphere.warps as warps
+
+    assert len(warps.__all__) == len(set(warps.__all__))
+    assert all(hasattr(warps, name) for name in warps.__all__)
+    for warp in WARPS.values():
+        for f in (warp.forward, warp.pdf, warp.inverse):
+            assert "<locals>" in f.__qualname__ or getattr(warps, f.__name__) is f  # a map of the namespace, or
+            # one bound to its method (the maps onto T0 and the scheme's bijections)
+    with pytest.raises(TypeError):
+        Warp(
+            "x",
+            "sphere",
+            True,
+            WARPS["uniform_sphere"].forward,
+            WARPS["uniform_sphere"].pdf,
+            WARPS["uniform_sphere"].inverse,
+        )

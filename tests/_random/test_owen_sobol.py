@@ -1,16 +1,16 @@
-"""symsphere.render._random: the 2D Sobol' sequence, bit reversal, hash-based Owen scrambling and interlacing."""
+"""symsphere._random.owen_sobol: the 2D Sobol' sequence, bit reversal, hash-based Owen scrambling and interlacing."""
 
 import numpy as np
 import pytest
 from references import net_t_value
 
+from symsphere._testing import owen_sobol, splitmix
 from symsphere._testing import render_probes as P
-from symsphere._testing import render_random, splitmix
 
 nested_uniform_scramble, reverse_bits32, sobol2 = (
-    render_random.nested_uniform_scramble,
-    render_random.reverse_bits32,
-    render_random.sobol2,
+    owen_sobol.nested_uniform_scramble,
+    owen_sobol.reverse_bits32,
+    owen_sobol.sobol2,
 )
 mix64 = splitmix.mix64
 
@@ -79,7 +79,7 @@ def test_sobol_direction_numbers_are_scipys():
     """
     from scipy.stats import qmc
 
-    sobol_coordinate = render_random.sobol_coordinate
+    sobol_coordinate = owen_sobol.sobol_coordinate
 
     engine = qmc.Sobol(d=6, scramble=False, bits=32)
 
@@ -125,7 +125,7 @@ def test_interlace_fractions_is_interlace_digits():
 
     from symsphere.points import interlace_digits
 
-    interlace_fractions = render_random.interlace_fractions
+    interlace_fractions = owen_sobol.interlace_fractions
 
     @njit
     def interlace(words, factor):
@@ -145,7 +145,7 @@ def test_owen_sobol_interlaced_equals_its_definition():
     """The table-driven form equals: shuffle the index, scramble each Sobol' coordinate, interlace."""
     from numba import njit
 
-    interlace_fractions, sobol_coordinate = render_random.interlace_fractions, render_random.sobol_coordinate
+    interlace_fractions, sobol_coordinate = owen_sobol.interlace_fractions, owen_sobol.sobol_coordinate
 
     @njit
     def definition(index, key, factor):
