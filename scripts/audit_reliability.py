@@ -7,8 +7,8 @@ signals, absurd sizes.  Prints one markdown table (and, with --verbose, every fi
 What it counts (a finding is anything but the last column's "0"):
 
 - bad inputs: every public function of the library below ``symsphere.render`` (the property tests'
-  table of valid arguments, ``tests/test_properties.py``) and ten of ``symsphere.render``, called with
-  valid arguments but one, replaced in turn by each of 34 fixed odd values (None, bools, strings, NaN,
+  table of valid arguments, ``tests/test_properties.py``, without its ``TRUSTED`` formulas) and ten of
+  ``symsphere.render``, called with valid arguments but one, replaced in turn by each of 34 fixed odd values (None, bools, strings, NaN,
   inf, 2**70, empty, ragged, object and complex arrays, ...).  Each call must return finite output or
   raise ValueError/TypeError whose one-line message names the argument, without a warning, within
   10 s.  "crashes" are deaths of the process that runs the table (it is a child process); "hangs" are
@@ -24,6 +24,10 @@ What it counts (a finding is anything but the last column's "0"):
   be 0 (the output complete and new) or 130/143 (the target as before), with no traceback.
 - absurd sizes: commands that must exit 2 within 20 s naming the argument (or asking for --allow-long),
   and library calls that must raise ValueError naming it at once (``sample_sphere(48 * 2**31)``).
+- overflow: ``integrate`` (numpy and compiled f, random, Sobol', hemisphere, ``method='auto'``, a
+  tolerance) and ``orbit_average`` with values, sums or variances beyond float64, ``rtol=1e-300``,
+  ``atol=1e-300``, and the CLI's ``--rtol 1e-300``: a ValueError naming ``f`` (or the tolerance, or ``p``),
+  or a finite result; "silent" is an inf/NaN result or a warning, "unnamed" another error or message.
 - Mitsuba files (skipped, with the reason, without Mitsuba): nested BSDFs, no sensor, an empty film, a
   NaN or 1e39 radiance, a directory, FIFO or /dev/zero link named .xml, options that cannot apply: exit
   2 with one line naming the file or option, nothing written.
@@ -121,6 +125,8 @@ def bad_input_table(verbose: bool) -> dict[str, int]:
     os.chdir(folder)  # relative names land here
     table = []
     for name, function in tp.FUNCTIONS:
+        if name in tp.TRUSTED:  # documented as not validating (numba scalar formulas), as the property tests
+            continue
         arguments = tp._valid_arguments(name, function)
         if arguments is not None:
             table.append((name, function, arguments, lambda f, a: tp._call(f, a)))
@@ -381,12 +387,15 @@ ABSURD = [
     (["render", "--width", str(2**31), "--height", str(2**31)], "--width * --height"),
     (["render", "--spp", str(10**15)], "--spp"),
     (["render", "--spp", str(10**13)], "--allow-long"),
-    (["integrate", "--integrand", "exp", "--n", str(48 * 10**13)], "--allow-long"),
+    # more than a day, and (below ~1.2 TB of memory) more partial sums than memory holds, said first
+    (["integrate", "--integrand", "exp", "--n", str(48 * 10**13)], ("--allow-long", "'--n'")),
     (["sample", "--n", str(48 * 10**13), "--out", "x.npy"], "--allow-long"),
     (["sample", "--n", str(48 * 2**64), "--out", "x.npy"], "'n'"),
     (["study", "--repetitions", "1000000000", "--out", "s"], "--repetitions"),
     (["study", "--repetitions", str(2**70), "--out", "s"], "--repetitions"),
     (["study", "--repetitions", "100000", "--out", "s"], "--allow-long"),
+    (["integrate", "--integrand", "exp", "--n", str(48 * 10**13), "--allow-long"], "'--n'"),
+    (["integrate", "--integrand", "exp", "--atol", "1e-9", "--n-max", str(48 * 10**14), "--allow-long"], "'--n-max'"),
 ]
 
 # Library calls that must raise ValueError naming the argument at once (not run on, not MemoryError).
@@ -394,6 +403,13 @@ ABSURD_API = [
     ("symsphere.sample_sphere(48 * 2**31)", "'n'"),
     ("symsphere.sample_hemisphere(24 * 2**33)", "'n'"),
     ("symsphere.render.render('furnace', width=10**7, height=10**7, spp=1)", "'width * height'"),
+    ("symsphere.integrate(lambda w: w[:, 0], n=48 * 10**13)", "'n'"),  # its partial sums: beyond memory
+    ("symsphere.integrate(lambda w: w[:, 0], atol=1e-9, n_max=48 * 10**14)", "'n_max'"),
+    (
+        "symsphere.integrate(lambda w: w[:, 0], n=48 * 10**12, points='sobol', replicates=10**12 // 4096)",
+        "'replicates'",
+    ),
+    ("__import__('symsphere.distributed').distributed.integrate(lambda w: w[:, 0], n=48 * 10**13)", "'n'"),
 ]
 
 
@@ -411,7 +427,8 @@ def absurd_sizes(verbose: bool) -> dict[str, int]:
             if time.monotonic() - start > 20:
                 counts["slow"] += 1
                 print(f"  slow ({time.monotonic() - start:.0f} s): {' '.join(arguments)}", file=sys.stderr)
-            if run.returncode != 2 or named not in run.stderr or "Traceback" in run.stderr:
+            said = any(name in run.stderr for name in ((named,) if isinstance(named, str) else named))
+            if run.returncode != 2 or not said or "Traceback" in run.stderr:
                 counts["unnamed"] += 1
                 print(f"  {' '.join(arguments)}: exit {run.returncode}: {run.stderr[-200:]!r}", file=sys.stderr)
             elif verbose:
@@ -435,6 +452,98 @@ def absurd_sizes(verbose: bool) -> dict[str, int]:
                 print(f"  {call}: {run.stdout.strip()[-200:]!r}", file=sys.stderr)
             elif verbose:
                 print(f"  {call}: {run.stdout.strip()}", file=sys.stderr)
+    return counts
+
+
+# --- integrands that overflow, tolerances float64 cannot resolve ---------------------------------------
+
+OVERFLOW_CODE = """
+import json, sys, time, warnings
+import numpy as np
+from numba import njit
+import symsphere
+from symsphere.integrands import orbit_average
+
+huge = lambda w: np.full(len(w), 1e308)
+signed = lambda w: np.where(w[:, 0] > 0, 1e308, -1e308)  # the sum is finite, its variance is not
+def grows(w):  # inf for some directions; quietly, so that any warning seen is the library's
+    with np.errstate(over="ignore"):
+        return np.full(len(w), 1e300) * np.exp(700 * w[:, 2])
+def square(w):
+    with np.errstate(over="ignore"):
+        return w[:, 0] ** 2
+huge_compiled = njit(lambda x, y, z: 1e308)
+CASES = [
+    ("integrate(huge, n=96)", lambda: symsphere.integrate(huge, n=96, rng=1), "'f'"),
+    ("integrate(huge, atol=1e-3)", lambda: symsphere.integrate(huge, atol=1e-3, rng=1), "'f'"),
+    ("integrate(huge_compiled, n=96)", lambda: symsphere.integrate(huge_compiled, n=96, rng=1), "'f'"),
+    ("integrate(signed, n=96)", lambda: symsphere.integrate(signed, n=96, rng=1), "'f'"),
+    ("integrate(grows, n=4800)", lambda: symsphere.integrate(grows, n=4800, rng=1), "'f'"),
+    ("integrate(huge, sobol)", lambda: symsphere.integrate(huge, n=384, points="sobol", rng=1), "'f'"),
+    ("integrate(huge, hemisphere)", lambda: symsphere.integrate(huge, n=48, domain="hemisphere", rng=1), "'f'"),
+    ("integrate(huge, method=auto)", lambda: symsphere.integrate(huge, rtol=1e-6, method="auto", rng=1), "'f'"),
+    ("integrate(exp, rtol=1e-300)", lambda: symsphere.integrate(lambda w: np.exp(w[:, 0]), rtol=1e-300), "'rtol'"),
+    ("integrate(exp, atol=1e-300)", lambda: symsphere.integrate(lambda w: np.exp(w[:, 0]), atol=1e-300,
+                                                               n_max=48 * 2**10, rng=1), None),
+    ("orbit_average(huge)", lambda: orbit_average(huge, [0.3, 0.2, 0.9]), "'f'"),
+    ("orbit_average(grows)", lambda: orbit_average(grows, [[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]]), "'f'"),
+    ("orbit_average(p=1e308)", lambda: orbit_average(square, [[1e308] * 3]), "'p'"),
+]
+for name, call, named in CASES:
+    start = time.monotonic()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = call()
+            value = np.asarray(getattr(result, "integral", result), dtype=float)
+            error = getattr(result, "standard_error", 0.0)
+            outcome = "finite" if np.all(np.isfinite(value)) and not np.any(np.isinf(error)) else "non-finite"
+            message = repr(value.ravel()[:2].tolist())
+        except ValueError as exc:
+            outcome, message = ("named" if named and named in str(exc) else "unnamed"), str(exc)
+        except Exception as exc:
+            outcome, message = "wrong type", f"{type(exc).__name__}: {exc}"
+    warned = [str(w.message) for w in caught if not str(w.message).startswith("integrate: the tolerance")]
+    print(json.dumps(dict(name=name, outcome=outcome, message=message[:200], warned=warned,
+                          seconds=time.monotonic() - start)), flush=True)
+"""
+
+
+def overflow(verbose: bool) -> dict[str, int]:
+    """Integrands whose values, sums or variances overflow float64, and tolerances it cannot resolve: one
+    ValueError naming f (or the tolerance) at once, or a finite result; never inf/NaN, never only a warning."""
+    counts = dict(cases=0, silent=0, unnamed=0, slow=0)
+    try:
+        run = subprocess.run([sys.executable, "-c", OVERFLOW_CODE], capture_output=True, text=True, timeout=600)
+    except subprocess.TimeoutExpired:
+        counts["slow"] += 1
+        return counts
+    for line in run.stdout.splitlines():
+        case = json.loads(line)
+        counts["cases"] += 1
+        bad = case["outcome"] in ("non-finite",) or case["warned"]
+        counts["silent"] += bool(bad)
+        counts["unnamed"] += case["outcome"] in ("unnamed", "wrong type")
+        counts["slow"] += case["seconds"] > 20
+        if bad or case["outcome"] in ("unnamed", "wrong type") or case["seconds"] > 20 or verbose:
+            print(f"  {case['name']}: {case['outcome']} {case['message']!r} {case['warned']}", file=sys.stderr)
+    if run.returncode != 0:
+        counts["unnamed"] += 1
+        print(f"  the overflow cases' process: exit {run.returncode}: {run.stderr[-300:]!r}", file=sys.stderr)
+    for arguments, named, status in (
+        (["integrate", "--integrand", "exp", "--seed", "1", "--rtol", "1e-300"], "'--rtol'", 2),
+        (["integrate", "--integrand", "exp", "--seed", "1", "--atol", "1e-300", "--n-max", "49152"], "NOT reached", 0),
+    ):
+        counts["cases"] += 1
+        start = time.monotonic()
+        done = subprocess.run(CLI + arguments, capture_output=True, text=True, timeout=300)
+        counts["slow"] += time.monotonic() - start > 20
+        said = done.stderr + done.stdout
+        if done.returncode != status or named not in said or "Traceback" in said or "Warning" in said:
+            counts["unnamed"] += 1
+            print(f"  {' '.join(arguments)}: exit {done.returncode}: {said[-200:]!r}", file=sys.stderr)
+        elif verbose:
+            print(f"  {' '.join(arguments)}: {said.strip()[-200:]}", file=sys.stderr)
     return counts
 
 
@@ -672,6 +781,9 @@ def main() -> int:
         )
         c = absurd_sizes(args.verbose)
         rows.append(("absurd sizes", f"{c['cases']} commands and calls", f"slow {c['slow']}, unnamed {c['unnamed']}"))
+        c = overflow(args.verbose)
+        rows.append(("overflow", f"{c['cases']} integrands and tolerances beyond float64",
+                     f"silent {c['silent']}, unnamed {c['unnamed']}, slow {c['slow']}"))  # fmt: skip
         missing = _mitsuba_missing()
         if missing is None:
             c = mitsuba_files(args.verbose)

@@ -214,3 +214,35 @@ def writing_in(pid: int, directory, min_size: int = 0) -> bool:
         if os.path.dirname(target.removesuffix(" (deleted)")) == folder and size >= min_size:
             return True
     return False
+
+
+def inject_sigint(monkeypatch, module, name, at_call):
+    """Send SIGINT to this process from inside the at_call-th call of module.name (after the call)."""
+    import os
+    import signal
+
+    real = getattr(module, name)
+    calls = []
+
+    def wrapper(*args, **kwargs):
+        calls.append(None)
+        result = real(*args, **kwargs)
+        if len(calls) == at_call:
+            os.kill(os.getpid(), signal.SIGINT)
+        return result
+
+    monkeypatch.setattr(module, name, wrapper)
+
+
+def catches(pid: int, signum: int) -> bool:
+    """Whether process *pid* has a handler for *signum* (Linux: the SigCgt mask of /proc/PID/status); False
+    where that cannot be read.  ``symsphere`` installs its SIGTERM handler when ``main()`` starts, after
+    the package's imports: a signal before then ends the process the default way."""
+    try:
+        with open(f"/proc/{pid}/status") as status:
+            for line in status:
+                if line.startswith("SigCgt:"):
+                    return bool(int(line.split()[1], 16) >> (signum - 1) & 1)
+    except OSError:
+        pass
+    return False

@@ -222,6 +222,56 @@ def test_render_on_cluster_equals_single_process(client):
         assert np.array_equal(clustered.image, single)
 
 
+# --- bad input: Sobol' lengths, graphs too large to build, exception types -----------------------------------------
+
+
+def _fails_fast(call, error, match, seconds=5.0):
+    start = time.monotonic()
+    with pytest.raises(error, match=match):
+        call()
+    assert time.monotonic() - start < scaled_for_load(seconds)  # instead of allocating or computing for minutes
+
+
+def test_sobol_beyond_its_length_is_rejected_by_distributed():
+    distributed = pytest.importorskip("symsphere.distributed")
+    pytest.importorskip("dask")
+    with pytest.raises(ValueError, match="Sobol'"):
+        distributed.sample_sphere(48 * 2**31, points="sobol")
+
+
+def test_absurd_dask_graphs_fail_fast(monkeypatch):
+    distributed = pytest.importorskip("symsphere.distributed")
+    pytest.importorskip("dask")
+    from symsphere._testing import validation
+
+    # A machine whose memory holds the partial sums (a smaller one refuses n first, naming it)
+    monkeypatch.setattr(validation.values, "machine_memory", lambda: 2**50)
+    _fails_fast(lambda: distributed.sample_sphere(n=48 * 10**13), ValueError, "'chunks'", seconds=10)
+    _fails_fast(
+        lambda: distributed.integrate(lambda d: d[:, 0], n=48 * 10**13, client=None), ValueError, "'chunk_blocks'"
+    )
+
+
+def test_distributed_exception_types():
+    distributed = pytest.importorskip("symsphere.distributed")
+    pytest.importorskip("dask")
+    with pytest.raises(TypeError, match="'client'"):
+        distributed.close_client(None)
+    with pytest.raises(TypeError, match="'client'"):
+        distributed.integrate(lambda d: d[:, 0], client=5, n=48)
+    with pytest.raises(TypeError, match="'timeout'"):
+        distributed.connect("tcp://127.0.0.1:9", timeout="x")
+    with pytest.raises(ValueError, match="'timeout'"):
+        distributed.connect("tcp://127.0.0.1:9", timeout=float("nan"))
+
+
+def test_connect_none_does_not_start_a_cluster():
+    distributed = pytest.importorskip("symsphere.distributed")
+    pytest.importorskip("dask")
+    with pytest.raises(TypeError, match="'address'"):
+        distributed.connect(None)
+
+
 def _scaled(seconds):
     """*seconds* stretched by how overloaded the machine is (1-minute load average per core, at least 1)."""
     return seconds * max(1.0, os.getloadavg()[0] / (os.cpu_count() or 1))

@@ -2,10 +2,14 @@
 (to_world, to_local).  The frame's use by the samplers is tested in test_sampling.py; its validation
 under random inputs in test_properties.py."""
 
+import math
+import warnings
+
 import numpy as np
 import pytest
 from numba import njit
 
+from symsphere import frames
 from symsphere.frames import frame, frame_rows, to_local, to_world
 
 RNG = np.random.default_rng(7)
@@ -78,3 +82,25 @@ def test_to_world_and_to_local_are_inverse():
 def test_bad_arguments_name_themselves(call, error, name):
     with pytest.raises(error, match=name):
         call()
+
+
+# --- wrong types and values name the argument ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "call, error, named",
+    [
+        (lambda: frames.to_local(np.ones((1, 3)), None), TypeError, "'basis'"),
+        (lambda: frames.to_world("abc", np.eye(3)), TypeError, "'local'"),
+        (lambda: frames.to_world(np.ones((1, 3)), "xyz"), TypeError, "'basis'"),
+        (lambda: frames.frame([math.nan, 0, 1]), ValueError, "'normal'"),
+        (lambda: frames.frame([0, 0, 2.0]), ValueError, "'normal'"),
+        (lambda: frames.frame_rows(math.inf, 0, 1), ValueError, "'nx'"),
+        (lambda: frames.frame_rows(None, 0, 1), TypeError, "'nx'"),
+    ],
+)  # fmt: skip
+def test_wrong_types_and_values_name_the_argument(call, error, named):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=named):
+            call()

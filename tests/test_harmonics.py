@@ -7,6 +7,7 @@ z axis x trapezoid in the azimuth, exact for the degrees involved.
 
 import itertools
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from references import cap_rule
 from scipy import special
 
 import symsphere as ss
+from symsphere import harmonics
 from symsphere import harmonics as H
 from symsphere import integrands as I
 
@@ -147,3 +149,21 @@ def test_the_building_blocks_have_one_home():
 def test_bad_input(call, error, word):
     with pytest.raises(error, match=word):
         call()
+
+
+# --- wrong types and values name the argument ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "call, error, named",
+    [
+        (lambda: harmonics.polynomial_integral({(2, 0, 0): math.inf}), ValueError, "'coeffs'"),
+        (lambda: harmonics.polynomial_integral({(2, 0, 0): math.nan}), ValueError, "'coeffs'"),
+        (lambda: harmonics.polynomial_integral({(2, 0, 0): "1"}), TypeError, "'coeffs'"),
+    ],
+)  # fmt: skip
+def test_wrong_types_and_values_name_the_argument(call, error, named):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=named):
+            call()

@@ -15,6 +15,7 @@ import pytest
 from references import cap_rule
 from scipy import integrate, special
 
+import symsphere
 import symsphere as ss
 from symsphere import harmonics as H
 from symsphere import integrands as I
@@ -362,3 +363,15 @@ def test_orbit_average_names_p_when_its_rows_are_not_directions():
         I.orbit_average(lambda d: np.full(len(d), np.inf), [0.3, 0.2, 0.9])
     # finite values near the largest float64: their mean is finite (the sum of 48 overflowed to NaN)
     assert I.orbit_average(lambda d: np.full(len(d), 1e308), [[1e308] * 3])[0] == pytest.approx(1e308)
+
+
+# --- functions of f refuse NaN and complex values ------------------------------------------------------------------
+
+
+def test_functions_of_f_reject_nan_and_complex():
+    from symsphere.integrands import orbit_average
+
+    with pytest.raises(ValueError, match="'f' returned non-finite"):
+        orbit_average(lambda d: np.where(d[:, 0] > 0, np.nan, 1.0), [0.3, 0.2, 0.9])
+    with pytest.raises(TypeError, match="complex"):
+        symsphere.integrate(lambda d: np.exp(1j * d[:, 0]), n=48, rng=1)

@@ -174,6 +174,15 @@ def test_sobol_balance_warning_once_at_the_callers_line():
     assert balance[0].filename == __file__
 
 
+# --- f of shape (m, 0) ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("options", [dict(n=96), dict(atol=1e-2)])
+def test_integrate_rejects_empty_components(options):
+    with pytest.raises(ValueError, match="'f' must return shape"):
+        symsphere.integrate(lambda d: np.zeros((len(d), 0)), rng=1, **options)
+
+
 DIRECTION = r"\[-?[0-9.e-]+, -?[0-9.e-]+, -?[0-9.e-]+\]"
 
 
@@ -410,3 +419,57 @@ def test_cli_tolerance_errors(capsys, argv, message):
     assert main(["integrate", "--integrand", "exp", *argv]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+# --- sizes whose partial sums cannot fit in memory: refused at once, naming the argument and the limit ---
+
+GIB_MACHINE_MOST_N = 2**30 // 512 * 4096 * 48  # a 1 GiB machine: 2**21 block partials of ~512 bytes
+
+
+@pytest.fixture
+def one_gib_machine(monkeypatch):
+    from symsphere._testing import validation
+
+    monkeypatch.setattr(validation.values, "machine_memory", lambda: 2**30)
+
+
+@pytest.mark.parametrize(
+    "kwargs, named, most",
+    [
+        (dict(n=GIB_MACHINE_MOST_N + 48 * 4096), f"'n'={GIB_MACHINE_MOST_N + 48 * 4096}", GIB_MACHINE_MOST_N),
+        (dict(n=48 * 10**13), "'n'=480000000000000", GIB_MACHINE_MOST_N),
+        (dict(n=48 * 10**13, points="sobol"), "'n'=480000000000000", GIB_MACHINE_MOST_N),
+        (dict(atol=1e-9, n_max=48 * 10**13), "'n_max'=480000000000000", GIB_MACHINE_MOST_N),
+        (dict(n=48 * 2**22, points="sobol", replicates=2**22), "'replicates'=4194304", 2**21),
+    ],
+)  # fmt: skip
+def test_sizes_beyond_memory_are_refused_naming_the_argument_and_the_limit(one_gib_machine, kwargs, named, most):
+    # The partial sum of every block is held until the reduction: 48 * 10**13 evaluations would hold
+    # 1.2 TB of them (the run had started, for years, without a word).
+    with pytest.raises(ValueError) as caught:
+        symsphere.integrate(lambda w: w[:, 0], rng=1, **kwargs)
+    message = str(caught.value)
+    assert message.startswith(f"{named} is too large for this machine's memory"), message
+    assert f"at most {most} here" in message, message
+
+
+def test_the_largest_n_that_fits_is_planned(one_gib_machine):
+    from symsphere._testing import validation
+
+    assert validation.memory_count_limit(512) == 2**21
+    # What fits is accepted (its plan made; not run): the bound is memory, not a constant.
+    with pytest.raises(ValueError, match="'f' raised ZeroDivisionError"):
+        symsphere.integrate(lambda w: 1 / 0, n=GIB_MACHINE_MOST_N, rng=1)
+
+
+def test_distributed_integrate_beyond_memory_names_n(one_gib_machine):
+    with pytest.raises(ValueError, match="'n'=480000000000000 is too large for this machine's memory"):
+        distributed.integrate(lambda w: w[:, 0], n=48 * 10**13, client=None)
+
+
+def test_cli_integrate_beyond_memory_is_one_line_before_any_estimate(one_gib_machine, capsys):
+    assert main(["integrate", "--integrand", "exp", "--n", str(48 * 10**13), "--allow-long"]) == 2
+    line = one_line_error(capsys.readouterr().err)
+    assert f"'--n'={48 * 10**13} is too large for this machine's memory" in line and "at most" in line
+    assert main(["integrate", "--integrand", "exp", "--atol", "1e-9", "--n-max", str(48 * 10**13), "--allow-long"]) == 2
+    assert "'--n-max'" in one_line_error(capsys.readouterr().err)

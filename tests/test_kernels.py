@@ -161,7 +161,7 @@ def test_store_keeps_rows_about_a_normal_on_or_above_the_plane(dtype):
     # lie on the equator, where rounding puts rows just below the plane.  With *above* the store moves
     # those rows, and only rows that close to the plane, by a few ulps; every row then has d . n >= 0
     # in its dtype, whichever order the sum is taken in, and in float64, for the normal as given or
-    # scaled (the guarantee tests/test_reliability3.py checks through the public functions).
+    # scaled (the guarantee tests/test_sampling.py checks through the public functions).
     from scipy.stats import qmc
 
     uv = qmc.Sobol(2, scramble=False).random(512)

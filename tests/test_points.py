@@ -9,6 +9,7 @@ import pytest
 from references import net_t_value
 from scipy.stats import qmc
 
+from symsphere import points
 from symsphere.points import BLOCK, POINT_SETS, BasePoints, check_points, interlace_digits, unit_square_points
 
 
@@ -184,3 +185,18 @@ def test_take_names_a_start_or_stop_that_is_not_an_integer(start):
     with pytest.raises(TypeError, match=r"^'stop' must be an integer index; got "):
         points.take(start=0, stop=start)
     assert points.take(start=np.int64(1), stop=8).shape == (7, 2)
+
+
+# --- per_point is checked for every point set ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("point_set", ["random", "sobol", "halton", "sobol_interlaced2", "sobol_interlaced3"])
+def test_per_point_is_checked(point_set):
+    with pytest.raises(TypeError, match="'per_point'"):
+        points.unit_square_points(64, point_set, 1, per_point="x")
+    for bad in (-1, 0):
+        with pytest.raises(ValueError, match="'per_point'"):
+            points.unit_square_points(64, point_set, 1, per_point=bad)
+    with pytest.raises(ValueError, match="per_point"):
+        points.unit_square_points(64, point_set, 1, per_point=2**60)
+    assert points.unit_square_points(64, point_set, 1, per_point=48).shape == (64, 2)

@@ -501,11 +501,11 @@ EXCLUDED = {
     "each is one call on a fresh Scheme); its own bad arguments and methods in tests/test_sampling.py",
 }
 # Whole modules left out: the applications.  Their contract (one line on stderr, exit status 2 for bad
-# arguments, never a traceback) is tested through symsphere.apps.cli.main in tests/test_reliability.py
-# (hostile scene files, --timeout nan, --exposure inf, signals, full disks) and tests/apps/ (every verb's
-# bad options); their internals run only with arguments the applications build.
+# arguments, never a traceback) is tested through symsphere.apps.cli.main in tests/apps/ (hostile scene
+# files, --timeout nan, --exposure inf, signals, full disks in test_cli.py; every verb's bad options);
+# their internals run only with arguments the applications build.
 EXCLUDED_MODULES = {
-    "symsphere.apps": "the applications: tested through the command line (tests/test_reliability.py, tests/apps/)",
+    "symsphere.apps": "the applications: tested through the command line (tests/apps/)",
     "symsphere.mitsuba": "Dr.Jit functions of Mitsuba's array types, not numpy inputs: tested in tests/mitsuba (values "
     "against numpy, chi-square, parameter errors)",
 }

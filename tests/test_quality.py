@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from symsphere import quality
 from symsphere.quality import cap_discrepancy, cap_discrepancy_squared, fit_slope, rmse
 
 
@@ -164,3 +165,12 @@ def test_fit_slope_floors_zeros_without_warnings():
     assert math.isnan(fit_slope([10, 100], [1.0, 0.1]).standard_error)
     with pytest.raises(ValueError, match="distinct"):
         fit_slope([10, 10, 10], [1.0, 2.0, 3.0])
+
+
+# --- weights -------------------------------------------------------------------------------------------------------
+
+
+def test_cap_discrepancy_refuses_negative_weights():
+    x = np.vstack([np.eye(3), -np.eye(3)])
+    with pytest.raises(ValueError, match="'weights' must be >= 0"):
+        quality.cap_discrepancy(x, weights=np.array([1.0, -1, 1, 1, 1, 1]))

@@ -13,16 +13,20 @@ pinned bit for bit by tests/test_public_outputs.py, so here the engine is compar
 with itself (a stream split into calls against the same stream in one call).
 """
 
+import time
 import warnings
 
 import numpy as np
 import pytest
+from references import scaled_for_load
 from scipy.stats import qmc
 
+import symsphere
 from symsphere import (
     METHODS,
     Scheme,
     fold,
+    harmonics,
     hemisphere_pdf,
     iter_hemisphere,
     iter_sphere,
@@ -31,7 +35,9 @@ from symsphere import (
     sample_sphere,
     sphere_pdf,
     square_to_triangle_pdf,
+    symmetry,
     triangle_to_square,
+    warps,
 )
 from symsphere._testing import kernels
 from symsphere.frames import frame
@@ -253,6 +259,123 @@ def test_an_array_larger_than_memory_is_a_value_error_naming_n(monkeypatch):
     with pytest.raises(ValueError, match=r"^'n'=103079215104 directions need"):
         sample_sphere(48 * 2**31)
     assert sample_sphere(48 * 2**10, rng=1).shape == (48 * 2**10, 3)  # what fits is sampled as before
+
+
+# --- hostile and extreme input: rows on the hemisphere, Sobol' lengths, absurd sizes, the documented exception types, extreme normals, non-unit vectors ---
+
+
+def _fails_fast(call, error, match, seconds=5.0):
+    start = time.monotonic()
+    with pytest.raises(error, match=match):
+        call()
+    assert time.monotonic() - start < scaled_for_load(seconds)  # instead of allocating or computing for minutes
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_rotated_hemisphere_rows_have_positive_pdf(dtype):
+    from scipy.stats import qmc
+
+    normal = [0.3, -0.5, 0.8]
+    d = symsphere.sample_hemisphere(96, normal=normal, points=qmc.Sobol(2, scramble=False), dtype=dtype)
+    assert np.all(symsphere.hemisphere_pdf(d, normal=normal) > 0)
+    rng = np.random.default_rng(12)
+    for seed in range(40):  # the issue's random float32 scan found 357 such rows
+        normal = rng.normal(size=3)
+        d = symsphere.sample_hemisphere(24 * 512, normal=normal, rng=seed, dtype=dtype)
+        assert np.all(symsphere.hemisphere_pdf(d, normal=normal) > 0)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_rotated_hemisphere_rows_are_not_below_the_plane(dtype):
+    from scipy.stats import qmc
+
+    cases = [
+        (
+            [0.3, -0.5, 0.8],
+            symsphere.sample_hemisphere(96, normal=[0.3, -0.5, 0.8], points=qmc.Sobol(2, scramble=False), dtype=dtype),
+        )
+    ]
+    rng = np.random.default_rng(22)
+    for seed in range(40):
+        normal = rng.normal(size=3)
+        cases.append((normal, symsphere.sample_hemisphere(24 * 512, normal=normal, rng=seed, dtype=dtype)))
+    for normal, d in cases:
+        normal = np.asarray(normal)
+        assert np.all(d.astype(np.float64) @ normal >= 0)  # the issue's check, in float64
+        assert np.all(d @ normal.astype(dtype) >= 0)  # and in the rows' own dtype
+        unit = normal / np.linalg.norm(normal)
+        assert np.all(d.astype(np.float64) @ unit >= 0) and np.all(d @ unit.astype(dtype) >= 0)
+    block = next(iter(symsphere.iter_hemisphere(24 * 64, chunk=24 * 32, normal=[0.3, -0.5, 0.8],
+                                                points=qmc.Sobol(2, scramble=False), dtype=dtype)))  # fmt: skip
+    assert np.all(block.astype(np.float64) @ np.array([0.3, -0.5, 0.8]) >= 0)
+
+
+def test_sobol_beyond_its_length_is_rejected_at_the_call():
+    with pytest.raises(ValueError, match=r"'n'=103079215104 needs 2147483648 Sobol' points"):
+        symsphere.iter_sphere(48 * 2**31, points="sobol")
+    with pytest.raises(ValueError, match="Sobol'"):
+        symsphere.integrate(lambda d: d[:, 2], n=48 * 8 * 2**31, points="sobol")
+    from scipy.stats import qmc
+
+    engine = qmc.Sobol(2, scramble=False)
+    engine.fast_forward(2**30 - 4)
+    with pytest.raises(ValueError, match="after the engine's 1073741820"):
+        symsphere.sample_sphere(48 * 8, points=engine)
+
+
+def test_absurd_sizes_fail_fast_naming_the_argument():
+    from symsphere.render import render
+
+    _fails_fast(lambda: symsphere.sample_sphere(48 * 2**64), ValueError, r"'n'=.* is too large")
+    _fails_fast(lambda: symsphere.integrate(lambda d: d[:, 0], n=48 * 2**64), ValueError, "'n'")
+    _fails_fast(lambda: symsphere.iter_sphere(48 * 2**64), ValueError, "'n_total'")
+    _fails_fast(lambda: render("cornell", spp=10**15), ValueError, r"'spp'=1000000000000000 is too large")
+    _fails_fast(lambda: harmonics.sh_polynomial(10**5, 0), ValueError, "'l'")
+    _fails_fast(lambda: harmonics.monomial_integral(10**7, 0, 0), ValueError, r"'a \+ b \+ c'")
+    _fails_fast(lambda: harmonics.real_sh_basis(10**6, [0, 0, 1]), ValueError, "'lmax'")
+
+
+def test_exception_types():
+    deep = np.zeros((1,) * 33 + (3,))
+    for call in (
+        lambda: symmetry.fold(deep),
+        lambda: symsphere.sphere_pdf(deep),
+        lambda: symsphere.hemisphere_pdf(deep),
+    ):
+        with pytest.raises(ValueError, match="'d' has 34 dimensions"):
+            call()
+    with pytest.raises(ValueError, match="'l'"):
+        harmonics.real_sh(10**5, 0, [0.0, 0.0, 1.0])
+    from symsphere.render import Camera, Scene, SceneError, Sphere, diffuse, write_outputs
+
+    with pytest.raises(TypeError, match="'result'"):
+        write_outputs(None, "x.png")
+    with pytest.raises(SceneError, match="max_depth must be at most"):
+        Scene("s", Camera((0, 0, 5), (0, 0, -1), 40), {"m": diffuse(0.5, 1.0)}, (Sphere((0, 0, 0), 1, "m"),),
+              max_depth=10**30)  # fmt: skip
+
+
+@pytest.mark.parametrize("scale", [1e200, 1e-170, 1e-320])
+def test_extreme_normals_are_accepted_without_warning(scale):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d = symsphere.sample_hemisphere(48, normal=[scale, 0.0, 0.0], rng=4)
+        density = symsphere.hemisphere_pdf(d, normal=[scale, 0.0, 0.0])
+    np.testing.assert_array_equal(d, symsphere.sample_hemisphere(48, normal=[1.0, 0.0, 0.0], rng=4))
+    assert np.all(density > 0)
+
+
+def test_zero_and_non_unit_vectors_are_rejected():
+
+    for call in (
+        lambda: warps.square_to_cosine_hemisphere_pdf([0.0, 0.0, 0.0]),
+        lambda: warps.spherical_triangle_to_square([0.0, 0.0, 0.0], *warps.T0_VERTICES),
+        lambda: symsphere.triangle_to_square([0.0, 0.0, 0.0], "paper1"),
+        lambda: symsphere.sphere_pdf([0.0, 0.0, 2.0], "paper1"),
+        lambda: symsphere.hemisphere_pdf([0.0, 0.0, 0.5]),
+    ):
+        with pytest.raises(ValueError, match="unit vectors"):
+            call()
 
 
 SIGNIFICANCE = 0.01

@@ -32,6 +32,7 @@ from ._validation import (
     check_real_values,
     check_rng,
     check_rtol,
+    memory_count_limit,
     short_repr,
 )
 from .points import BLOCK, BasePoints, check_points
@@ -42,6 +43,11 @@ Integrand = Callable[[Float64Array], npt.ArrayLike]
 """What ``f`` is: directions (m, 3) to values (m,) or (m, k)."""
 Partial = tuple[int, Float64Array, Float64Array]
 """A block's (orbits, sum of orbit estimates, sum of squared deviations from their mean)."""
+PARTIAL_BYTES = 512
+"""Memory a block's partial takes until the reduction: 312 bytes measured (a tuple of an int and two
+one-element arrays, tracemalloc, one component), ~150 more where a tolerance run also keeps it by index;
+rounded up.  Every block's partial is held until the end, so this, not the evaluation (a block at a time),
+is what bounds n by the machine's memory."""
 Compute = Callable[["Plan", Sequence[tuple[int, int, int]]], list[list[Partial]]]
 """Sums blocks: (plan, [(replicate, first block, stop block), ...]) -> one list of partials per request."""
 
@@ -248,6 +254,7 @@ def plan(
             "or fewer replicates"
         )
     n = check_count(n, "n", multiple=count * replicates)
+    check_partials_fit(n, count, replicates, "n")
     root = np.random.SeedSequence(check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64).tolist())
     orbits = n // (count * replicates)
     with warnings.catch_warnings(record=True) as caught:  # e.g. scipy's Sobol' balance warning, once per replicate
@@ -274,6 +281,29 @@ def plan(
         basis=None if normal is None else frames.frame(normal),
         confidence_level=float(confidence_level),
         compiled=compiled,
+    )
+
+
+def check_partials_fit(
+    n: int, count: int, replicates: int, name: str, given: int | None = None, replicates_name: str = "replicates"
+) -> None:
+    """ValueError naming *name* (=*given*, default *n*) if the partials of *n* evaluations (one per block
+    of BLOCK orbits of each replicate) cannot fit in the machine's memory (:data:`PARTIAL_BYTES` each);
+    naming *replicates_name* if one block per replicate already cannot."""
+    most_blocks = memory_count_limit(PARTIAL_BYTES)
+    blocks = replicates * -(-n // (count * replicates * BLOCK))
+    if most_blocks is None or blocks <= most_blocks:
+        return
+    if replicates > most_blocks:
+        raise ValueError(
+            f"{replicates_name!r}={replicates} is too large for this machine's memory: each replicate keeps a "
+            f"partial sum per block (~{PARTIAL_BYTES} bytes) until the end; at most {most_blocks} here"
+        )
+    largest = (most_blocks // replicates) * BLOCK * count * replicates
+    raise ValueError(
+        f"{name!r}={n if given is None else given} is too large for this machine's memory: its {blocks} blocks of {BLOCK} orbits keep a "
+        f"partial sum each (~{PARTIAL_BYTES} bytes) until the end, {blocks * PARTIAL_BYTES / 2**30:.3g} GiB of "
+        f"{most_blocks * PARTIAL_BYTES / 2**30:.3g} GiB; at most {largest} here (or combine smaller runs)"
     )
 
 
@@ -483,6 +513,7 @@ def to_tolerance(
     largest_n = n
     while largest_n * growth <= n_max:
         largest_n *= growth
+    check_partials_fit(largest_n, count, replicates or 1, *(("n_max", n_max) if largest_n > n else ("n", n)))
     # One plan for the largest stage: its point sources address every stage's points by index.
     # 'stratified' grids are not nested (a finer grid is other points), so each stage plans anew.
     largest = plan(f, domain, largest_n, method, points, normal, rng, replicates, confidence_level)

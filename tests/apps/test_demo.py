@@ -2,9 +2,12 @@
 
 import contextlib
 import io
+import os
 import re
+import stat
 
 import pytest
+from references import one_line_error
 
 import symsphere.apps.demo
 from symsphere.apps.cli import main
@@ -145,3 +148,17 @@ def test_demo_names_all_its_files_in_help_and_closing_line(demo_run, capsys):
     assert "render.png" in capsys.readouterr().out
     closing = demo_run[1].strip().splitlines()[-1]  # the session's demo run (no second run for this)
     assert all(name in closing for name in DEMO_FILES)
+
+
+# --- --out that is a FIFO ------------------------------------------------------------------------------------------
+
+
+def _listing(directory):
+    return sorted(p.name for p in directory.iterdir())
+
+
+def test_demo_out_that_is_a_fifo_is_refused(tmp_path, capsys):
+    os.mkfifo(tmp_path / "demo")
+    assert main(["demo", "--n", "4800", "--out", str(tmp_path / "demo"), "--no-progress"]) != 0
+    assert "demo" in one_line_error(capsys.readouterr().err)
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "demo").st_mode) and _listing(tmp_path) == ["demo"]

@@ -118,6 +118,10 @@ def test_scene_without_a_sensor_is_refused(cornell, capsys):
     assert main(["render", "--scene", str(scene), "--out", str(cornell.parent / "out.png")]) == 2
     line = _one_line_error(capsys)
     assert "has no <sensor>" in line and "internal error" not in line
+    # --spp for a file that declares spp but no longer uses it: Mitsuba's reason, not its list's last item
+    assert main(["render", "--scene", str(scene), "--spp", "4", "--out", str(cornell.parent / "out.png")]) == 2
+    line = _one_line_error(capsys)
+    assert "Found unused parameters: $spp=4" in line, line
 
 
 def test_empty_film_is_refused(cornell, capsys):

@@ -1,7 +1,10 @@
 """symsphere.render.image: PFM, .npy and tone-mapped PNG output."""
 
+import os
+
 import numpy as np
 import pytest
+from references import inject_sigint
 
 from symsphere.render import load_pfm, save_npy, save_pfm, save_png, tonemap
 
@@ -43,3 +46,48 @@ def test_npy_and_png(tmp_path):
     assert tonemap(image)[0, 0].tolist() == [255] * 3 and tonemap(image)[1, 0].tolist() == [0] * 3
     assert tonemap(image)[0, 1, 0] == round(255 * (1.055 * 0.5 ** (1 / 2.4) - 0.055))  # 188
     assert tonemap(image, exposure=0.25)[0, 0, 0] == round(255 * (1.055 * 0.25 ** (1 / 2.4) - 0.055))
+
+
+# --- writers: suffixes, temporaries only while writing, a signal during the renames --------------------------------
+
+
+def _listing(directory):
+    return sorted(p.name for p in directory.iterdir())
+
+
+def test_save_png_refuses_another_suffix(tmp_path):
+    from symsphere.render import save_npy, save_pfm, save_png
+
+    for save, name in ((save_png, "x.jpg"), (save_pfm, "x.png"), (save_npy, "x.pfm")):
+        with pytest.raises(ValueError, match="must end in"):
+            save(tmp_path / name, np.zeros((1, 1, 3)))
+    assert _listing(tmp_path) == []
+
+
+def test_image_temporaries_exist_only_while_writing(tmp_path, monkeypatch):
+    from symsphere.render import image as image_module
+
+    real_encode = image_module._encode
+    seen = []
+
+    def encode(*args):
+        seen.append(_listing(tmp_path))
+        return real_encode(*args)
+
+    monkeypatch.setattr(image_module, "_encode", encode)
+    image_module.save_image_set([tmp_path / "a.png", tmp_path / "a.pfm", tmp_path / "a.npy"], np.zeros((2, 2, 3)))
+    assert seen == [[], [], []]
+
+
+@pytest.mark.usefixtures("python_sigint_handler")
+def test_sigint_during_the_renames_of_a_set_is_delivered_after_them(tmp_path, monkeypatch):
+    from symsphere.render import save_image_set
+
+    paths = [tmp_path / f"a{s}" for s in (".png", ".pfm", ".npy")]
+    save_image_set(paths, np.zeros((2, 2, 3)))
+    inject_sigint(monkeypatch, os, "replace", 2)  # between the second and the third rename
+    with pytest.raises(KeyboardInterrupt):
+        save_image_set(paths, np.ones((2, 2, 3)))
+    monkeypatch.undo()
+    assert np.load(paths[2]).tolist() == np.ones((2, 2, 3)).tolist()  # all three are the new ones
+    assert _listing(tmp_path) == ["a.npy", "a.pfm", "a.png"]

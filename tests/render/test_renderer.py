@@ -1,13 +1,18 @@
 """symsphere.render.renderer: ``render``, its arguments and results, determinism, passes and the ``render`` verb."""
 
 import dataclasses
+import errno
 import math
+import os
+import pathlib
 import pickle
+import warnings
 
 import numba
 import numpy as np
 import pytest
 
+import symsphere
 from symsphere._testing import render_integrator as K
 from symsphere.apps.cli import main
 from symsphere.render import (
@@ -311,3 +316,47 @@ def test_an_image_larger_than_memory_is_refused_before_any_allocation(monkeypatc
     with pytest.raises(ValueError, match=r"'width \* height'=67108864 is too large .* on this machine"):
         render("furnace", width=8192, height=8192, spp=1, strategy="cosine", seed=1)
     assert validation.memory_pixel_limit(160) == 2**30 // 160
+
+
+# --- write_outputs: all or nothing ---------------------------------------------------------------------------------
+
+
+def test_write_outputs_is_all_or_nothing_and_names_the_failing_file(tmp_path, monkeypatch):
+    from symsphere.render import image as image_module
+    from symsphere.render import render, write_outputs
+
+    result = render("furnace", width=4, height=4, spp=2, strategy="cosine", seed=1)
+    write_outputs(result, tmp_path / "f.png")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    real_encode, real_write_bytes = image_module._encode, pathlib.Path.write_bytes
+
+    written = []
+
+    def full_disk_at_pfm(self, data):  # the files are encoded first, then written to their temporaries
+        written.append(self)
+        if len(written) == 2:  # PNG, then PFM: the temporaries are unnamed on Linux, so count
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
+        return real_write_bytes(self, data)
+
+    monkeypatch.setattr(
+        image_module, "_encode", lambda suffix, image, exposure: real_encode(suffix, image, exposure * 2)
+    )
+    monkeypatch.setattr(pathlib.Path, "write_bytes", full_disk_at_pfm)
+    with pytest.raises(OSError) as caught:
+        write_outputs(result, tmp_path / "f.png", exposure=0.5)
+    assert caught.value.filename == str(tmp_path / "f.pfm")  # the file that failed, not the PNG
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+@pytest.mark.parametrize(
+    "call, error, named",
+    [
+        (lambda: symsphere.render.render("furnace", width=2, height=2, spp=1, seed=np.random.PCG64(1)), TypeError,
+         "'seed'"),
+    ],
+)  # fmt: skip
+def test_wrong_types_and_values_name_the_argument(call, error, named):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=named):
+            call()

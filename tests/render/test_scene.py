@@ -78,3 +78,26 @@ def test_scene_names_have_one_home_each():
         scene.get_scene  # noqa: B018
     error_class = render_package.SceneError
     assert type(pickle.loads(pickle.dumps(error_class("x")))) is error_class
+
+
+# --- materials and emission validated at once ----------------------------------------------------------------------
+
+
+def test_huge_emission_is_rejected_not_rendered_as_inf():
+    from symsphere.render import SceneError, diffuse, scene_from_dict
+
+    with pytest.raises(SceneError, match="emission must be at most"):
+        scene_from_dict({
+            "camera": {"position": [0, 0, 4], "direction": [0, 0, -1], "fov": 40},
+            "materials": {"lamp": {"type": "diffuse", "albedo": 0, "emission": 1e308}},
+            "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "lamp"}],
+        })  # fmt: skip
+    assert diffuse(0.5, emission=1e30).emission == (1e30,) * 3
+
+
+def test_dielectric_validates_at_once():
+    from symsphere.render import dielectric
+
+    for bad in (-1.0, float("nan"), "glass"):
+        with pytest.raises(ValueError, match="ior"):
+            dielectric(ior=bad)

@@ -1,6 +1,9 @@
 """symsphere.render.scene_files: the TOML/JSON scene format (load_scene, scene_from_dict), its errors naming the field."""
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -174,3 +177,38 @@ def test_the_documented_scene_file_loads_and_renders(tmp_path):
     }  # fmt: skip
     assert any(s.clip is not None for s in scene.spheres)
     assert render(str(path), width=16, height=12, spp=24, seed=0).image.mean() > 0
+
+
+# --- files too large, FIFOs and devices refused at once ------------------------------------------------------------
+
+
+def test_scene_file_too_large_is_refused(tmp_path):
+    from symsphere.render import SceneError, load_scene
+    from symsphere.render.scene_files import MAX_SCENE_BYTES
+
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"name": "x" * (MAX_SCENE_BYTES + 10)}))
+    with pytest.raises(SceneError, match="larger than"):
+        load_scene(path)
+
+
+def test_load_scene_on_a_fifo_or_device_fails_at_once(tmp_path):
+    os.mkfifo(tmp_path / "f.json")
+    (tmp_path / "z.json").symlink_to("/dev/zero")
+    (tmp_path / "u.toml").symlink_to("/dev/urandom")
+    code = (
+        "import sys\nfrom symsphere.render import load_scene, load_pfm\n"
+        "for name in sys.argv[1:]:\n"
+        "    try:\n"
+        "        (load_pfm if name.endswith('.pfm') else load_scene)(name)\n"
+        "    except ValueError as exc:\n"
+        "        print(exc)\n"
+    )
+    os.mkfifo(tmp_path / "p.pfm")
+    names = [str(tmp_path / n) for n in ("f.json", "z.json", "u.toml", "p.pfm")]
+    run = subprocess.run([sys.executable, "-c", code, *names], capture_output=True, text=True, timeout=60)
+    lines = run.stdout.splitlines()
+    assert run.returncode == 0 and len(lines) == 4, (run.stdout, run.stderr)
+    assert "is a FIFO (named pipe), not a regular file" in lines[0]
+    assert "is a character device, not a regular file" in lines[1] and "character device" in lines[2]
+    assert "FIFO" in lines[3]

@@ -1,11 +1,14 @@
 """The three unit-square-to-T0 maps: forward, pdf and inverse side by side."""
 
+import warnings
+
 import mpmath
 import numpy as np
 import pytest
 from references import ELEMENTARY_ULPS, assert_within_eps
 from scipy import integrate
 
+import symsphere
 from symsphere.warps import METHODS, square_to_triangle, square_to_triangle_pdf, triangle_to_square
 
 VERTICES = {  # (u, v) -> vertex of T0, the same for all three maps
@@ -209,3 +212,15 @@ def test_float32_close_to_float64(method):
 def test_bad_input(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+# --- float32 near the vertex ---------------------------------------------------------------------------------------
+
+
+def test_triangle_pdf_float32_near_the_vertex_is_quiet():
+    p = np.array([1e-30, 0.0, 1.0], dtype=np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for method in ("paper1", "paper2"):
+            density = symsphere.square_to_triangle_pdf(p, method)
+            assert density.dtype == np.float32 and density > 0

@@ -2,6 +2,7 @@
 
 import itertools
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ from numba import njit
 from references import ELEMENTARY_ULPS, assert_power, assert_within_eps
 from scipy import integrate
 
+from symsphere import frames, warps
 from symsphere.stats import chi2_test
 from symsphere.warps import (
     WEDGE_MAPS,
@@ -404,3 +406,37 @@ def test_integer_input_gives_float64():
 def test_bad_input(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+# --- the scalar functions still compile in kernels -----------------------------------------------------------------
+
+
+def test_scalar_functions_still_compile_in_kernels():
+    from numba import njit
+
+    @njit
+    def kernel(u, v):
+        x, y, z = warps.cosine_wedge_point(u, v)
+        t, b = frames.frame_rows(x, y, z)
+        return z, t[0], warps.cosine_wedge_density(x, y, z), warps.cosine_wedge_uv(x, y, z)[0]
+
+    z, t0, density, u = kernel(0.75, 0.3)
+    assert z == 0.5 and abs(density - 4 / math.pi) < 1e-15 and abs(u - 0.75) < 1e-15
+    assert t0 == frames.frame_rows(*warps.cosine_wedge_point(0.75, 0.3))[0][0]
+
+
+@pytest.mark.parametrize(
+    "call, error, named",
+    [
+        (lambda: warps.cosine_wedge_point(-1.0, 0.4), ValueError, "'u'"),
+        (lambda: warps.cosine_wedge_point(0.5, math.nan), ValueError, "'v'"),
+        (lambda: warps.cosine_wedge_density(None, 0.0, 1.0), TypeError, "'x'"),
+        (lambda: warps.cosine_wedge_density(0.0, 0.0, 2.0), ValueError, "'x, y, z'"),
+        (lambda: warps.cosine_wedge_uv(0.0, 0.6, 0.8), ValueError, "'x', 'y', 'z'"),
+    ],
+)  # fmt: skip
+def test_wrong_types_and_values_name_the_argument(call, error, named):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=named):
+            call()

@@ -25,6 +25,7 @@ __all__ = [
     "MAX_PATHS",
     "MAX_PIXELS",
     "machine_memory",
+    "memory_count_limit",
     "memory_pixel_limit",
     "MAX_POLYNOMIAL_DEGREE",
     "MAX_QUADRATURE_ORDER",
@@ -162,12 +163,19 @@ def machine_memory() -> int | None:
     return min(sizes) if sizes else None
 
 
+def memory_count_limit(bytes_each: int) -> int | None:
+    """How many things of *bytes_each* bytes fit in :func:`machine_memory` (None where it cannot be read):
+    the one bound of every size whose memory grows with an argument (pixels, partial sums)."""
+    memory = machine_memory()
+    return None if memory is None else memory // bytes_each
+
+
 def memory_pixel_limit(bytes_per_pixel: int) -> int:
     """The largest image (width * height) a render may hold at *bytes_per_pixel*: :data:`MAX_PIXELS`, or
     fewer where :func:`machine_memory` is smaller (an image that would not fit is refused at once, not
     after the machine has started swapping or the kernel's OOM killer has ended the run)."""
-    memory = machine_memory()
-    return MAX_PIXELS if memory is None else max(1, min(MAX_PIXELS, memory // bytes_per_pixel))
+    limit = memory_count_limit(bytes_per_pixel)
+    return MAX_PIXELS if limit is None else max(1, min(MAX_PIXELS, limit))
 
 
 MAX_SH_DEGREE = 85

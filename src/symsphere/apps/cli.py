@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from .. import IntegrationResult, __version__, integrate, iter_hemisphere, iter_sphere
+from .._integration import DEFAULT_REPLICATES, check_partials_fit
 from .._typing import FloatArray
 from .._validation import check_count, check_nonnegative, check_output_path, check_rtol, check_seed
 from ..integrands import INTEGRANDS, Integrand
@@ -488,6 +489,11 @@ def _print_estimate(f: Integrand, kwargs: dict[str, Any], args: argparse.Namespa
         n = max(n or 0, kwargs.get("n_max") or 48 * 2**24)
     if not isinstance(n, int) or n <= _ESTIMATE_ABOVE:
         return
+    # Before the pilot and its estimate: a run whose partial sums cannot fit in memory is one line.
+    replicates = 1 if kwargs["points"] in (None, "random") else kwargs["replicates"] or DEFAULT_REPLICATES
+    count = 48 if kwargs["domain"] == "sphere" else 24
+    if isinstance(replicates, int) and replicates > 0 and n % (count * replicates) == 0:  # else integrate says
+        check_partials_fit(n, count, replicates, "--n" if n == kwargs["n"] else "--n-max", None, "--replicates")
     check_duration(n / FASTEST_EVALUATIONS_PER_SECOND, f"{n} evaluations", args)  # before the pilot
     pilot = {k: v for k, v in kwargs.items() if k not in ("rtol", "atol", "n_max")}
     pilot.update(n=48 * 2**14, method="equal_area", points="random", replicates=None, rng=0)

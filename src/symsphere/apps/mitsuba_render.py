@@ -210,7 +210,14 @@ def _pass_seed(seed: int, index: int) -> int:
 
 
 def _last_line(error: BaseException) -> str:
-    lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
+    """The last line of Mitsuba's message, with the list that follows it ("Found unused parameters:",
+    then one "- $spp=4" a line) joined on: the list alone named no reason."""
+    lines: list[str] = []
+    for line in (line.strip() for line in str(error).strip().splitlines()):
+        if line.startswith("- ") and lines:
+            lines[-1] += (" " if lines[-1].endswith(":") else ", ") + line[2:]
+        elif line:
+            lines.append(line)
     return lines[-1] if lines else type(error).__name__
 
 

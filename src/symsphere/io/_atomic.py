@@ -431,10 +431,12 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
 
     Notes
     -----
-    A directory cannot be renamed over a non-empty one, so an existing
-    *path* is first renamed aside, the new one renamed in, and the old one
-    deleted.  Readers see either the old or the new directory, except in the
-    instant between the two renames, when *path* does not exist.
+    A directory cannot be renamed over a non-empty one.  On Linux the new
+    directory and an existing *path* are exchanged in one step
+    (``renameat2(RENAME_EXCHANGE)``) and the old one deleted: *path* is always
+    the old or the new directory, also for a process killed at any moment.
+    Elsewhere *path* is first renamed aside, the new one renamed in, and the
+    old one deleted: in the instant between the two renames *path* does not exist.
 
     Examples
     --------
@@ -470,7 +472,9 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
     try:
         yield temporary
         _check_replaceable(target, allowed)  # it may have appeared or changed meanwhile
-        if target.exists():
+        if target.exists() and _exchange(temporary, target):
+            shutil.rmtree(temporary, ignore_errors=True)  # the old directory now; if killed first, a stale one
+        elif target.exists():
             aside = _temporary_name(target, "old")
             os.replace(target, aside)
             os.replace(temporary, target)
@@ -482,6 +486,22 @@ def atomic_directory(path: str | os.PathLike[str], *, replaceable: Collection[st
         raise
     finally:
         os.close(lock)
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two paths atomically (Linux ``renameat2(..., RENAME_EXCHANGE)``); False where it is not available."""
+    import ctypes
+
+    function = getattr(ctypes.CDLL(None, use_errno=True), "renameat2", None)
+    if function is None:  # not glibc >= 2.28 (or not Linux)
+        return False
+    function.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    if function(-100, os.fsencode(first), -100, os.fsencode(second), 2) == 0:  # AT_FDCWD, RENAME_EXCHANGE
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.ENOSYS, errno.EINVAL, errno.EOPNOTSUPP):  # an old kernel or a file system without it
+        return False
+    raise OSError(code, os.strerror(code), str(second))
 
 
 def _check_replaceable(target: Path, allowed: set[str]) -> None:
