@@ -260,12 +260,12 @@ def test_tests_reach_internals_only_through_the_testing_hook(path):
 # Tests of the package as a whole (or of the repository around it), not of one module: its layout and
 # typing, the docs and the site, packaging, the pinned public outputs, the property-based error
 # contract of every public function, examples and first contact, the statistical uniformity of every
-# sampler.  The reliability rounds' files are being moved into the files of the modules they exercise.
+# sampler.
 PACKAGE_TESTS = {
     "test_architecture.py", "test_typing.py", "test_docs.py", "test_site.py", "test_gallery.py",
     "test_examples.py", "test_packaging.py", "test_benchmark_tables.py", "test_public_outputs.py",
     "test_properties.py", "test_properties_apps.py", "test_ux.py", "test_without_mitsuba.py",
-    "statistical/test_uniformity.py", "test_reliability.py", "test_reliability3.py",
+    "statistical/test_uniformity.py",
 }  # fmt: skip
 
 
