@@ -103,6 +103,7 @@ class Rotated(Family):
         self.copies: list[list[Float64Array]] = [[] for _ in range(replicates)]  # Lebedev copies, reused
         self.copy_seeds: list[np.random.SeedSequence] | None = None
         self.varies = False  # f took two different values somewhere
+        self._sizes: tuple[int, list[tuple[int, int]]] = (-1, [])  # (stages run, sizes()): asked many times a stage
 
     def shape(self, k: int) -> tuple[int, int]:
         """(points per replicate, copies) of stage k (0-based)."""
@@ -113,11 +114,13 @@ class Rotated(Family):
         return LEBEDEV_SIZES[-1], 2 ** (k - len(LEBEDEV_LADDER) + 1)
 
     def sizes(self) -> list[tuple[int, int]]:
-        out = []
-        for k in range(len(self.stages), len(self.stages) + 64):
-            size, copies = self.shape(k)
-            out.append((size * copies, self.replicates * size * self._new_copies(k)))
-        return out
+        if self._sizes[0] != len(self.stages):  # the ladder depends only on the stages run
+            out = []
+            for k in range(len(self.stages), len(self.stages) + 64):
+                size, copies = self.shape(k)
+                out.append((size * copies, self.replicates * size * self._new_copies(k)))
+            self._sizes = (len(self.stages), out)
+        return self._sizes[1]
 
     def _new_copies(self, k: int) -> int:
         """Copies stage k draws: the first copies stage draws 2, each later one as many as it reuses."""
