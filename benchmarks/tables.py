@@ -337,7 +337,7 @@ def _integrate_auto(loaded):
 
 
 AUTO_CODE = (
-    "src/symsphere/_auto.py", "src/symsphere/_integration.py", "src/symsphere/_lebedev.py",
+    "src/symsphere/_auto.py", "src/symsphere/_families.py", "src/symsphere/_integration.py", "src/symsphere/_lebedev.py",
     "src/symsphere/peers.py", "src/symsphere/integrands.py", "src/symsphere/harmonics.py",
 )  # fmt: skip
 

@@ -97,22 +97,27 @@ def test_no_run_is_more_than_5_standard_errors_off(method):
     assert max(worst.values()) <= 5, worst
 
 
-AUTO_RTOL = {"exp": 1e-2, "phong": 1e-2, "cap": 5e-2, "exp_hemisphere": 1e-2, "cosine": 1e-2}
+# The tolerances make a run a few thousand evaluations at most (the cap's, discontinuous, some 10^4) and keep
+# the choice varied (the cap's answers come from all three families); the five together take about 40 s
+# of CPU.
+AUTO_RTOL = {"exp": 1e-2, "phong": 3e-2, "cap": 1e-1, "exp_hemisphere": 1e-2, "cosine": 1e-2}
 
 
 @pytest.mark.slow
 @pytest.mark.statistical
 @pytest.mark.parametrize("name", COVERAGE_INTEGRANDS)
 def test_auto_intervals_cover_after_the_choice(name):
-    # integrate(method='auto') to a tolerance, 1000 seeds (a few tens of thousands of evaluations at most per
-    # run, so that the five take minutes, not hours).  Two intervals of the answer, against the closed form:
-    # - the one returned (at its own level, >= 0.95 by a union bound over every stage looked at) must cover
-    #   in at least 930 runs: below has probability < 0.4% for a correct >= 95% interval;
+    # integrate(method='auto') to a tolerance, 1000 seeds per integrand.  Two intervals of the answer, against
+    # the closed form:
+    # - the one returned (at its own level, >= 0.95 by a union bound over every stage looked at) must cover in
+    #   at least 930 runs: an interval of exactly 95% falls below with probability 0.23% (Binomial(1000, 0.95)),
+    #   1.2% for any of the five (Sidak); a conservative one less.  Measured 969-992;
     # - the plain 95% t-interval from the answer's standard error (the answer is a fresh stage of the chosen
-    #   family, its replicates drawn after the choice): the target is 930-970; measured 919-947
+    #   family, its replicates drawn after the choice): the target is 930-970; measured 910-947
     #   (docs/results/integration.md: the folded hemisphere rules and the discontinuous cap below 930), so
-    #   this asserts >= 900, which a standard error biased by the choice (the pilot's answers, 913 of 1000
-    #   on 'exp' before they were repeated afresh) could fail.
+    #   this asserts >= 900 -- a regression bound, not a calibration test: a calibrated interval falls below
+    #   900 with probability 4e-11 (2e-10 for the five), and a standard error biased by the choice (a pilot
+    #   stage answering when its spread happened to be small) falls below it.
     f = INTEGRANDS[name]
     t95 = float(stats.t.ppf(0.975, 7))
     returned = plain = 0
@@ -120,7 +125,7 @@ def test_auto_intervals_cover_after_the_choice(name):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             result = symsphere.integrate(
-                f, domain=f.domain, rtol=AUTO_RTOL[name], method="auto", rng=seed, n_max=48 * 2**14
+                f, domain=f.domain, rtol=AUTO_RTOL[name], method="auto", rng=seed, n_max=48 * 2**12
             )
         low, high = result.confidence_interval
         returned += bool(low <= f.exact <= high)

@@ -1,26 +1,7 @@
-"""Rule families of :func:`symsphere.integrate` and ``method='auto'``, which picks one by a pilot on f itself.
+"""``method='auto'`` of :func:`symsphere.integrate`: it picks a rule family by a pilot on f itself.
 
-Three families of randomised rules, each unbiased for every integrable f, with a standard error from
-R independent randomisations (*replicates*, default 8; Student's t with R - 1 degrees of freedom):
-
-- ``'equal_area'``: the scheme's orbits (as without ``method='auto'``); within ``'auto'`` its base points
-  are ``'sobol_interlaced3'`` (higher-order scrambled Sobol'), unless ``points=`` says otherwise.  Stage
-  k has 2**k orbits per replicate; the points are nested, so a stage only adds the new blocks.
-- ``'lebedev'``: scipy's Lebedev rules of increasing order (:data:`LEBEDEV_LADDER` points), each
-  replicate the rule under an independent uniform (Haar) rotation
-  (``scipy.spatial.transform.Rotation.random``); past the largest rule (order 131, 5810 points) a
-  replicate is the mean of 2, 4, 8, ... independently rotated copies (the earlier copies reused).
-- ``'fibonacci'``: the spherical Fibonacci set of 16 * 2**k points, each replicate under an
-  independent Haar rotation.
-
-Hemispheres: the scheme has its own 24-image orbits about the normal.  A rotated sphere rule is
-mapped onto the hemisphere by *folding*: a node below the plane is reflected into it
-(``w - 2 (w . n) n``).  Reflection preserves the uniform measure, so a uniformly distributed node
-folds to a uniformly distributed direction on the hemisphere, and ``(1/2) sum w_i f(fold(x_i))`` is
-unbiased for the hemisphere integral.  Folding keeps f continuous (restricting f by an indicator
-would make it discontinuous at the horizon and ruin the rule's order); the folded integrand has a
-kink at the horizon where f's derivative along the normal is not zero there, so a high-order rule
-converges more slowly on the hemisphere than on the sphere.
+The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibonacci sets) are in
+:mod:`symsphere._families`.
 
 ``'auto'`` (needs ``atol`` or ``rtol``) runs three kinds of stages:
 
@@ -60,34 +41,30 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import is_jitted
 
-from ._fused import compiled_integrand, vectorised
-from ._integration import (
-    DEFAULT_REPLICATES,
-    Integrand,
-    IntegrationResult,
-    Plan,
-    check_sums,
-    compute_here,
-    evaluate,
-    plan,
-    stage_result,
+from ._families import (
+    FAMILIES,
+    Family,
+    Rotated,
+    Scheme,
+    Stage,
+    as_result,
+    fixed_stage,
+    haar_rotations,
+    t_quantile,
 )
-from ._lebedev import LEBEDEV_SIZES, lebedev_weights, sample_lebedev
-from ._typing import Domain, Float64Array, PointsLike, RNGLike
+from ._fused import compiled_integrand, vectorised
+from ._integration import DEFAULT_REPLICATES, Integrand, IntegrationResult
+from ._lebedev import LEBEDEV_SIZES
+from ._typing import Domain, PointsLike, RNGLike
 from ._validation import check_choice, check_count, check_nonnegative, check_normal, check_rng, check_rtol, short_repr
-from .peers import fibonacci_points
-from .points import BLOCK, check_points
+from .points import check_points
 from .symmetry import DOMAINS, orbit_size
 
-__all__ = ["FAMILIES", "RULE_METHODS", "LEBEDEV_LADDER", "haar_rotations", "integrate_rules"]
+# haar_rotations: the tests reach it here (symsphere._testing.auto)
+__all__ = ["RULE_METHODS", "haar_rotations", "integrate_rules"]
 
-FAMILIES: tuple[str, ...] = ("equal_area", "fibonacci", "lebedev")
-"""The families ``method='auto'`` chooses from (``'equal_area'``: the scheme)."""
 RULE_METHODS: tuple[str, ...] = ("auto", "fibonacci", "lebedev")
 """The ``method=`` values this module runs (the scheme's maps run in :mod:`symsphere._integration`)."""
-LEBEDEV_LADDER: tuple[int, ...] = (6, 14, 26, 50, 110, 230, 434, 974, 2030, 3890, 5810)
-"""Points of the Lebedev rules of the stages (about doubling), then copies of the 5810-point rule."""
-FIBONACCI_FIRST = 16
 AUTO_POINTS = "sobol_interlaced3"
 PILOT_STAGES = 2
 PILOT_ALPHA = 0.5
@@ -105,250 +82,9 @@ SPECTRAL_MARGIN = 0.8
 SHARE = {"lebedev": 2.0}
 """Balanced stages give a family this multiple of the others' total: Lebedev's small rules are cheap, and
 exact on band-limited f once the order passes the degree, which no small stage can predict."""
-_CHUNK = 1 << 16  # rows evaluated at a time: bounded memory
 
 
-@dataclasses.dataclass
-class _Stage:
-    size: int  # points of one replicate's rule (scheme: directions per replicate)
-    cost: int  # new evaluations
-    integral: Float64Array
-    standard_error: Float64Array
-    units: int
-    tied: bool = False  # every replicate gave the same value although f varies: the spread says nothing
-
-
-class _Family:
-    """One rule family's stages; subclasses say what a stage is."""
-
-    name = ""
-    points_name = "haar_rotations"
-
-    def __init__(self, replicates: int) -> None:
-        self.replicates = replicates
-        self.stages: list[_Stage] = []
-        self.chosen: list[_Stage] = []  # fresh stages run by 'auto' after the pilot
-        self.spent = 0
-
-    def sizes(self) -> list[tuple[int, int]]:
-        """(size, cost) of every stage from the next one on, as far as the ladder goes (lazily bounded)."""
-        raise NotImplementedError
-
-    def run_next(self) -> _Stage:
-        raise NotImplementedError
-
-    def ladder(self, k: int) -> tuple[int, int]:
-        """(size, evaluations) of stage k run afresh."""
-        raise NotImplementedError
-
-    def fresh(self, k: int) -> _Stage:
-        """Stage k from a randomisation of its own, independent of every stage before."""
-        raise NotImplementedError
-
-
-class _Rotated(_Family):
-    """Lebedev or Fibonacci: replicate r of a stage is the rule under Haar rotation(s) of its own."""
-
-    def __init__(self, name: str, numpy_f: Integrand, domain: str, normal: Float64Array, seed: Any, replicates: int):
-        super().__init__(replicates)
-        self.name = name
-        self.f = numpy_f
-        self.normal = normal if domain == "hemisphere" else None
-        self.seed = seed
-        self.copies: list[list[Float64Array]] = [[] for _ in range(replicates)]  # Lebedev copies, reused
-        self.copy_seeds: list[np.random.SeedSequence] | None = None
-        self.varies = False  # f took two different values somewhere
-
-    def _size(self, k: int) -> tuple[int, int]:
-        """(points per replicate, copies) of stage k (0-based)."""
-        if self.name == "fibonacci":
-            return FIBONACCI_FIRST << k, 1
-        if k < len(LEBEDEV_LADDER):
-            return LEBEDEV_LADDER[k], 1
-        return LEBEDEV_SIZES[-1], 2 ** (k - len(LEBEDEV_LADDER) + 1)
-
-    def sizes(self) -> list[tuple[int, int]]:
-        out = []
-        for k in range(len(self.stages), len(self.stages) + 64):
-            size, copies = self._size(k)
-            out.append((size * copies, self.replicates * size * self._new_copies(k)))
-        return out
-
-    def _new_copies(self, k: int) -> int:
-        """Copies stage k draws: the first copies stage draws 2, each later one as many as it reuses."""
-        copies = self._size(k)[1]
-        return copies if copies <= 2 else copies // 2
-
-    def run_next(self) -> _Stage:
-        return self.run_stage(len(self.stages))
-
-    def ladder(self, k: int) -> tuple[int, int]:
-        """(size, evaluations) of stage k run afresh: every copy drawn."""
-        size, copies = self._size(k)
-        return size * copies, self.replicates * size * copies
-
-    def fresh(self, k: int) -> _Stage:
-        """Stage k from rotations of its own (a child of this family's seed), nothing reused."""
-        domain, normal = ("sphere", np.zeros(3)) if self.normal is None else ("hemisphere", self.normal)
-        other = _Rotated(self.name, self.f, domain, normal, self.seed.spawn(1)[0], self.replicates)
-        stage = other.run_stage(k)
-        self.varies = self.varies or other.varies
-        return stage
-
-    def run_stage(self, k: int) -> _Stage:
-        """Stage k (0-based); copies stages reuse the copies drawn so far."""
-        size, copies = self._size(k)
-        stage_seed = self.seed.spawn(1)[0]
-        if copies == 1:
-            rotations = haar_rotations(self.replicates, stage_seed)
-            estimates = np.stack([self._rule(rotation, size) for rotation in rotations])
-            cost = self.replicates * size
-        else:
-            if self.copy_seeds is None:  # one stream of copies per replicate: later stages extend it
-                self.copy_seeds = stage_seed.spawn(self.replicates)
-            cost = 0
-            for r, copy_seed in enumerate(self.copy_seeds):
-                while len(self.copies[r]) < copies:
-                    (rotation,) = haar_rotations(1, copy_seed.spawn(1)[0])
-                    self.copies[r].append(self._rule(rotation, size))
-                    cost += size
-            estimates = np.stack([np.mean(self.copies[r][:copies], axis=0) for r in range(self.replicates)])
-        integral = estimates.mean(axis=0)
-        with np.errstate(over="ignore", invalid="ignore"):
-            variance = estimates.var(axis=0, ddof=1)
-        if not (np.all(np.isfinite(integral)) and np.all(np.isfinite(variance))):
-            raise ValueError(
-                f"'f' returned values whose sum (or its variance) overflows float64 (integral {integral[0]:.3g}); "
-                "scale f down"
-            )
-        tied = self.varies and bool(np.all(variance == 0))  # e.g. the same count of points in a cap every time
-        stage = _Stage(size * copies, cost, integral, np.sqrt(variance / self.replicates), self.replicates, tied)
-        self.stages.append(stage)
-        return stage
-
-    def _rule(self, rotation: Float64Array, size: int) -> Float64Array:
-        """sum w_i f(R x_i) over the rule of *size* points (folded onto the hemisphere about the normal),
-        in chunks: a Fibonacci set's points are made chunk by chunk (bounded memory for any size)."""
-        half = 1.0 if self.normal is None else 0.5  # folded: (1/2) sum w f(fold(x))
-        total: Float64Array | None = None
-        for start in range(0, size, _CHUNK):
-            stop = min(start + _CHUNK, size)
-            if self.name == "fibonacci":
-                nodes, weights = fibonacci_points(size, start=start, stop=stop), np.full(stop - start, 4 * np.pi / size)
-            else:
-                nodes = np.asarray(sample_lebedev(size), dtype=np.float64)[start:stop]
-                weights = lebedev_weights(size)[start:stop]
-            weights = weights * half
-            directions = nodes @ rotation.T
-            if self.normal is not None:
-                below = np.minimum(directions @ self.normal, 0.0)
-                directions = directions - 2 * below[:, None] * self.normal
-            values = evaluate(self.f, directions)
-            self.varies = self.varies or bool(np.any(values != values[:1]))
-            with np.errstate(over="ignore", invalid="ignore"):
-                part = weights @ values
-                total = part if total is None else total + part
-            if not np.all(np.isfinite(total)):
-                check_sums(values, directions)
-        assert total is not None
-        return total
-
-
-class _Scheme(_Family):
-    """The scheme's orbits: stage k has 2**k orbits per replicate (orbits as units for random points)."""
-
-    name = "equal_area"
-
-    def __init__(
-        self,
-        f: Integrand,
-        domain: str,
-        points: PointsLike,
-        normal: Any,
-        seed: Any,
-        replicates: int,
-        n_max: int,
-        first: int | None = None,
-    ):
-        units = 1 if points == "random" else replicates
-        super().__init__(units)
-        self.args = (f, domain, points, normal, seed, replicates, n_max)
-        self.count = orbit_size(cast(Domain, domain))
-        self.base = 16 if points == "random" else 1  # orbits (per replicate) of the first stage
-        self.first = self.base if first is None else first
-        orbits = self.first
-        while self.count * units * orbits * 2 <= n_max:
-            orbits *= 2
-        self.largest: Plan = plan(
-            f,
-            domain,
-            self.count * units * orbits,
-            "equal_area",
-            points,
-            normal,
-            seed,
-            None if units == 1 else units,
-            0.95,
-        )
-        self.points_name = self.largest.points_name
-        self.kept: dict[tuple[int, int], Any] = {}
-
-    def ladder(self, k: int) -> tuple[int, int]:
-        """(size, evaluations) of stage k (counted from the first stage of 1 or 16 orbits) run afresh."""
-        orbits = self.base << k
-        if orbits > self.largest.orbits_per_replicate:
-            return self.count * orbits, 2**62  # beyond the plan for n_max: never affordable
-        return self.count * orbits, self.count * self.replicates * orbits
-
-    def fresh(self, k: int) -> _Stage:
-        """Stage k from base points of their own (a child of this family's seed), nothing reused."""
-        f, domain, points, normal, seed, replicates, n_max = self.args
-        child = seed.spawn(1)[0]
-        other = _Scheme(f, domain, points, normal, child, replicates, n_max, first=self.base << k)
-        return other.run_next()
-
-    def sizes(self) -> list[tuple[int, int]]:
-        out = []
-        for k in range(len(self.stages), len(self.stages) + 64):
-            orbits = self.first << k
-            if orbits > self.largest.orbits_per_replicate:
-                break
-            new = orbits - (orbits // 2 if k > 0 else 0)
-            out.append((self.count * orbits, self.count * self.replicates * new))
-        return out
-
-    def run_next(self) -> _Stage:
-        k = len(self.stages)
-        orbits = self.first << k
-        work = dataclasses.replace(self.largest, orbits_per_replicate=orbits, blocks_per_replicate=-(-orbits // BLOCK))
-        result = stage_result(work, self.kept, k + 1, 0.0, 0.0, compute_here)
-        cost = self.count * self.replicates * (orbits - (orbits // 2 if k > 0 else 0))
-        stage = _Stage(
-            self.count * orbits,
-            cost,
-            np.atleast_1d(np.asarray(result.integral, dtype=np.float64)),
-            np.atleast_1d(np.asarray(result.standard_error, dtype=np.float64)),
-            result.n_units,
-        )
-        self.stages.append(stage)
-        return stage
-
-
-def haar_rotations(count: int, seed: np.random.SeedSequence) -> Float64Array:
-    """*count* independent uniformly (Haar) distributed rotation matrices, (count, 3, 3), from *seed*."""
-    from scipy.spatial.transform import Rotation  # function-level: scipy.spatial costs ~0.3 s at import
-
-    matrices: Float64Array = Rotation.random(count, rng=np.random.default_rng(seed)).as_matrix().reshape(count, 3, 3)
-    return matrices
-
-
-def _t(units: int, level: float) -> float:
-    from scipy import special  # not at import, as in symsphere._integration
-
-    return float(special.stdtrit(units - 1, 0.5 + level / 2)) if units > 1 else math.inf
-
-
-def _predict(family: _Family, tolerance: float, level: float, budget: int) -> tuple[float, float]:
+def _predict(family: Family, tolerance: float, level: float, budget: int) -> tuple[float, float]:
     """(predicted new evaluations until the half-width meets *tolerance*, or inf; predicted half-width
     after spending at most *budget*), extrapolating the standard error along the family's stage sizes."""
     last = family.stages[-1]
@@ -358,13 +94,13 @@ def _predict(family: _Family, tolerance: float, level: float, budget: int) -> tu
     if len(recent) >= 2 and all(e > 0 for _, e in recent) and recent[0][0] != recent[-1][0]:
         x, y = np.log([z for z, _ in recent]), np.log([e for _, e in recent])  # least squares: less noise
         slope = min(-0.5, float(np.polyfit(x, y, 1)[0]))
-    t = _t(last.units, level)
+    t = t_quantile(last.units, level)
     cost, half_width = 0, t * se
     for size, stage_cost in family.sizes():
         if cost + stage_cost > budget:
             break
         cost += stage_cost
-        rate = -0.5 if isinstance(family, _Rotated) and family.name == "lebedev" and size > LEBEDEV_SIZES[-1] else slope
+        rate = -0.5 if isinstance(family, Rotated) and family.name == "lebedev" and size > LEBEDEV_SIZES[-1] else slope
         half_width = t * se * (size / last.size) ** rate
         if half_width <= tolerance:
             return float(cost), half_width
@@ -421,8 +157,8 @@ def integrate_rules(
     seeds = dict(zip(FAMILIES, root.spawn(len(FAMILIES)), strict=True))
     fold_normal = np.array([0.0, 0.0, 1.0]) if unit_normal is None else unit_normal
 
-    def rotated(name: str) -> _Rotated:
-        return _Rotated(name, numpy_f, domain, fold_normal, seeds[name], replicates)
+    def rotated(name: str) -> Rotated:
+        return Rotated(name, numpy_f, domain, fold_normal, seeds[name], replicates)
 
     if not to_tolerance:
         if method == "auto":
@@ -431,15 +167,15 @@ def integrate_rules(
             raise ValueError("'n_max' is only valid with 'atol' or 'rtol'")
         if n is None:
             raise TypeError("integrate() missing required keyword argument 'n' (or give 'atol' or 'rtol')")
-        return _fixed(rotated(method), check_count(n, "n", multiple=replicates), domain, confidence_level)
+        return fixed_stage(rotated(method), check_count(n, "n", multiple=replicates), domain, confidence_level)
     if n is not None:
         raise ValueError(
             f"'n' with a tolerance is the scheme's first stage; method={method!r} starts at its smallest rule"
         )
     n_max = count * 2**24 if n_max is None else check_count(n_max, "n_max")
     if method == "auto":
-        families: list[_Family] = [
-            _Scheme(f, domain, scheme_points, normal, seeds["equal_area"], replicates, n_max),
+        families: list[Family] = [
+            Scheme(f, domain, scheme_points, normal, seeds["equal_area"], replicates, n_max),
             rotated("fibonacci"),
             rotated("lebedev"),
         ]
@@ -447,49 +183,13 @@ def integrate_rules(
     return _race([rotated(method)], domain, confidence_level, atol_value, rtol_value, n_max)
 
 
-def _fixed(family: _Rotated, n: int, domain: str, level: float) -> IntegrationResult:
-    """One stage of a rotated rule with n evaluations in all: n / replicates points per replicate."""
-    per = n // family.replicates
-    for k in range(64):
-        size, copies = family._size(k)
-        if size * copies == per:
-            return _result(family, family.run_stage(k), level, n, domain)
-        if size * copies > per:
-            break
-    valid = sorted({family._size(k)[0] * family._size(k)[1] * family.replicates for k in range(14)})
-    raise ValueError(
-        f"'n'={n} is not a stage of method={family.name!r} with {family.replicates} replicates; "
-        f"use one of {valid[:14]} ..."
-    )
-
-
-def _result(family: _Family, stage: _Stage, level: float, evaluations: int, domain: str) -> IntegrationResult:
-    t = _t(stage.units, level)
-    squeeze = (lambda a: float(a[0])) if stage.integral.shape == (1,) else (lambda a: a)
-    return IntegrationResult(
-        integral=squeeze(stage.integral),
-        standard_error=squeeze(stage.standard_error),
-        confidence_interval=(
-            squeeze(stage.integral - t * stage.standard_error),
-            squeeze(stage.integral + t * stage.standard_error),
-        ),
-        confidence_level=level,
-        n_evaluations=evaluations,
-        n_units=stage.units,
-        unit="orbit" if stage.units > 1 and isinstance(family, _Scheme) and family.replicates == 1 else "replicate",
-        domain=domain,
-        method=family.name,
-        points=family.points_name,
-    )
-
-
-def _balanced(family: _Family) -> float:
+def _balanced(family: Family) -> float:
     """The family's total after its next stage, over its share: the balanced order of the pilot."""
     return (family.spent + family.sizes()[0][1]) / SHARE.get(family.name, 1.0)
 
 
 def _race(
-    families: Sequence[_Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
+    families: Sequence[Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
 ) -> IntegrationResult:
     """Run stages (pilot, then the predicted cheapest family) until one meets the tolerance or n_max."""
     alpha = 1.0 - confidence_level
@@ -501,7 +201,7 @@ def _race(
         share = alpha / len(families)  # each family's share of alpha, spent over its own stages
         pending = [fam for fam in families if len(fam.stages) < PILOT_STAGES and fam.sizes()]
         budget = n_max - spent
-        choice: _Family | None = None
+        choice: Family | None = None
         if pending:  # balanced: the family whose total after its next stage is smallest
             running = [fam for fam in families if fam.sizes()]
             choice = min(running, key=_balanced)
@@ -551,7 +251,7 @@ def _race(
         spent += stage.cost
         check += 1
         level = 1.0 - share / (len(choice.stages) * (len(choice.stages) + 1))
-        result = _result(choice, stage, level, spent, domain)
+        result = as_result(choice, stage, level, spent, domain)
         low, high = result.confidence_interval
         half_width = (np.asarray(high) - np.asarray(low)) / 2
         tolerance_now = np.maximum(atol, rtol * np.abs(np.asarray(result.integral)))
@@ -599,7 +299,7 @@ def _not_reached(
     return best
 
 
-def _jump(family: _Family, tolerance: float, t: float, budget: int) -> tuple[int, int, float, bool]:
+def _jump(family: Family, tolerance: float, t: float, budget: int) -> tuple[int, int, float, bool]:
     """(stage, evaluations, predicted half-width, whether it meets *tolerance*) of the smallest fresh stage,
     larger than any run, predicted to meet the tolerance within *budget*; else the largest affordable one
     (evaluations 0 and half-width inf if none is).  The standard error is extrapolated from the family's
@@ -647,7 +347,7 @@ def _jump(family: _Family, tolerance: float, t: float, budget: int) -> tuple[int
 
 
 def _auto(
-    families: Sequence[_Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
+    families: Sequence[Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
 ) -> IntegrationResult:
     """The pilot (every family's first stages, cheapest total first), then fresh stages of the family
     predicted to meet the tolerance with the fewest evaluations, the others exploring on the side."""
@@ -657,18 +357,18 @@ def _auto(
     history: list[dict[str, Any]] = []
     latest: dict[str, tuple[IntegrationResult, int]] = {}  # each family's estimate with the most evaluations behind it
     result: IntegrationResult | None = None
-    confirm: list[tuple[_Family, int]] = []  # a pilot stage that met PILOT_STRICT of the tolerance
+    confirm: list[tuple[Family, int]] = []  # a pilot stage that met PILOT_STRICT of the tolerance
 
     def level(part: str, look: int) -> float:
         share = PILOT_ALPHA if part == "pilot" else 1.0 - PILOT_ALPHA
         return 1.0 - alpha * share / (look * (look + 1))
 
-    def look(family: _Family, stage: _Stage, part: str, reason: str) -> IntegrationResult:
+    def look(family: Family, stage: Stage, part: str, reason: str) -> IntegrationResult:
         nonlocal spent
         family.spent += stage.cost
         spent += stage.cost
         looks[part] += 1
-        result = _result(family, stage, level(part, looks[part]), spent, domain)
+        result = as_result(family, stage, level(part, looks[part]), spent, domain)
         low, high = result.confidence_interval
         half_width = (np.asarray(high) - np.asarray(low)) / 2
         tolerance_now = np.maximum(atol, rtol * np.abs(np.asarray(result.integral)))
@@ -706,7 +406,7 @@ def _auto(
         )
         return result
 
-    def step(family: _Family, reason: str) -> IntegrationResult:
+    def step(family: Family, reason: str) -> IntegrationResult:
         return look(family, family.run_next(), "pilot", reason)
 
     while True:
@@ -728,7 +428,7 @@ def _auto(
         if best is not None:
             tolerance = float(np.min(np.maximum(atol, rtol * np.abs(best.integral))))
             units = min(fam.replicates for fam in families)
-            t = _t(units, level("chosen", looks["chosen"] + 1))
+            t = t_quantile(units, level("chosen", looks["chosen"] + 1))
             cap = max(JUMP * spent, 1)  # a fresh stage costs at most JUMP times everything so far
             jumps = {
                 fam.name: _jump(fam, tolerance, t, min(budget, cap))
