@@ -477,34 +477,21 @@ def _build_integrands() -> dict[str, Integrand]:
         return np.exp(np.asarray(d, dtype=np.float64) @ a)
 
     exp_kernel = integrand_kernel(EXP, tuple(a.tolist()))
-    out.append(
-        Integrand(
+    for name, domain, exact, description in (
+        (
             "exp",
             "sphere",
-            expo,
             4 * math.pi * math.sinh(norm_a) / norm_a,
             "exp(w.a), a = (0.7, -0.4, 0.5); exact: 4 pi sinh|a| / |a|",
-            True,
-            False,
-            False,
-            _frozen(a=a),
-            exp_kernel,
-        )
-    )
-    out.append(
-        Integrand(
+        ),
+        (
             "exp_hemisphere",
             "hemisphere",
-            expo,
             _EXP_HEMISPHERE,
             "exp(w.a) over z >= 0; exact: 2 pi int_0^1 exp(a_z z) I0(|a_xy| sqrt(1 - z^2)) dz by quadrature, ~1e-15",
-            True,
-            False,
-            False,
-            _frozen(a=a),
-            exp_kernel,
-        )
-    )
+        ),
+    ):
+        out.append(Integrand(name, domain, expo, exact, description, True, False, False, _frozen(a=a), exp_kernel))
 
     # Hemisphere: cos theta and harmonics with the odd-c moment formula.
     out.append(

@@ -117,12 +117,18 @@ def as_float_array(a: object, name: str) -> FloatArray:
     return out
 
 
+def _rows_of(value: object, name: str, width: int) -> FloatArray:
+    """*value* as a float array of shape (..., width), or the error naming *name*."""
+    arr = as_float_array(value, name)
+    check_dimensions(arr, name)
+    if arr.ndim == 0 or arr.shape[-1] != width:
+        raise ValueError(f"'{name}' must have shape (..., {width}), got {arr.shape}")
+    return arr
+
+
 def check_uv(uv: object, name: str = "uv") -> FloatArray:
     """Return points of the unit square as a float array of shape (..., 2)."""
-    arr = as_float_array(uv, name)
-    check_dimensions(arr, name)
-    if arr.ndim == 0 or arr.shape[-1] != 2:
-        raise ValueError(f"'{name}' must have shape (..., 2), got {arr.shape}")
+    arr = _rows_of(uv, name, 2)
     if not np.all((arr >= 0) & (arr <= 1)):  # also rejects NaN
         raise ValueError(f"'{name}' must lie in the closed unit square [0, 1]^2 (no NaN)")
     return arr
@@ -130,10 +136,7 @@ def check_uv(uv: object, name: str = "uv") -> FloatArray:
 
 def check_directions(d: object, name: str = "d") -> FloatArray:
     """Return finite vectors as a float array of shape (..., 3)."""
-    arr = as_float_array(d, name)
-    check_dimensions(arr, name)
-    if arr.ndim == 0 or arr.shape[-1] != 3:
-        raise ValueError(f"'{name}' must have shape (..., 3), got {arr.shape}")
+    arr = _rows_of(d, name, 3)
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"'{name}' must be finite (no NaN or inf)")
     return arr

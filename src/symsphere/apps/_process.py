@@ -37,6 +37,7 @@ __all__ = [
     "abandoned_work",
     "add_allow_long",
     "add_cluster_options",
+    "add_run_options",
     "check_duration",
     "check_pending",
     "close_client",
@@ -163,6 +164,13 @@ def check_pending(args: argparse.Namespace) -> None:
     """Raise a signal that arrived but whose exception was lost (see signals_as_interrupts)."""
     if args.pending:
         raise_terminated(args.pending[0], None)
+
+
+def add_run_options(verb: argparse.ArgumentParser, handler: Callable[[argparse.Namespace], int]) -> None:
+    """Finish a verb whose work may be long or distributed: --allow-long, the cluster options, its handler."""
+    add_allow_long(verb)
+    add_cluster_options(verb)
+    verb.set_defaults(handler=handler)
 
 
 def add_cluster_options(verb: argparse.ArgumentParser) -> None:

@@ -54,8 +54,7 @@ from ._process import (
     Outputs,
     UsageError,
     abandoned_work,
-    add_allow_long,
-    add_cluster_options,
+    add_run_options,
     check_duration,
     check_pending,
     close_client,
@@ -159,9 +158,7 @@ def build_parser(*, mitsuba: bool = False) -> argparse.ArgumentParser:
         help="directions generated and written at a time, a multiple of 48 (hemisphere: 24); "
         "memory stays at one chunk for any N (default: 48 * 2**16)",
     )
-    add_allow_long(sample)
-    add_cluster_options(sample)
-    sample.set_defaults(handler=_run_sample)
+    add_run_options(sample, _run_sample)
 
     integrate = verbs.add_parser(
         "integrate",
@@ -198,9 +195,7 @@ def build_parser(*, mitsuba: bool = False) -> argparse.ArgumentParser:
     integrate.add_argument(
         "--n-max", type=int, default=None, help="with --rtol/--atol: the largest n (default 48 * 2**24)"
     )
-    add_allow_long(integrate)
-    add_cluster_options(integrate)
-    integrate.set_defaults(handler=_run_integrate)
+    add_run_options(integrate, _run_integrate)
 
     demo = verbs.add_parser(
         "demo",

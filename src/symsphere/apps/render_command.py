@@ -35,7 +35,7 @@ from ._process import (
     FASTEST_PATHS_PER_THREAD,
     UsageError,
     add_allow_long,
-    add_cluster_options,
+    add_run_options,
     check_duration,
     check_pending,
     close_client,
@@ -109,9 +109,7 @@ def add_render_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]
                         help="writes FILE.png, FILE.pfm and FILE.npy; may end in .pfm or .npy (default: %(default)s)")  # fmt: skip
     render.add_argument("--variant", default=None, help=argparse.SUPPRESS)  # Mitsuba scene files only: refused
     render.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
-    add_allow_long(render)
-    add_cluster_options(render)
-    render.set_defaults(handler=_run_render)
+    add_run_options(render, _run_render)
 
 
 def _add_mitsuba_parser(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

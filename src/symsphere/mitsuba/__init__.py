@@ -25,24 +25,10 @@ except ImportError as _error:  # pragma: no cover - exercised without the extra
         "(Mitsuba's LLVM variants also need libLLVM >= 16, Debian: apt-get install libllvm19)"
     ) from _error
 
+from . import _warps
 from ._integrator import GROUP_SIZES, POINTS, STRATEGIES, integrator_class, on_variant_change, register
 from ._scenes import SCENES, scene_path
-from ._warps import (
-    cosine_wedge_to_square,
-    fold,
-    hemisphere_to_square,
-    orbit_member,
-    sphere_to_square,
-    square_to_cosine_wedge,
-    square_to_cosine_wedge_pdf,
-    square_to_hemisphere,
-    square_to_hemisphere_pdf,
-    square_to_sphere,
-    square_to_sphere_pdf,
-    square_to_triangle,
-    square_to_triangle_pdf,
-    triangle_to_square,
-)
+from ._warps import *  # noqa: F403  (the maps in Dr.Jit, listed once: in _warps.__all__)
 
 __all__ = [
     "integrator_class",
@@ -52,21 +38,8 @@ __all__ = [
     "STRATEGIES",
     "POINTS",
     "GROUP_SIZES",
-    "square_to_triangle",
-    "square_to_triangle_pdf",
-    "triangle_to_square",
-    "orbit_member",
-    "fold",
-    "square_to_sphere",
-    "square_to_sphere_pdf",
-    "sphere_to_square",
-    "square_to_hemisphere",
-    "square_to_hemisphere_pdf",
-    "hemisphere_to_square",
-    "square_to_cosine_wedge",
-    "square_to_cosine_wedge_pdf",
-    "cosine_wedge_to_square",
 ]
+__all__ += _warps.__all__
 
 if _mitsuba.variant() is not None:
     register()

@@ -41,10 +41,7 @@ __all__ = [
     "square_to_cosine_wedge",
     "square_to_cosine_wedge_pdf",
     "cosine_wedge_to_square",
-    "triangle_point",
-    "triangle_density",
-    "cosine_wedge_point",
-]
+]  # the maps that symsphere.mitsuba re-exports; the package's integrator imports the point helpers by name
 
 _SQRT2 = math.sqrt(2.0)
 _PI = math.pi

@@ -19,9 +19,9 @@ Scene files (TOML, JSON) are read by :mod:`symsphere.render.scene_files`
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TypedDict
+from typing import TypedDict, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -50,6 +50,7 @@ __all__ = [
 MATERIAL_KINDS = ("diffuse", "translucent", "mirror", "dielectric")
 """The materials of the scene format: Lambertian reflection, Lambertian reflection and transmission, mirror, glass."""
 _KIND_CODES = {"diffuse": _k.DIFFUSE, "translucent": _k.TRANSLUCENT, "mirror": _k.MIRROR, "dielectric": _k.DIELECTRIC}
+_Member = TypeVar("_Member")
 
 
 # --- the data -----------------------------------------------------------------
@@ -404,10 +405,7 @@ def _normalise(scene: Scene) -> None:
         materials[name] = _check_material(material, f"materials.{name}")
     put(scene, "materials", materials)
     spheres = []
-    for i, sphere in enumerate(sequence(scene.spheres, "spheres")):
-        where = f"spheres[{i}]"
-        if not isinstance(sphere, Sphere):
-            raise SceneError(f"{where} must be a Sphere, got {type(sphere).__name__}")
+    for where, sphere in _members(scene.spheres, "spheres", Sphere):
         radius = number(sphere.radius, f"{where}.radius")
         if not radius > 0:
             raise SceneError(f"{where}.radius must be positive, got {radius!r}")
@@ -417,10 +415,7 @@ def _normalise(scene: Scene) -> None:
         spheres.append(Sphere(center, radius, material_name, clip))
     put(scene, "spheres", tuple(spheres))
     quads = []
-    for i, quad in enumerate(sequence(scene.quads, "quads")):
-        where = f"quads[{i}]"
-        if not isinstance(quad, Quad):
-            raise SceneError(f"{where} must be a Quad, got {type(quad).__name__}")
+    for where, quad in _members(scene.quads, "quads", Quad):
         corner = vector(quad.corner, f"{where}.corner")
         edge1 = vector(quad.edge1, f"{where}.edge1")
         edge2 = vector(quad.edge2, f"{where}.edge2")
@@ -440,6 +435,15 @@ def _normalise(scene: Scene) -> None:
         put(scene, "epsilon", epsilon)
     put(scene, "rr_depth", integer(scene.rr_depth, "settings.rr_depth", 1))
     put(scene, "max_depth", integer(scene.max_depth, "settings.max_depth", 1))
+
+
+def _members(values: object, name: str, kind: type[_Member]) -> Iterator[tuple[str, _Member]]:
+    """(where, member) for each member of the sequence field *name*, each checked to be a *kind*."""
+    for i, value in enumerate(sequence(values, name)):
+        where = f"{name}[{i}]"
+        if not isinstance(value, kind):
+            raise SceneError(f"{where} must be a {kind.__name__}, got {type(value).__name__}")
+        yield where, value
 
 
 def _check_camera(cam: Camera) -> Camera:

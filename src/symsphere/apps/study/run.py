@@ -12,7 +12,7 @@ import math
 import os
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Literal, cast
 
@@ -135,18 +135,16 @@ def run_study(
         with tqdm(
             total=total, desc="study", disable=True if not progress else None, dynamic_ncols=True, bar_format=bar_format
         ) as bar:
-            clock = time.perf_counter()
-            _run_convergence(results, cells, bar)
-            results.stage_seconds["convergence"] = time.perf_counter() - clock
-            clock = time.perf_counter()
-            _run_discrepancy(results, discrepancy_cells, bar)
-            results.stage_seconds["discrepancy"] = time.perf_counter() - clock
-            clock = time.perf_counter()
-            _run_chi2(results, tests, bar)
-            results.stage_seconds["chi2"] = time.perf_counter() - clock
-            clock = time.perf_counter()
-            write_figures(results, build_dir, bar)
-            results.stage_seconds["figures"] = time.perf_counter() - clock
+            stages: tuple[tuple[str, Callable[[], object]], ...] = (
+                ("convergence", lambda: _run_convergence(results, cells, bar)),
+                ("discrepancy", lambda: _run_discrepancy(results, discrepancy_cells, bar)),
+                ("chi2", lambda: _run_chi2(results, tests, bar)),
+                ("figures", lambda: write_figures(results, build_dir, bar)),
+            )
+            for stage, work in stages:
+                clock = time.perf_counter()
+                work()
+                results.stage_seconds[stage] = time.perf_counter() - clock
         _write_csv(build_dir / "convergence.csv", results.convergence, CONVERGENCE_COLUMNS)
         _write_csv(build_dir / "summary.csv", results.summary, SUMMARY_COLUMNS)
         _write_csv(build_dir / "discrepancy.csv", results.discrepancy, DISCREPANCY_COLUMNS)
