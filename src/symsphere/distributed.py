@@ -27,7 +27,7 @@ import copy
 import dataclasses
 import os
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
@@ -35,6 +35,7 @@ import numpy.typing as npt
 
 from . import frames
 from ._blocks import base_points
+from ._clients import client_or_local, close_client, connect, local_client
 from ._integration import Integrand, IntegrationResult, Partial, Plan, block_partials, finish, plan, to_tolerance
 from ._kernels import Plan as KernelPlan
 from ._kernels import fill
@@ -46,9 +47,7 @@ from ._validation import (
     check_count,
     check_dtype,
     check_normal,
-    check_positive_real,
     check_tasks,
-    short_repr,
 )
 from .points import BLOCK, BasePoints
 from .symmetry import orbit_size
@@ -216,7 +215,7 @@ def integrate(
             def compute(work: Plan, requests: Sequence[tuple[int, int, int]]) -> list[list[Partial]]:
                 if not clients:
                     check_client(client)
-                    clients.append(stack.enter_context(_client_or_local(client)))
+                    clients.append(stack.enter_context(client_or_local(client)))
                 return _compute_on(clients[0], work, requests, chunk_blocks, progress, as_completed)
 
             return to_tolerance(f, n=n, **arguments, **tolerance, compute=compute)
@@ -229,7 +228,7 @@ def integrate(
     )
     check_bool(progress, "progress")
     check_client(client)  # after the arguments of the run, before any work
-    with _client_or_local(client) as active:
+    with client_or_local(client) as active:
         partials = _compute_on(active, work, requests, chunk_blocks, progress, as_completed)
     return finish(work, partials)
 
@@ -346,7 +345,7 @@ def render(
     check_bool(progress, "progress")
     check_client(client)
     tasks = [(first, min(first + passes_per_task, plan.passes)) for first in range(0, plan.passes, passes_per_task)]
-    with _client_or_local(client) as active:
+    with client_or_local(client) as active:
         start = time.perf_counter()
         plan_future = active.scatter(plan, broadcast=True, hash=False)
         futures = [active.submit(_render_task, plan_future, *task, pure=False) for task in tasks]
@@ -360,117 +359,6 @@ def render(
         for image in results[index]:
             accum += image
     return plan.result(accum, time.perf_counter() - start, 0.0, workers)
-
-
-def connect(address: str, *, timeout: float = 10) -> Client:
-    """A ``distributed.Client`` for the scheduler at *address*, or a clear error within *timeout* seconds.
-
-    Parameters
-    ----------
-    address : str
-        The scheduler's address, as ``dask scheduler`` prints it (``tcp://HOST:8786``).
-    timeout : float
-        Seconds to wait for the scheduler.
-
-    Returns
-    -------
-    distributed.Client
-        Pass it as ``client=`` to :func:`integrate` and :func:`render`, or compute the
-        arrays of :func:`sample_sphere` with it; close it with :func:`close_client`
-        (the cluster keeps running).
-
-    Raises
-    ------
-    ConnectionError
-        If no scheduler answers at *address* within *timeout*.
-
-    Examples
-    --------
-    A small cluster in this process stands in for ``dask scheduler`` and ``dask worker``:
-
-    >>> from distributed import LocalCluster
-    >>> from symsphere.distributed import close_client, connect
-    >>> cluster = LocalCluster(n_workers=1, processes=False, dashboard_address=":0")  # any free port
-    >>> client = connect(cluster.scheduler_address)
-    >>> len(client.scheduler_info()["workers"])
-    1
-    >>> close_client(client)
-    >>> cluster.close()
-    """
-    from distributed import Client
-
-    if not isinstance(address, str) or not address:
-        raise TypeError(
-            f"'address' must be the scheduler's address as a string (tcp://HOST:8786), got {short_repr(address)}; "
-            "for a cluster on this machine use local_client()"
-        )
-    timeout = check_positive_real(timeout, "timeout")
-    try:
-        return Client(address, timeout=timeout)
-    except (OSError, TimeoutError) as exc:
-        raise ConnectionError(
-            f"could not reach the Dask scheduler at {address!r} within {timeout} s "
-            f"({type(exc).__name__}: {exc}); start one with 'dask scheduler' and workers with "
-            f"'dask worker {address}'"
-        ) from exc
-
-
-def local_client(workers: int | None = None) -> Client:
-    """A ``LocalCluster`` client: *workers* single-threaded worker processes (default: one per core).
-
-    Parameters
-    ----------
-    workers : int, optional
-        Worker processes, each with one thread (the kernels of a task run single-threaded).
-
-    Returns
-    -------
-    distributed.Client
-        A client of its own cluster; close both with :func:`close_client`.
-
-    Examples
-    --------
-    >>> from symsphere.distributed import close_client, integrate, local_client
-    >>> client = local_client(workers=1)
-    >>> len(client.scheduler_info()["workers"])
-    1
-    >>> result = integrate(lambda d: d[:, 2] ** 2, client=client, n=48 * 4, rng=1)
-    >>> round(result.integral, 10)                     # 4 pi / 3: exact from one orbit
-    4.1887902048
-    >>> close_client(client)
-    """
-    from distributed import Client, LocalCluster
-
-    workers = (os.cpu_count() or 1) if workers is None else check_count(workers, "workers")
-    # the scheduler's HTTP server on a free port (None would still take 8787, and warn if it is taken)
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
-    return Client(cluster)
-
-
-def close_client(client: Client) -> None:
-    """Close *client*, and its cluster too if it runs one of its own (as :func:`local_client`'s does).
-
-    A client of a remote scheduler (:func:`connect`) is closed and its cluster left running.
-
-    Parameters
-    ----------
-    client : distributed.Client
-
-    Examples
-    --------
-    >>> from symsphere.distributed import close_client, local_client
-    >>> client = local_client(1)
-    >>> cluster = client.cluster
-    >>> close_client(client)
-    >>> client.status, cluster.status.name
-    ('closed', 'closed')
-    """
-    if check_client(client) is None:
-        raise TypeError("'client' must be a distributed.Client, got None")
-    cluster = getattr(client, "cluster", None)  # None for a client of a remote scheduler
-    client.close()
-    if cluster is not None:
-        cluster.close()
 
 
 # --- private ---------------------------------------------------------------------
@@ -584,19 +472,6 @@ def _dask_directions(
         pieces.append(da.from_delayed(task, shape=((stop - start) * count, 3), dtype=dtype))
     directions: da.Array = da.concatenate(pieces, axis=0)
     return directions
-
-
-@contextlib.contextmanager
-def _client_or_local(client: Client | None) -> Iterator[Client]:
-    given: Client | None = check_client(client)
-    if given is not None:
-        yield given
-        return
-    owned = local_client()
-    try:
-        yield owned
-    finally:
-        close_client(owned)
 
 
 def _progress(iterable: Iterable[_T], total: int, enabled: bool, description: str) -> Iterable[_T]:

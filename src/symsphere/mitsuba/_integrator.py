@@ -62,7 +62,6 @@ consecutive lanes instead, keyed from the scene's sampler.
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 import drjit as dr
@@ -73,6 +72,7 @@ from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import check_choice
 from ..warps import METHODS
 from . import _lights, _random
+from ._bsdfs import all_diffuse, all_lambertian, bsdf_ids, diffuse_only, lambertian_codes
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
 __all__ = [
@@ -102,26 +102,6 @@ def _mis_weight(pdf_a: Any, pdf_b: Any) -> Any:
     a2 = dr.square(pdf_a)
     w = a2 / (a2 + dr.square(pdf_b))
     return dr.detach(dr.select(dr.isfinite(w), w, 0.0))
-
-
-def _bsdf_ids(bsdfs: Any) -> Any:
-    """The Dr.Jit registry ids (UInt32) of a ``BSDFPtr`` array: the keys of the Lambertian table."""
-    return dr.reinterpret_array(mi.UInt32, bsdfs)
-
-
-_BRDF_LINE = re.compile(r"^  brdf\[(\d)\] = (\w+)\[", re.MULTILINE)
-
-
-def lambertian_codes(bsdf: Any) -> int:
-    """1 for Mitsuba's ``diffuse``, 2 for a ``twosided`` whose both sides are ``diffuse``, else 0."""
-    name = bsdf.class_name()
-    if name == "SmoothDiffuse":
-        return 1
-    if name == "TwoSidedBRDF":
-        nested = dict(_BRDF_LINE.findall(str(bsdf)))
-        if nested.get("0") == "SmoothDiffuse" and nested.get("1") == "SmoothDiffuse":
-            return 2
-    return 0
 
 
 class _PathMethods:
@@ -294,7 +274,7 @@ class _PathMethods:
             bsdf = shape.bsdf()
             if bsdf is None:
                 continue
-            ident = int(_bsdf_ids(mi.BSDFPtr(bsdf))[0])
+            ident = int(bsdf_ids(mi.BSDFPtr(bsdf))[0])
             codes[ident] = lambertian_codes(bsdf)
         size = max(codes, default=0) + 1
         values = [0] * size
@@ -405,12 +385,12 @@ class _PathMethods:
         # sampled ray that finds one of them counts 0): see the module docstring.  In a scene whose every BSDF is diffuse
         # and whose every emitter is in the table, no BSDF hit needs the light sampling's density, and the
         # ray of a vertex whose next vertex is the last can find nothing that counts: it is not traced.
-        only_table = lights is not None and lights.covers_all and _all_diffuse(scene)
+        only_table = lights is not None and lights.covers_all and all_diffuse(scene)
         # emitter_sampling='projected': at Lambertian vertices (the shading normal is the BSDF's) the table
         # samples by projected solid angle; everywhere, when every BSDF is Lambertian
         projected = lights is not None and lights.projected
         lambertian_ids = self._lambertian_table(scene) if projected else None
-        cosine_only = projected and only_table and _all_lambertian(scene)
+        cosine_only = projected and only_table and all_lambertian(scene)
         prev_alone = mi.Bool(False)  # the previous vertex sampled the table's emitters alone
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
@@ -459,10 +439,10 @@ class _PathMethods:
             # emitter sampling
             flags = bsdf.flags()
             active_em = active_next & mi.has_flag(flags, mi.BSDFFlags.Smooth)
-            alone = active_em & _diffuse(flags) if lights is not None else mi.Bool(False)
+            alone = active_em & diffuse_only(flags) if lights is not None else mi.Bool(False)
             cosine = None
             if dr.hint(projected, mode="scalar"):
-                cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, _bsdf_ids(bsdf), alone) != 0)
+                cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, bsdf_ids(bsdf), alone) != 0)
             ds, em_weight, active_em, total, ours = self._sample_emitter(
                 scene, si, sampler, active_em, primal, lights, cosine, cosine_only
             )
@@ -477,7 +457,7 @@ class _PathMethods:
             )
 
             if dr.hint(replaces, mode="scalar"):
-                lambertian = active_next & (dr.gather(mi.UInt32, table, _bsdf_ids(bsdf), active_next) != 0)
+                lambertian = active_next & (dr.gather(mi.UInt32, table, bsdf_ids(bsdf), active_next) != 0)
                 local, pdf_local = self._local_direction(key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
                 # A Lambertian BSDF's own (cosine) sample has weight f cos / pdf = its reflectance R at si,
@@ -542,32 +522,6 @@ class _PathMethods:
         if dr.hint(primal, mode="scalar"):
             L = dr.select(valid_ray, L, 0.0)
         return (L if primal else δL), valid_ray, [], L
-
-
-def _diffuse(flags: Any) -> Any:
-    """The lanes whose BSDF is diffuse only (no glossy or delta component): light sampling alone there."""
-    return (
-        mi.has_flag(flags, mi.BSDFFlags.Diffuse)
-        & ~mi.has_flag(flags, mi.BSDFFlags.Glossy)
-        & ~mi.has_flag(flags, mi.BSDFFlags.Delta)
-    )
-
-
-def _all_diffuse(scene: Any) -> bool:
-    """Whether every BSDF of *scene* is diffuse only (a trace-time constant)."""
-    for shape in scene.shapes():
-        bsdf = shape.bsdf()
-        if bsdf is None:
-            continue
-        flags = int(bsdf.flags())
-        if not flags & int(mi.BSDFFlags.Diffuse) or flags & int(mi.BSDFFlags.Glossy | mi.BSDFFlags.Delta):
-            return False
-    return True
-
-
-def _all_lambertian(scene: Any) -> bool:
-    """Whether every BSDF of *scene* is Lambertian (:func:`lambertian_codes`; a trace-time constant)."""
-    return all(shape.bsdf() is None or lambertian_codes(shape.bsdf()) for shape in scene.shapes())
 
 
 def _taken_count(sampler: Any, count: int) -> int:
