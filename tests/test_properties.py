@@ -135,8 +135,8 @@ MAY_BE_INF = {"square_to_triangle_pdf", "sphere_pdf", "hemisphere_pdf"}
 # Functions whose arguments are trusted (documented: "not validated"): the numba-compilable formulas.
 # Their valid inputs are still checked for finite output.  frames' and wedge's scalar functions validate
 # since the third reliability round (inside kernels they are the bare formulas) and are tested like the others, and below;
-# so do the elementwise warps of symsphere.warps.
-TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf", "rectangle_frame", "rectangle_point",
+# so do the elementwise warps of symsphere.warps, the spherical rectangle's rectangle_frame and rectangle_point included.
+TRUSTED = {"triangle_warp", "check_points", "suite", "uniform_pdf",
            "projected_triangle_setup", "projected_triangle_point", "projected_triangle_uv",
            "projected_triangle_density"}  # fmt: skip
 MODULES = (symsphere, sampling, symmetry, frames, harmonics, stats, integrands, peers, quality, points_module,

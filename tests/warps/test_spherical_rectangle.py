@@ -6,11 +6,16 @@ sample falls into the cell where its ray meets the plane.  One test per rectangl
 0.01, Sidak-corrected over CHI2_TESTS; fixed seeds.
 """
 
+import math
+
 import numpy as np
 import pytest
+from numba import njit
 from scipy import stats as scipy_stats
 
 from symsphere.warps import (
+    rectangle_frame,
+    rectangle_point,
     spherical_rectangle_to_square,
     square_to_spherical_rectangle,
     square_to_spherical_rectangle_pdf,
@@ -148,3 +153,84 @@ def test_chi2_detects_area_sampling():
 def test_bad_input(args, word):
     with pytest.raises(ValueError, match=word):
         square_to_spherical_rectangle([0.5, 0.5], *args)
+
+
+# --- the scalar formulas: checked from Python, bare inside numba kernels ----------------------------------
+
+CUBE_FACE = (-1.0, -1.0, 1.0, 2.0, 2.0)  # corner (x0, y0, z0), width, height: a face of the cube [-1, 1]^3
+FRAME = rectangle_frame(*CUBE_FACE)
+POINT_ARGS = (0.3, 0.7, FRAME[0], *FRAME[1:6], *FRAME[7:])  # u, v, S, x0, y0, z0, x1, y1, b0, b1, ck, sk
+POINT_NAMES = ("u", "v", "solid_angle", "x0", "y0", "z0", "x1", "y1", "b0", "b1", "ck", "sk")
+
+
+@pytest.mark.parametrize(
+    "index, value, error, message",
+    [
+        (4, None, TypeError, "'height' must be a real number, got NoneType None"),
+        (4, np.nan, ValueError, "'height' must be a finite positive number at most 1e+30, got nan"),
+        (3, 0.0, ValueError, "'width' must be a finite positive number at most 1e+30, got 0.0"),
+        (3, -2.0, ValueError, "'width' must be a finite positive number at most 1e+30, got -2.0"),
+        (0, True, TypeError, "'x0' must be a real number, got bool True"),
+        (1, "1", TypeError, "'y0' must be a real number, got str '1'"),
+        (1, np.inf, ValueError, "'y0' must be a finite number of magnitude at most 1e+30, got inf"),
+        (2, 1e308, ValueError, "'z0' must be a finite number of magnitude at most 1e+30, got 1e+308"),
+        (2, -1e-320, ValueError, "'z0' must be 0 or of magnitude at least 1e-30, got -1e-320"),
+        (0, np.zeros(2), TypeError, "'x0' must be a real number, got ndarray array([0., 0.])"),
+    ],
+)
+def test_rectangle_frame_names_a_bad_argument(index, value, error, message):
+    args = list(CUBE_FACE)
+    args[index] = value
+    with pytest.raises(error) as info:
+        rectangle_frame(*args)
+    assert str(info.value) == message
+
+
+@pytest.mark.parametrize(
+    "name, value, error, fragment",
+    [
+        ("u", 1.5, ValueError, "'u' must be a number in [0, 1], got 1.5"),
+        ("v", np.nan, ValueError, "'v' must be a number in [0, 1], got nan"),
+        ("solid_angle", 7.0, ValueError, "'solid_angle' must be a solid angle in [0, 2 pi], got 7.0"),
+        ("z0", 1.0, ValueError, "'z0' must be negative, of magnitude in [1e-30, 2e+30]"),
+        ("z0", -1e-300, ValueError, "'z0' must be negative"),
+        ("x1", -2.0, ValueError, "'x1' must be >= 'x0' (-1.0), got -2.0"),
+        ("y1", -3.0, ValueError, "'y1' must be >= 'y0' (-1.0), got -3.0"),
+        ("x0", 1e31, ValueError, "'x0' must be a finite number of magnitude at most 2e+30"),
+        ("ck", 1.5, ValueError, "'ck' must be a number in [-1, 1]"),
+        ("b1", None, TypeError, "'b1' must be a real number, got NoneType None"),
+    ],
+)
+def test_rectangle_point_names_a_bad_argument(name, value, error, fragment):
+    args = list(POINT_ARGS)
+    args[POINT_NAMES.index(name)] = value
+    with pytest.raises(error) as info:
+        rectangle_point(*args)
+    assert str(info.value).startswith(fragment), str(info.value)
+
+
+def test_the_checked_forms_take_names():
+    assert rectangle_frame(x0=-1.0, y0=-1.0, z0=1.0, width=2.0, height=2.0) == FRAME
+    assert rectangle_point(*POINT_ARGS[:2], **dict(zip(POINT_NAMES[2:], POINT_ARGS[2:], strict=True))) == (
+        rectangle_point(*POINT_ARGS)
+    )
+    # z0 = 0 (the origin in the rectangle's plane) is allowed: S = 0, as documented
+    assert rectangle_frame(-1.0, -1.0, 0.0, 2.0, 2.0)[0] == 0.0
+
+
+def test_inside_a_kernel_they_are_the_bare_formulas():
+    # A NaN height raises from Python; compiled, the call is the formula, which does not check it (NaN out).
+    @njit
+    def solid_angle_and_y1(height):
+        f = rectangle_frame(-1.0, -1.0, 1.0, 2.0, height)
+        return f[0], f[5]
+
+    @njit
+    def point_x(u):
+        f = rectangle_frame(-1.0, -1.0, 1.0, 2.0, 2.0)
+        return rectangle_point(u, 0.5, f[0], f[1], f[2], f[3], f[4], f[5], f[7], f[8], f[9], f[10])[0]
+
+    assert math.isclose(solid_angle_and_y1(2.0)[0], FRAME[0], rel_tol=1e-15)  # the same formula, compiled
+    assert np.isnan(solid_angle_and_y1(np.nan)[1])  # y1 = y0 + height
+    assert math.isclose(point_x(0.3), rectangle_point(0.3, 0.5, *POINT_ARGS[2:])[0], rel_tol=1e-15, abs_tol=1e-15)
+    assert np.isfinite(point_x(1.5))  # u outside [0, 1]: no check in the kernel (the clamp keeps x finite)

@@ -6,6 +6,7 @@ Private module; its names are public within the package only.
 from __future__ import annotations
 
 import functools
+import inspect
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
@@ -38,21 +39,26 @@ def unit_square_args(u: Any, v: Any) -> list[Any]:
 def elementwise(check: Callable[..., Any] = unit_square_args) -> Callable[[F], F]:
     """Give a scalar formula, written once, its checked Python form and its numba form.
 
-    The decorated function is the formula: numpy ufuncs and :func:`pick` only, so that it runs on float64
-    arrays (numpy) and on scalars (numba).  The name it is bound to becomes the public function: called from
-    Python it first passes its arguments through *check* (which returns them converted, or raises naming
-    them) and then runs the formula; inside a numba kernel it *is* the formula, unchecked (an ``overload``).
-    The bare formula itself, :func:`formula` of the public function, is ``register_jitable``: other formulas
-    call it in numba and numpy alike, and the array maps (``square_to_X``) apply it to trusted rows
-    (:func:`on_rows`).  Mitsuba's ``warp.h`` and pbrt-v4's ``sampling.h`` write each map once as a small pure
-    function; this is that, with the two entry points numpy and numba need.
+    The decorated function is the formula: numpy ufuncs and :func:`pick` only, so that it runs on float64 arrays
+    (numpy) and on scalars (numba); or a scalar formula in plain ``math`` whose *check* returns floats (the
+    spherical rectangle's). The name it is bound to becomes the public function: called from Python it first
+    passes its arguments through *check* (which returns them converted, or raises naming them; arguments given
+    by name are bound to the formula's signature first) and then runs the formula; inside a numba kernel it *is*
+    the formula, unchecked (an ``overload``). The bare formula itself, :func:`formula` of the public function,
+    is ``register_jitable``: other formulas call it in numba and numpy alike, and the array maps
+    (``square_to_X``) apply it to trusted rows (:func:`on_rows`). Mitsuba's ``warp.h`` and pbrt-v4's
+    ``sampling.h`` write each map once as a small pure function; this is that, with the two entry points numpy
+    and numba need.
     """
 
     def decorate(bare: F) -> F:
         register_jitable(bare)
+        signature = inspect.signature(bare)
 
         @functools.wraps(bare)
-        def checked(*args: Any) -> Any:
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            if kwargs:  # by name, as the formula's signature allows (its TypeError for an unknown name)
+                args = signature.bind(*args, **kwargs).args
             return bare(*check(*args))
 
         overload(checked, jit_options={}, inline="never", strict=False)(lambda *args: bare)

@@ -9,7 +9,8 @@ along x = xu), which is uniform in solid angle.  The density is 1/S.
 
 The scalar formulas (:func:`rectangle_frame`, :func:`rectangle_point`) are the ones the numba renderer
 compiles into its kernels (``symsphere.render``'s rectangle lights); the numpy functions run them in a
-compiled loop, in float64 whatever the input dtype.
+compiled loop, in float64 whatever the input dtype.  Called from Python the two check their numbers
+first (:func:`._common.elementwise`); inside a kernel they are the bare formulas.
 """
 
 from __future__ import annotations
@@ -20,12 +21,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from numba import njit
-from numba.extending import register_jitable
 
 from .._threads import route_compiles
 from .._typing import Float64Array, FloatArray
-from .._validation import check_unit_directions, check_uv
+from .._validation import check_unit_directions, check_uv, real_number, short_repr
 from .._validation.arrays import as_float_array
+from ._common import elementwise, formula
 
 __all__ = [
     "square_to_spherical_rectangle",
@@ -36,9 +37,72 @@ __all__ = [
 ]
 
 _PI = math.pi
+# The largest magnitude of a coordinate (and the smallest of a non-zero z0) that rectangle_frame accepts:
+# its complex products multiply eight coordinates, at most 625 L^8 (1e243) and, with |z0| >= 1 / L, at
+# least |z0|^4 (1e-120) for the number it divides by, so that every value it returns is finite.
+_LIMIT = 1e30
 
 
-@register_jitable
+def _number(value: object, name: str) -> float:
+    """*value* as a float; TypeError naming *name* unless it is a real number (not a bool, not an array)."""
+    result = real_number(value)
+    if result is None:
+        raise TypeError(f"'{name}' must be a real number, got {type(value).__name__} {short_repr(value)}")
+    return result
+
+
+def _in_range(value: object, name: str, low: float, high: float, what: str) -> float:
+    """*value* as a float in [low, high]; ValueError naming *name* and saying *what* otherwise (NaN too)."""
+    result = _number(value, name)
+    if not low <= result <= high:
+        raise ValueError(f"'{name}' must be {what}, got {short_repr(value)}")
+    return result
+
+
+def _frame_arguments(x0: object, y0: object, z0: object, width: object, height: object) -> tuple[float, ...]:
+    """The arguments of :func:`rectangle_frame` as floats in its domain, else TypeError/ValueError naming one."""
+    coordinate = f"a finite number of magnitude at most {_LIMIT:g}"
+    x, y = (_in_range(v, n, -_LIMIT, _LIMIT, coordinate) for v, n in ((x0, "x0"), (y0, "y0")))
+    z = _in_range(z0, "z0", -_LIMIT, _LIMIT, coordinate)
+    if z != 0.0 and abs(z) < 1.0 / _LIMIT:
+        raise ValueError(f"'z0' must be 0 or of magnitude at least {1.0 / _LIMIT:g}, got {short_repr(z0)}")
+    positive = f"a finite positive number at most {_LIMIT:g}"
+    w, h = (_in_range(v, n, 0.0, _LIMIT, positive) for v, n in ((width, "width"), (height, "height")))
+    for value, name, number in ((width, "width", w), (height, "height", h)):
+        if number == 0.0:
+            raise ValueError(f"'{name}' must be {positive}, got {short_repr(value)}")
+    return x, y, z, w, h
+
+
+def _point_arguments(*values: object) -> tuple[float, ...]:
+    """The arguments of :func:`rectangle_point` as floats in its domain, else TypeError/ValueError naming one.
+
+    Only ranges are checked (not that the numbers are one :func:`rectangle_frame`'s): within them every
+    value the formula returns is finite.
+    """
+    u, v, s, x0, y0, z0, x1, y1, b0, b1, ck, sk = values
+    coordinate = f"a finite number of magnitude at most {2 * _LIMIT:g} (a corner of rectangle_frame)"
+    unit = "a number in [0, 1]"
+    cosine = "a number in [-1, 1] (as rectangle_frame returns it)"
+    checked = (
+        _in_range(u, "u", 0.0, 1.0, unit),
+        _in_range(v, "v", 0.0, 1.0, unit),
+        _in_range(s, "solid_angle", 0.0, 2 * _PI, "a solid angle in [0, 2 pi]"),
+        _in_range(x0, "x0", -2 * _LIMIT, 2 * _LIMIT, coordinate),
+        _in_range(y0, "y0", -2 * _LIMIT, 2 * _LIMIT, coordinate),
+        _in_range(z0, "z0", -2 * _LIMIT, -1.0 / _LIMIT,
+                  f"negative, of magnitude in [{1.0 / _LIMIT:g}, {2 * _LIMIT:g}] (rectangle_frame's flipped z0)"),
+        _in_range(x1, "x1", -2 * _LIMIT, 2 * _LIMIT, coordinate),
+        _in_range(y1, "y1", -2 * _LIMIT, 2 * _LIMIT, coordinate),
+        *(_in_range(c, n, -1.0, 1.0, cosine) for c, n in ((b0, "b0"), (b1, "b1"), (ck, "ck"), (sk, "sk"))),
+    )  # fmt: skip
+    for low, high, name in ((checked[3], checked[6], "x1"), (checked[4], checked[7], "y1")):
+        if high < low:
+            raise ValueError(f"'{name}' must be >= '{name[0]}0' ({low!r}), got {high!r}")
+    return checked
+
+
+@elementwise(check=_frame_arguments)
 def rectangle_frame(x0: float, y0: float, z0: float, width: float, height: float) -> tuple[float, ...]:
     """The spherical rectangle of the corners (x0 | x0 + width, y0 | y0 + height, z0) seen from the origin.
 
@@ -57,6 +121,29 @@ def rectangle_frame(x0: float, y0: float, z0: float, width: float, height: float
     taken of -Z there, which has no branch cut near S = 0).  ``e^{ik}`` is the normalised conjugate of
     -(A00 - A01)'s number: no angle.
 
+    Called from Python the five numbers are checked first; inside a numba kernel this is the bare
+    formula, trusting its arguments (the renderer's lights are checked when the scene is read).
+
+    Parameters
+    ----------
+    x0, y0, z0 : float
+        The corner, in the frame of the edges; real numbers of magnitude at most 1e30, z0 either 0 or
+        of magnitude at least 1e-30 (within these every returned value is finite).
+    width, height : float
+        The lengths of the edges along x and y: positive real numbers, at most 1e30.
+
+    Returns
+    -------
+    tuple of 11 floats
+        (S, x0, y0, z0, x1, y1, zsign, b0, b1, cos k, sin k).
+
+    Raises
+    ------
+    TypeError
+        If an argument is not a real number (a bool, a string, an array, None); the message names it.
+    ValueError
+        If an argument is NaN, inf or outside the ranges above; the message names it.
+
     Examples
     --------
     >>> import math
@@ -64,6 +151,10 @@ def rectangle_frame(x0: float, y0: float, z0: float, width: float, height: float
     >>> s = rectangle_frame(-1.0, -1.0, 1.0, 2.0, 2.0)[0]      # a face of the cube [-1, 1]^3
     >>> bool(math.isclose(s, 2 * math.pi / 3))
     True
+    >>> rectangle_frame(-1.0, -1.0, 1.0, 2.0, float("nan"))
+    Traceback (most recent call last):
+        ...
+    ValueError: 'height' must be a finite positive number at most 1e+30, got nan
     """
     zsign = 1.0
     if z0 > 0.0:
@@ -97,7 +188,7 @@ def rectangle_frame(x0: float, y0: float, z0: float, width: float, height: float
     return solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1, -re2 * inv2, im2 * inv2
 
 
-@register_jitable
+@elementwise(check=_point_arguments)
 def rectangle_point(
     u: float,
     v: float,
@@ -119,6 +210,30 @@ def rectangle_point(
     xu = -cu z0 / sqrt(1 - cu^2) = -z0 sign(fu) / sqrt(fu^2 - (1 - b0^2)), 1 - b0^2 = z0^2 / (y0^2 + z0^2):
     xu = -z0 sign(nu) sin(au) / sqrt(nu^2 - (1 - b0^2) sin(au)^2) with nu = cos(au) b0 - b1.
 
+    Called from Python the twelve numbers are checked first (their ranges, not that they are one
+    frame's); inside a numba kernel this is the bare formula, trusting its arguments.
+
+    Parameters
+    ----------
+    u, v : float
+        The point of the unit square, in [0, 1].
+    solid_angle, x0, y0, z0, x1, y1, b0, b1, ck, sk : float
+        :func:`rectangle_frame`'s values (all but zsign): S in [0, 2 pi]; the corners of magnitude at
+        most 2e30, x0 <= x1, y0 <= y1, z0 negative of magnitude at least 1e-30; b0, b1, ck, sk in
+        [-1, 1].
+
+    Returns
+    -------
+    xu, yv, dist2 : float
+        The point of the plane z = z0 and its squared distance from the origin (finite).
+
+    Raises
+    ------
+    TypeError
+        If an argument is not a real number; the message names it.
+    ValueError
+        If an argument is NaN, inf or outside its range; the message names it.
+
     Examples
     --------
     >>> from symsphere.warps import rectangle_frame, rectangle_point
@@ -126,6 +241,10 @@ def rectangle_point(
     >>> x, y, d2 = rectangle_point(0.5, 0.5, frame[0], *frame[1:6], *frame[7:])
     >>> round(x, 12) + 0.0, round(y, 12) + 0.0, round(d2, 12)
     (0.0, 0.0, 1.0)
+    >>> rectangle_point(1.5, 0.5, frame[0], *frame[1:6], *frame[7:])
+    Traceback (most recent call last):
+        ...
+    ValueError: 'u' must be a number in [0, 1], got 1.5
     """
     cs = math.cos(u * solid_angle)
     ss = math.sin(u * solid_angle)
@@ -146,6 +265,9 @@ def rectangle_point(
     return xu, yv, d2 + yv * yv
 
 
+_rectangle_frame = formula(rectangle_frame)
+
+
 # --- the numpy forms -----------------------------------------------------------------------------
 
 
@@ -164,7 +286,7 @@ def _frame(corner: npt.ArrayLike, edge1: npt.ArrayLike, edge2: npt.ArrayLike) ->
         e, f = e1 / w, e2 / h
         rows = np.array([e, f, np.cross(e, f)])
         x0, y0, z0 = (float(r @ c) for r in rows)
-        setup = rectangle_frame(x0, y0, z0, w, h)
+        setup = _rectangle_frame(x0, y0, z0, w, h)  # the bare formula: its result is checked below
     if not (setup[0] > 0.0 and all(math.isfinite(x) for x in setup)):
         raise ValueError(
             "'corner', 'edge1', 'edge2' must give a rectangle of positive, finite solid angle "
