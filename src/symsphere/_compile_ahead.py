@@ -64,7 +64,14 @@ def _index(dispatcher: Any) -> dict[Any, Any]:
         return {}
 
 
-def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence[str], timeout: float = 300.0) -> None:
+def compile_ahead(
+    kernel: Any,
+    module: str,
+    here: Sequence[str],
+    there: Sequence[str],
+    timeout: float = 300.0,
+    parts: Parts | None = None,
+) -> None:
     """Before *kernel*'s first compile on a cold cache: its parts *there* in a second process, *here* in this one.
 
     Parameters
@@ -78,6 +85,9 @@ def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence
         Names of the parts compiled in this process and in the second one.
     timeout : float
         Seconds to wait for the second process after this one's parts are done.
+    parts : Parts, optional
+        The parts compiled here, if not the module's ``kernel_parts()`` (for a kernel specialised
+        on its arguments: the types this call needs; the second process takes the module's).
     """
     if len(there) == 0 or is_cached(kernel) or _cpus() < 2:
         return
@@ -85,7 +95,7 @@ def compile_ahead(kernel: Any, module: str, here: Sequence[str], there: Sequence
     if helper is None:
         return  # no second process: this one compiles everything, as without this module
     try:
-        _compile_parts(module, here, compile_interruptibly)
+        _compile_parts(module, here, compile_interruptibly, parts)
     except BaseException:  # an error or Ctrl-C here: stop the second process at once
         finish(helper, 0.0)
         raise
@@ -158,10 +168,12 @@ def _cpus() -> int:
         return os.cpu_count() or 1
 
 
-def _compile_parts(module: str, names: Sequence[str], compile: Callable[[Any, tuple[Any, ...]], None]) -> None:
-    parts: Parts = importlib.import_module(module).kernel_parts()
+def _compile_parts(
+    module: str, names: Sequence[str], compile: Callable[[Any, tuple[Any, ...]], None], parts: Parts | None = None
+) -> None:
+    found: Parts = importlib.import_module(module).kernel_parts() if parts is None else parts
     for name in names:
-        dispatcher, signature = parts[name]
+        dispatcher, signature = found[name]
         compile(dispatcher, signature)
 
 

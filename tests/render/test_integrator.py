@@ -47,6 +47,7 @@ Unbiasedness against the other integrator
     against ``bsdf``/``cosine``.
 """
 
+import dataclasses
 import json
 import math
 import os
@@ -70,6 +71,7 @@ from symsphere.render import (
     SAMPLERS,
     Camera,
     HalfSpace,
+    Material,
     Quad,
     Scene,
     Sphere,
@@ -578,13 +580,14 @@ import json
 from numba.core import event
 from symsphere.render import cornell, render
 from symsphere.render.renderer import compile_in_background
-from symsphere._testing import compile_ahead as C, render_integrator as K
+from symsphere._testing import compile_ahead as C, render_emitters as E, render_integrator as K
 with compile_in_background() as ready:  # what symsphere demo does on a new install
     cold = not K.kernel_is_cached()
     ready()
 with event.install_recorder("numba:compile") as recorder:  # numba's events: what this process compiles
     image = render(cornell(), width=8, height=6, spp=48, seed=5).image
-parts = K.kernel_parts()
+a = cornell().arrays(8, 6)
+parts = K.kernel_parts(K.light_kinds(a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"]))
 print(json.dumps({
     "cold": cold,
     "cached": K.kernel_is_cached(),
@@ -592,6 +595,7 @@ print(json.dumps({
     "image": image.tobytes().hex(),
     "on_disk": {name: C.cached_signatures(d) for name, (d, _) in parts.items()},
     "expected": {name: str(tuple(t)) for name, (_, t) in parts.items()},
+    "absent_kinds": {f.__name__: C.cached_signatures(f) for f in (E.spherical_rectangle, E._sphere_cone)},
 }))
 """
 
@@ -610,10 +614,41 @@ def test_a_cold_kernel_compiled_in_the_background_is_loaded_for_kernel_parts_typ
     cold = json.loads(result.stdout.splitlines()[-1])
     assert cold["cold"] and cold["cached"]
     assert cold["on_disk"] == {name: [types] for name, types in cold["expected"].items()}
+    # cornell's one light is a clipped sphere: the rectangle's and the full sphere's code was never compiled
+    assert cold["absent_kinds"] == {"spherical_rectangle": [], "_sphere_cone": []}
     if len(os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else range(os.cpu_count() or 1)) >= 2:
         assert cold["compiled"] == [], cold["compiled"]  # the kernel: loaded, not compiled here
     warm = render(cornell(), width=8, height=6, spp=48, seed=5).image
     assert cold["image"] == warm.tobytes().hex()
+
+
+def test_light_kinds_are_those_of_the_scene_emitters():
+    # True for a kind the scene has an emitter of, None otherwise (the kernel then does not compile its
+    # code); every kind at once: a scene with a full sphere, a clipped sphere, a rectangle and a parallelogram
+    # lit; the expected kinds are read off the scene's description, not the tables.
+    def kinds(scene):
+        a = scene.arrays(8, 6)
+        return K.light_kinds(a["spheres"], a["sphere_material"], a["quads"], a["quad_material"], a["materials"])
+
+    box = cornell()  # a clipped sphere light (smallpt's lamp sunk into the ceiling)
+    assert kinds(box) == (True, None, None, None)
+    lamp = Material("diffuse", emission=(1.0, 1.0, 1.0))
+    materials = {**box.materials, "lamp2": lamp}
+    full = dataclasses.replace(
+        box, materials=materials, spheres=(*box.spheres, Sphere((30.0, 40.0, 60.0), 6.0, "lamp2"))
+    )
+    assert kinds(full) == (True, True, None, None)
+    dark = tuple(s for s in box.spheres if box.materials[s.material].emission == (0.0, 0.0, 0.0))
+    square = Quad((20.0, 70.0, 50.0), (10.0, 0.0, 0.0), (0.0, 0.0, 10.0), "lamp2")
+    slanted = Quad((60.0, 70.0, 40.0), (10.0, 0.0, 0.0), (5.0, 0.0, 10.0), "lamp2")
+    assert kinds(dataclasses.replace(box, materials=materials, spheres=dark, quads=(slanted,))) == (
+        None,
+        None,
+        True,
+        None,
+    )
+    assert kinds(dataclasses.replace(box, materials=materials, quads=(square,))) == (True, None, True, True)
+    assert kinds(dataclasses.replace(box, spheres=dark)) == (None, None, None, None)
 
 
 def test_the_two_groups_of_parts_are_kernel_parts():

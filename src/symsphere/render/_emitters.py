@@ -52,6 +52,7 @@ __all__ = [
     "choose_light",
     "disk_point",
     "emitter_pdf",
+    "light_kinds",
     "power_heuristic",
     "rows_to_world",
     "sample_emitter",
@@ -88,6 +89,34 @@ def rows_to_world(lx, ly, lz, t, b, nx, ny, nz):
 
 
 # --- emitters ------------------------------------------------------------------------
+
+LIGHT_KINDS = ("sphere", "cone", "quad", "rectangle")
+"""The emitter kinds the renderer's kernel is specialised on (:func:`light_kinds`): any sphere, a full
+(unclipped) sphere, which may be sampled by its cone, any quad, a rectangle, which may be sampled in
+solid angle."""
+
+
+def light_kinds(
+    spheres: Any, sphere_material: Any, quads: Any, quad_material: Any, materials: Any
+) -> tuple[bool | None, ...]:
+    """For each of :data:`LIGHT_KINDS`: True if the scene has an emitter of that kind, else None.
+
+    The tables are those of :meth:`symsphere.render.Scene.arrays`; an emitter is an object whose
+    material emits (what the kernel tests before it asks :func:`emitter_pdf`).  A kernel called with
+    None for a kind does not compile its code (numba prunes a branch on an argument that is None).
+    """
+    emits = np.any(np.asarray(materials)[:, 8:11] != 0.0, axis=1)
+    sphere_lights = emits[np.asarray(sphere_material, dtype=np.int64)]
+    quad_lights = emits[np.asarray(quad_material, dtype=np.int64)]
+    full = np.asarray(spheres)[8] == -np.inf
+    rectangle = np.asarray(quads)[25] != 0.0
+    found = (
+        bool(sphere_lights.any()),
+        bool((sphere_lights & full).any()),
+        bool(quad_lights.any()),
+        bool((quad_lights & rectangle).any()),
+    )
+    return tuple(True if kind else None for kind in found)
 
 
 @njit(**TABLE_FUNCTION)
@@ -142,7 +171,7 @@ def disk_point(state):
 
 
 @njit(**INLINED)
-def sample_emitter(px, py, pz, obj, state, spheres, quads):
+def sample_emitter(px, py, pz, obj, state, spheres, quads, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle):
     """Sample the emitter *obj* as seen from the point p: (wx, wy, wz, distance, pdf, ok, state).
 
     w is a unit direction, pdf its solid-angle density (without the emitter's
@@ -171,12 +200,18 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
     ring point is ``(x, y) sqrt(h (2 r - w))``.  Area densities become
     solid-angle ones as ``|q - p|^2 / (|cos_l| area)``, cos_l between w and the
     emitter's normal at q.
+
+    *kinds_sphere*, *kinds_cone*, *kinds_quad*, *kinds_rectangle* (:data:`LIGHT_KINDS`) are each None
+    when the scene has no emitter of that kind, and then numba prunes its branch before typing it:
+    the code for absent kinds is never compiled (its cost: docs/results/cold-start.md).
     """
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
+        if kinds_sphere is None:
+            return 0.0, 0.0, 1.0, 0.0, 0.0, False, state  # (not an emitter of the scene: never reached)
         r = spheres[3, obj]
         x, y, u, state = disk_point(state)
-        if spheres[8, obj] == -np.inf:  # a full sphere: by its cone from outside (a clipped one never)
+        if kinds_cone is not None and spheres[8, obj] == -np.inf:  # a full sphere: by its cone from outside
             ex, ey, ez, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
             if cone:
                 sin2 = spheres[4, obj] / d2
@@ -209,12 +244,14 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
         pdf = dist2 * dist / (proj * (2.0 * _PI * height))  # d^2 / (|cos_l| 2 pi r h)
         return dx * inv, dy * inv, dz * inv, dist, pdf, proj > 0.0 and dist > 0.0, state
     else:
+        if kinds_quad is None:
+            return 0.0, 0.0, 1.0, 0.0, 0.0, False, state  # (not an emitter of the scene: never reached)
         j = obj - n_spheres
         state, b1 = next_u64(state)
         state, b2 = next_u64(state)
         u = u01(b1)
         v = u01(b2)
-        if quads[25, j] != 0.0:
+        if kinds_rectangle is not None and quads[25, j] != 0.0:
             solid_angle, x0, y0, z0, x1, y1, zsign, b0, b1_, ck, sk = spherical_rectangle(px, py, pz, j, quads)
             if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:  # uniform in solid angle (Urena et al. 2013, sec. 4)
                 xu, yv, dist2 = rectangle_point(u, v, solid_angle, x0, y0, z0, x1, y1, b0, b1_, ck, sk)
@@ -250,23 +287,29 @@ def sample_emitter(px, py, pz, obj, state, spheres, quads):
 
 
 @njit(**INLINED)
-def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads):
+def emitter_pdf(px, py, pz, obj, t, cos_l, spheres, quads, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle):
     """The solid-angle density with which :func:`sample_emitter` from p yields the hit of *obj* at distance t.
 
     *cos_l* is |cos| between the ray and the emitter's normal at the hit.
-    The same case analysis as :func:`sample_emitter` (cone, cap, rectangle, parallelogram).
+    The same case analysis as :func:`sample_emitter` (cone, cap, rectangle, parallelogram), and
+    the same emitter kinds (None: absent from the scene, not compiled).
     """
     n_spheres = spheres.shape[1]
     if obj < n_spheres:
-        _, _, _, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
-        if cone:
-            sin2 = spheres[4, obj] / d2
-            cos_max = math.sqrt(max(0.0, 1.0 - sin2))
-            return INV_2PI * (1.0 + cos_max) / sin2
+        if kinds_sphere is None:
+            return 0.0  # (not an emitter of the scene: never reached)
+        if kinds_cone is not None:
+            _, _, _, d2, cone = _sphere_cone(px, py, pz, obj, spheres)
+            if cone:
+                sin2 = spheres[4, obj] / d2
+                cos_max = math.sqrt(max(0.0, 1.0 - sin2))
+                return INV_2PI * (1.0 + cos_max) / sin2
         area = 2.0 * _PI * spheres[3, obj] * spheres[9, obj]
     else:
+        if kinds_quad is None:
+            return 0.0  # (not an emitter of the scene: never reached)
         j = obj - n_spheres
-        if quads[25, j] != 0.0:
+        if kinds_rectangle is not None and quads[25, j] != 0.0:
             solid_angle = spherical_rectangle(px, py, pz, j, quads)[0]
             if solid_angle >= _MIN_RECTANGLE_SOLID_ANGLE:
                 return 1.0 / solid_angle

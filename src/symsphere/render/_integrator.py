@@ -71,7 +71,15 @@ from .._random.hashes import next_u64, path_state, pixel_key, u01
 from .._threads import route_compiles, run_kernel, start_threads
 from ..frames import frame_rows
 from ._directions import bsdf_pdf, fixed_sampler, is_cosine, sample_local
-from ._emitters import INLINED, choose_light, emitter_pdf, power_heuristic, rows_to_world, sample_emitter
+from ._emitters import (
+    INLINED,
+    choose_light,
+    emitter_pdf,
+    light_kinds,
+    power_heuristic,
+    rows_to_world,
+    sample_emitter,
+)
 
 PATH, BSDF = 0, 1
 DIFFUSE, TRANSLUCENT, MIRROR, DIELECTRIC = 0, 1, 2, 3
@@ -214,7 +222,7 @@ def plain_spheres(spheres):
 @njit(**INLINED)  # speed vs compile time: see render/_emitters.py
 def _light_sample(
     px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material, quad_material,
-    spheres, quads, state,
+    spheres, quads, state, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle,
 ):  # fmt: skip
     """Next-event estimation at a diffuse vertex, the part that does not depend on the sampler.
 
@@ -222,14 +230,16 @@ def _light_sample(
     local direction (lx, ly, lz) in the frame (t_row, b_row, n), distance, solid-angle pdf
     times the selection probability, the vertex's reflectance (or transmittance) towards w,
     the emitter's material, state).  ok is False when w is on the wrong side or the BSDF
-    is black there.  Inlined by LLVM (see :mod:`symsphere.render._emitters` for why).
+    is black there.  The ``kinds_`` arguments: the scene's emitter kinds (:func:`light_kinds`).  Inlined by LLVM (see :mod:`symsphere.render._emitters` for why).
     """
     choice = 0
     if lights.shape[1] > 1:
         state, b1 = next_u64(state)
         choice = choose_light(lights, u01(b1))
     obj = np.int64(lights[0, choice])
-    wx, wy, wz, dist, p_light, ok, state = sample_emitter(px, py, pz, obj, state, spheres, quads)
+    wx, wy, wz, dist, p_light, ok, state = sample_emitter(
+        px, py, pz, obj, state, spheres, quads, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle
+    )
     lz = wx * nx + wy * ny + wz * nz
     lx, ly, fr, fg, fb = 0.0, 0.0, 0.0, 0.0, 0.0
     lm = np.int64(0)
@@ -280,9 +290,12 @@ def _specular_direction(kind, dx, dy, dz, nx, ny, nz, cos_in, entering, ior, sta
 def radiance(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
     rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter, key, s, row, col, width, height, scratch,
-    plain,
+    plain, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle,
 ):  # fmt: skip
-    """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top."""
+    """The radiance estimate of one camera path: sample *s* of pixel (row, col); row 0 is the top.
+
+    The ``kinds_`` arguments: the scene's emitter kinds (:func:`light_kinds`; None: none of that kind,
+    whose code is then not compiled)."""
     state = path_state(key, s)
     fx, state = _film_offset(pixel_filter, state)
     fy, state = _film_offset(pixel_filter, state)
@@ -354,7 +367,10 @@ def radiance(
         if er != 0.0 or eg != 0.0 or eb != 0.0:
             mis = 1.0
             if nee and not specular:  # BSDF-sampled hit of an emitter that NEE also samples
-                p_light = light_pmf[hit] * emitter_pdf(ox, oy, oz, hit, t, abs(cos_in), spheres, quads)
+                p_light = light_pmf[hit] * emitter_pdf(
+                    ox, oy, oz, hit, t, abs(cos_in), spheres, quads, kinds_sphere, kinds_cone, kinds_quad,
+                    kinds_rectangle,
+                )  # fmt: skip
                 mis = power_heuristic(pdf_bsdf, p_light)
             lr += br * er * mis
             lg += bg * eg * mis
@@ -373,7 +389,7 @@ def radiance(
             if nee and depth + 1 < max_depth:  # next-event estimation: one emitter, one shadow ray
                 ok, wx, wy, wz, lx, ly, lz, dist, p_light, fr, fg, fb, lm, state = _light_sample(
                     px, py, pz, nx, ny, nz, t_row, b_row, full, m, lights, light_pmf, materials, sphere_material,
-                    quad_material, spheres, quads, state,
+                    quad_material, spheres, quads, state, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle,
                 )  # fmt: skip
                 if ok:
                     p_b = bsdf_pdf(fixed, cosine, code, full, lx, ly, lz)
@@ -434,9 +450,12 @@ def radiance(
 def _render_rows(
     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera, background, eps,
     rr_depth, max_depth, integrator, sampler, code, pixel_filter, seed, sample_start, sample_count, rows, accum,
-    scratch,
+    scratch, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle,
 ):  # fmt: skip  # pragma: no cover - compiled by numba
-    """The serial kernel: it renders the rows it is given (every estimator, sampler, map and filter)."""
+    """The serial kernel: it renders the rows it is given (every estimator, sampler, map and filter).
+
+    Compiled once per set of the scene's emitter kinds (:func:`light_kinds`: True or None each), so
+    that the light sampling of kinds the scene does not have is not compiled."""
     height = accum.shape[0]
     width = accum.shape[1]
     plain = plain_spheres(spheres)
@@ -452,7 +471,7 @@ def _render_rows(
                     spheres, sphere_material, quads, quad_material, materials, lights, light_pmf, camera,
                     background, eps, rr_depth, max_depth, integrator, sampler, fixed, cosine, code, pixel_filter,
                     key, s,
-                    row, col, width, height, scratch, plain,
+                    row, col, width, height, scratch, plain, kinds_sphere, kinds_cone, kinds_quad, kinds_rectangle,
                 )  # fmt: skip
                 sr += lr
                 sg += lg
@@ -473,7 +492,9 @@ def render_pass(
     sample), so the sum does not depend on the number of threads or passes.
     """
     prepare_kernels()
-    compile_ahead(_render_rows, __name__, COMPILE_HERE, COMPILE_THERE)  # a cold cache: in two processes
+    kinds = light_kinds(spheres, sphere_material, quads, quad_material, materials)
+    # a cold cache: in two processes (this one's parts for the scene's emitter kinds)
+    compile_ahead(_render_rows, __name__, COMPILE_HERE, COMPILE_THERE, parts=kernel_parts(kinds))
     parts = max(1, min(get_num_threads(), len(rows)))
 
     def arguments(index):
@@ -483,6 +504,7 @@ def render_pass(
             rr_depth, max_depth, int(integrator), int(sampler), int(code), int(pixel_filter), seed, sample_start,
             sample_count, rows[lo:hi], accum,
             np.empty(max(spheres.shape[1], quads.shape[1], 1)),  # intersect's scratch: one per part
+            *kinds,
         )  # fmt: skip
 
     run_kernel(_render_rows, arguments, parts)
@@ -499,19 +521,21 @@ def kernel_is_cached() -> bool:
     return is_cached(_render_rows)
 
 
-def kernel_parts() -> dict[str, tuple[Any, tuple[Any, ...]]]:
+def kernel_parts(kinds: tuple[bool | None, ...] = (None,) * 4) -> dict[str, tuple[Any, tuple[Any, ...]]]:
     """The kernel's cached parts, each with the argument types :func:`_render_rows` calls it with.
 
     What :func:`symsphere._compile_ahead.compile_ahead` compiles in two processes on a cold cache
-    (tested: a cold render compiles each part for exactly these types, and only them).
+    (tested: a cold render compiles each part for exactly these types, and only them), for a scene
+    with the emitter *kinds* (:func:`light_kinds`; the second process's parts do not depend on them).
     """
     f, i, u, b = types.float64, types.int64, types.uint64, types.boolean
+    k = tuple(types.none if kind is None else b for kind in kinds)
     f1, f2, i1 = types.Array(f, 1, "C"), types.Array(f, 2, "C"), types.Array(i, 1, "C")
     row = types.UniTuple(f, 3)
     return {
-        "_light_sample": (_light_sample, (f, f, f, f, f, f, row, row, b, i, f2, f1, f2, i1, i1, f2, f2, u)),
+        "_light_sample": (_light_sample, (f, f, f, f, f, f, row, row, b, i, f2, f1, f2, i1, i1, f2, f2, u, *k)),
         "intersect": (intersect, (f, f, f, f, f, f, f2, i, f2, f, f1, f)),
-        "emitter_pdf": (emitter_pdf, (f, f, f, i, f, f, f2, f2)),
+        "emitter_pdf": (emitter_pdf, (f, f, f, i, f, f, f2, f2, *k)),
         "_film_offset": (_film_offset, (i, u)),
         "sample_local": (sample_local, (i, i, b, i, b, u, i, i, u)),
         "bsdf_pdf": (bsdf_pdf, (i, b, i, b, f, f, f)),

@@ -97,7 +97,9 @@ def emitter_samples(point, obj, seed, count, spheres, quads):
     out = np.empty((count, 6))
     state = np.uint64(seed)
     for i in range(count):
-        wx, wy, wz, dist, pdf, ok, state = sample_emitter(point[0], point[1], point[2], obj, state, spheres, quads)
+        wx, wy, wz, dist, pdf, ok, state = sample_emitter(
+            point[0], point[1], point[2], obj, state, spheres, quads, True, True, True, True
+        )
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = wx, wy, wz, dist, pdf, ok
     return out
 
@@ -110,7 +112,9 @@ def emitter_pdfs(point, obj, ts, cosines, spheres, quads):
     """
     out = np.empty(ts.shape[0])
     for i in range(ts.shape[0]):
-        out[i] = emitter_pdf(point[0], point[1], point[2], obj, ts[i], cosines[i], spheres, quads)
+        out[i] = emitter_pdf(
+            point[0], point[1], point[2], obj, ts[i], cosines[i], spheres, quads, True, True, True, True
+        )
     return out
 
 
