@@ -262,25 +262,37 @@ def _race(
             result, tolerance=float(np.min(tolerance_now)), n_stages=check, converged=converged
         )
         latest[choice.name] = result
-        history.append(
-            dict(
-                method=choice.name,
-                size=stage.size,
-                evaluations=stage.cost,
-                total_evaluations=spent,
-                integral=result.integral,
-                standard_error=result.standard_error,
-                half_width=float(np.max(half_width)),
-                tolerance=result.tolerance,
-                level=level,
-                reason=reason,
-            )
-        )
+        history.append(_history_row(choice.name, stage.size, stage.cost, spent, result, half_width, level, reason))
         if converged:
             return dataclasses.replace(result, history=tuple(history))
     if result is None:
         raise ValueError(f"'n_max'={n_max} is smaller than the first stage of every family")
     return _not_reached(list(latest.values()), spent, history, n_max)
+
+
+def _history_row(
+    name: str,
+    size: int,
+    cost: int,
+    spent: int,
+    result: IntegrationResult,
+    half_width: npt.NDArray[np.float64],
+    level: float,
+    reason: str,
+) -> dict[str, Any]:
+    """One entry of ``result.history``: a stage of family *name* and why it ran."""
+    return dict(
+        method=name,
+        size=size,
+        evaluations=cost,
+        total_evaluations=spent,
+        integral=result.integral,
+        standard_error=result.standard_error,
+        half_width=float(np.max(half_width)),
+        tolerance=result.tolerance,
+        level=level,
+        reason=reason,
+    )
 
 
 def _not_reached(
@@ -391,17 +403,8 @@ def _auto(
         if family.name not in latest or behind >= latest[family.name][1]:
             latest[family.name] = (result, behind)
         history.append(
-            dict(
-                method=family.name,
-                size=stage.size,
-                evaluations=stage.cost,
-                total_evaluations=spent,
-                integral=result.integral,
-                standard_error=result.standard_error,
-                half_width=float(np.max(half_width)),
-                tolerance=result.tolerance,
-                level=result.confidence_level,
-                reason=reason,
+            _history_row(
+                family.name, stage.size, stage.cost, spent, result, half_width, result.confidence_level, reason
             )
         )
         return result
