@@ -38,15 +38,18 @@ def sample_fibonacci(
     Parameters
     ----------
     n : int
+        Number of points, positive.
     randomize : bool
         Apply a uniformly random rotation drawn from ``rng``.
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
         Only used when ``randomize`` is True (but validated always).
     dtype : {numpy.float64, numpy.float32}
+        Of the result; the points are computed in float64.
 
     Returns
     -------
     ndarray, shape (n, 3)
+        Row i is point i of :func:`fibonacci_points` (rotated, with ``randomize=True``).
 
     Examples
     --------

@@ -40,10 +40,12 @@ def lambert_irradiance(vertices: npt.ArrayLike, normal: npt.ArrayLike | None = N
     normal : array_like of 3 floats, optional
         The surface normal (default (0, 0, 1)); normalised.
     radiance : float
+        L, the light's radiance, the same at every point and in every direction (default 1).
 
     Returns
     -------
     float
+        E, the irradiance at the origin: L times the polygon's cosine-weighted solid angle.
 
     Examples
     --------
@@ -91,10 +93,12 @@ def sphere_light_irradiance(center: npt.ArrayLike, distance: float, radius: floa
     distance, radius : float
         D > R > 0.
     radiance : float
+        L, constant over the sphere's surface (default 1).
 
     Returns
     -------
     float
+        E = pi L (R/D)^2 cos(beta).
 
     Examples
     --------

@@ -106,10 +106,12 @@ def lebedev_size(n: int, *, randomize: bool = False) -> int:
     n : int
         At least 6.
     randomize : bool
+        Count the multiples of 5810 too, which :func:`sample_lebedev` takes with ``randomize=True``.
 
     Returns
     -------
     int
+        The size, at most *n*.
 
     Examples
     --------
@@ -145,13 +147,16 @@ def sample_lebedev(
         A size of :data:`LEBEDEV_SIZES`, or (``randomize=True``) a multiple of 5810
         (:func:`lebedev_size` gives the largest usable size up to a budget).
     randomize : bool
+        Rotate the rule (each copy of it) by a uniformly random rotation drawn from ``rng``.
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
         The rotations (validated always, used only with ``randomize=True``).
     dtype : {numpy.float64, numpy.float32}
+        Of the result; the nodes are computed in float64.
 
     Returns
     -------
     ndarray, shape (n, 3)
+        The nodes in the order of :func:`lebedev_weights`.
 
     Examples
     --------

@@ -80,6 +80,7 @@ def real_sh(l: int, m: int, d: npt.ArrayLike) -> Float64Array:
     Returns
     -------
     ndarray, shape (...)
+        ``Y_lm(d)`` for each direction.
 
     Examples
     --------

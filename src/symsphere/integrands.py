@@ -196,10 +196,12 @@ def orbit_average(
         Base points, usually in T0 = {z >= x >= y >= 0} (for the hemisphere
         they must be, so that all images have z >= 0).
     domain : {'sphere', 'hemisphere'}
+        The 48 images on the sphere or the 24 on the hemisphere.
 
     Returns
     -------
     ndarray, shape (...)
+        The mean of ``f`` over the images of each point.
 
     Examples
     --------

@@ -342,11 +342,14 @@ def sample_classic(
         The points of the unit square: 'random', 'stratified', 'sobol', 'halton',
         'sobol_interlaced2', 'sobol_interlaced3' (``'stratified'`` needs ``n`` to be a square).
     rng : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Seeds the points (or their scrambling).
     dtype : {numpy.float64, numpy.float32}
+        Of the result; the map is computed in float64.
 
     Returns
     -------
     ndarray, shape (n, 3)
+        Row i is the image of point i of the square.
 
     Examples
     --------

@@ -247,8 +247,9 @@ def sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> FloatArray
     Parameters
     ----------
     d : array_like, shape (..., 3)
-        Unit directions.
+        Unit directions (any: the sampler reaches every direction), float64 or float32.
     method : {'equal_area', 'paper1', 'paper2'}
+        The map that :func:`sample_sphere` was given.
 
     Returns
     -------
@@ -281,6 +282,7 @@ def hemisphere_pdf(
     d : array_like, shape (..., 3)
         Unit directions.
     method : {'equal_area', 'paper1', 'paper2'}
+        The map that :func:`sample_hemisphere` was given.
     normal : array_like of 3 floats, optional
         Pole of the hemisphere (default (0, 0, 1)).
 

@@ -443,6 +443,7 @@ def one_per_orbit(directions: npt.ArrayLike, orbit_size: Literal[48, 24], rng: R
     Returns
     -------
     ndarray, shape (m, 3)
+        Row i is a member of orbit i (rows ``orbit_size * i`` to ``orbit_size * (i + 1) - 1``).
 
     Examples
     --------

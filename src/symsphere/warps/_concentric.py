@@ -92,6 +92,7 @@ def concentric_disk_to_square(p: npt.ArrayLike) -> FloatArray:
     Returns
     -------
     ndarray, shape (..., 2)
+        Points of [0, 1]^2; the centre goes to (0.5, 0.5).
 
     Examples
     --------

@@ -48,10 +48,12 @@ def square_to_octahedral_sphere(uv: npt.ArrayLike) -> FloatArray:
     Parameters
     ----------
     uv : array_like, shape (..., 2)
+        Points of [0, 1]^2; the centre (0.5, 0.5) goes to the pole (0, 0, 1).
 
     Returns
     -------
     ndarray, shape (..., 3)
+        Unit directions, uniform for uniform *uv*.
 
     Examples
     --------

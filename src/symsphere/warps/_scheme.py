@@ -112,8 +112,9 @@ def square_to_sphere_pdf(d: npt.ArrayLike, method: MapMethod = "equal_area") -> 
     Parameters
     ----------
     d : array_like, shape (..., 3)
-        Unit directions.
+        Unit directions, float64 or float32: the density has their dtype.
     method : {'equal_area', 'paper1', 'paper2'}
+        The map onto T0 that :func:`square_to_sphere` was given.
 
     Returns
     -------

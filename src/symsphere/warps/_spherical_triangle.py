@@ -97,6 +97,8 @@ def spherical_triangle_to_square(d: npt.ArrayLike, a: npt.ArrayLike, b: npt.Arra
     Returns
     -------
     ndarray, shape (..., 2)
+        Points of [0, 1]^2 that :func:`square_to_spherical_triangle` maps to *d* with the same
+        vertices, in the dtype of *d*.
 
     Examples
     --------

@@ -85,8 +85,9 @@ def square_to_triangle_pdf(p: npt.ArrayLike, method: MapMethod = "equal_area") -
     Parameters
     ----------
     p : array_like, shape (..., 3)
-        Unit directions.
+        Unit directions; those outside T0 have density 0.
     method : {'equal_area', 'paper1', 'paper2'}
+        The map of :func:`square_to_triangle` whose density is wanted.
 
     Returns
     -------

@@ -47,7 +47,7 @@ def square_to_uniform_sphere(uv: npt.ArrayLike) -> FloatArray:
     Parameters
     ----------
     uv : array_like, shape (..., 2)
-        Points of [0, 1]^2.
+        Points of [0, 1]^2: u gives the height z, v the azimuth.
 
     Returns
     -------
@@ -93,6 +93,7 @@ def uniform_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
     Returns
     -------
     ndarray, shape (..., 2)
+        Points of [0, 1]^2 with v < 1, in the dtype of *d* (float64 for integers).
 
     Examples
     --------
