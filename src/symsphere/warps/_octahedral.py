@@ -18,12 +18,11 @@ import numpy as np
 import numpy.typing as npt
 from numba.extending import register_jitable
 
-from .._constants import INV_2PI, INV_4PI
 from .._typing import Float64Array, FloatArray
-from .._validation import check_directions
 from ._common import checked_forward, checked_inverse, elementwise, on_rows, pick
 from ._record import Warp
 from ._registry import register
+from ._uniform import square_to_uniform_hemisphere_pdf, square_to_uniform_sphere_pdf
 
 __all__ = [
     "square_to_octahedral_sphere",
@@ -75,8 +74,7 @@ def square_to_octahedral_sphere_pdf(d: npt.ArrayLike) -> Float64Array:
     >>> float(square_to_octahedral_sphere_pdf([0.0, 0.0, -1.0]) * 4 * 3.141592653589793)
     1.0
     """
-    d = check_directions(d, "d")
-    return np.full(d.shape[:-1], INV_4PI)
+    return square_to_uniform_sphere_pdf(d)  # the map is equal-area
 
 
 def octahedral_sphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -199,8 +197,7 @@ def square_to_octahedral_hemisphere_pdf(d: npt.ArrayLike) -> Float64Array:
     >>> square_to_octahedral_hemisphere_pdf([[0.0, 0.6, 0.8], [0.0, 0.6, -0.8]]) * 2 * 3.141592653589793
     array([1., 0.])
     """
-    d = check_directions(d, "d")
-    return np.where(d[..., 2] >= 0, INV_2PI, 0.0)
+    return square_to_uniform_hemisphere_pdf(d)  # the map is equal-area
 
 
 def octahedral_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
@@ -208,11 +205,10 @@ def octahedral_hemisphere_to_square(d: npt.ArrayLike) -> FloatArray:
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from symsphere.warps import octahedral_hemisphere_to_square, square_to_octahedral_hemisphere
-    >>> uv = np.array([0.3, 0.9])
-    >>> bool(np.allclose(octahedral_hemisphere_to_square(square_to_octahedral_hemisphere(uv)), uv))
-    True
+    >>> from symsphere.warps import octahedral_hemisphere_to_square
+    >>> octahedral_hemisphere_to_square([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])   # the pole; a corner
+    array([[0.5, 0.5],
+           [1. , 1. ]])
     """
     return checked_inverse(_octahedral_hemisphere_inverse, d, hemisphere=True)
 
