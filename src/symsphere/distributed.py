@@ -79,6 +79,9 @@ def sample_sphere(
 ) -> da.Array:
     """A dask array of the directions of :func:`symsphere.sample_sphere`.
 
+    Each chunk is one task: the kernel of :func:`symsphere.sample_sphere` on the chunk's orbits,
+    whose base points it takes by index from the same stream.
+
     Parameters
     ----------
     n : int
@@ -92,6 +95,7 @@ def sample_sphere(
     Returns
     -------
     dask.array.Array, shape (n, 3)
+        Lazy: blocks of *chunks* rows (the last may be shorter), in *dtype*.
 
     Examples
     --------
@@ -120,10 +124,9 @@ def sample_hemisphere(
 
     Parameters
     ----------
-    n : int
-        A positive multiple of 24.
-    chunks : int
-        Rows per chunk: a multiple of ``24 * symsphere.points.BLOCK`` (98 304).
+    n, chunks : int
+        As for :func:`sample_sphere`, with 24 for 48: *n* a positive multiple of 24, rows per chunk
+        a multiple of ``24 * symsphere.points.BLOCK`` (98 304).
     normal, method, points, rng, dtype
         As in :func:`symsphere.sample_hemisphere`; the computed array equals its
         result bit for bit.
@@ -131,6 +134,7 @@ def sample_hemisphere(
     Returns
     -------
     dask.array.Array, shape (n, 3)
+        Lazy, in chunks of rows as for :func:`sample_sphere`.
 
     Examples
     --------
