@@ -516,6 +516,20 @@ def _random_only(sampler: Callable[..., FloatArray], **options: Any) -> Sampler:
     return wrapped
 
 
+def _point_set(name: str, sample: Callable[..., FloatArray], *, rotated: bool, reference: str, **fields: Any) -> Peer:
+    """The peer of a point set of the sphere (Fibonacci, Lebedev), rotated at random or not: its rows
+    are one set (under one rotation), so no subset of them is independent; unrotated it is fixed."""
+    return Peer(
+        name=name,
+        sampler=_random_only(sample, randomize=rotated),
+        is_random=rotated,
+        independent_rows=False,
+        orbit_size=None,
+        reference=reference,
+        **fields,
+    )
+
+
 def _build_peers() -> dict[str, Peer]:
     lebedev = "Lebedev & Laikov 1999; scipy.integrate.lebedev_rule (orders 3-131, 6-5810 points)"
     peers = [
@@ -528,19 +542,16 @@ def _build_peers() -> dict[str, Peer]:
         ),
         Peer.over(WARPS["octahedral_sphere"], name="octahedral"),
         Peer.over(WARPS["octahedral_hemisphere"], name="octahedral_hemisphere"),
-        Peer(
-            name="fibonacci",
-            sampler=_random_only(sample_fibonacci, randomize=False),
-            is_random=False,
-            independent_rows=False,
-            orbit_size=None,
+        _point_set(
+            "fibonacci",
+            sample_fibonacci,
+            rotated=False,
             reference="Keinert et al., Spherical Fibonacci Mapping, SIGGRAPH Asia 2015",
         ),
-        Peer(
-            name="fibonacci_rotated",
-            sampler=_random_only(sample_fibonacci, randomize=True),
-            independent_rows=False,
-            orbit_size=None,
+        _point_set(
+            "fibonacci_rotated",
+            sample_fibonacci,
+            rotated=True,
             reference="Keinert et al. 2015, under a uniformly random rotation",
         ),
         Peer(  # a map onto T0, then the 48 images: a uniform density on the sphere
@@ -552,24 +563,21 @@ def _build_peers() -> dict[str, Peer]:
             warp=WARPS["arvo_triangle"],
             reference=WARPS["arvo_triangle"].reference + "; on T0, then 48 images",
         ),
-        Peer(
-            name="lebedev",
-            sampler=_random_only(sample_lebedev, randomize=False),
-            is_random=False,
-            independent_rows=False,
-            orbit_size=None,
+        _point_set(
+            "lebedev",
+            sample_lebedev,
+            rotated=False,
+            reference=lebedev,
             rule_weights=lebedev_weights,
             sizes=lebedev_size,
-            reference=lebedev,
         ),
-        Peer(
-            name="lebedev_rotated",
-            sampler=_random_only(sample_lebedev, randomize=True),
-            independent_rows=False,
-            orbit_size=None,
+        _point_set(
+            "lebedev_rotated",
+            sample_lebedev,
+            rotated=True,
+            reference="Lebedev rules under uniformly random rotations; r x 5810 points: r rotations",
             rule_weights=functools.partial(lebedev_weights, randomize=True),
             sizes=functools.partial(lebedev_size, randomize=True),
-            reference="Lebedev rules under uniformly random rotations; r x 5810 points: r rotations",
         ),
         Peer.over(WARPS["cosine_hemisphere"], name="cosine"),
     ]

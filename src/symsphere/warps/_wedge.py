@@ -157,7 +157,8 @@ def square_to_cosine_wedge_pdf(d: npt.ArrayLike) -> np.ndarray:
 
     See Also
     --------
-    square_to_cosine_wedge, cosine_wedge_density
+    square_to_cosine_wedge : the map.
+    cosine_wedge_density : the same density, elementwise (also inside numba kernels).
 
     Examples
     --------
@@ -198,7 +199,8 @@ def cosine_wedge_to_square(d: npt.ArrayLike) -> np.ndarray:
 
     See Also
     --------
-    square_to_cosine_wedge, cosine_wedge_uv
+    square_to_cosine_wedge : the map this inverts.
+    cosine_wedge_uv : the same inverse, elementwise (also inside numba kernels).
 
     Examples
     --------
