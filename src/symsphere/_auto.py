@@ -10,7 +10,7 @@ The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibo
   from, the family predicted to be most efficient grows, and the others *explore* while their totals
   stay below EXPLORE of the next answering stage (a Lebedev rule's sudden convergence once its order
   passes f's bandwidth is invisible to a prediction from small stages);
-- *answering* stages: ANSWER_FACTOR times as many randomisations (default 32), all drawn afresh --
+- *answering* stages: ANSWER_FACTOR times as many randomisations (default 128), all drawn afresh --
   new rotations or new base points, nothing reused -- at the size predicted (from the stages before:
   the spread of one randomisation extrapolated along the family's ladder) to meet the tolerance with
   the fewest evaluations, once one is predicted within JUMP times everything spent before.  Its
@@ -21,8 +21,8 @@ The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibo
 This is Stein's two-stage procedure: the answer's size is fixed before its values are seen, so its
 interval covers at the stated level, conditioned only on its own half-width meeting the tolerance --
 which, at a size predicted to meet it, is nearly always so (measured: docs/results/integration.md).
-32 randomisations make the t-interval's own tails light: Student's t with 31 degrees of freedom
-exceeds 5 with probability 2e-5 (with 7, 1.6e-3).  ``n_max`` bounds the evaluations of all stages of
+128 randomisations make the t-interval's tails light even for the skewed estimates of a small folded
+rule (Student's t with 127 degrees of freedom exceeds 5 with probability 2e-6, with 7, 1.6e-3).  ``n_max`` bounds the evaluations of all stages of
 all families, which is what ``n_evaluations`` counts.  ``result.history`` lists every stage: family,
 evaluations, estimate, standard error, half-width, tolerance, level, and why it ran.
 """
@@ -65,15 +65,15 @@ RULE_METHODS: tuple[str, ...] = ("auto", "fibonacci", "lebedev")
 """The ``method=`` values this module runs (the scheme's maps run in :mod:`symsphere._integration`)."""
 AUTO_POINTS = "sobol_interlaced3"
 PILOT_STAGES = 2
-ANSWER_FACTOR = 8
-"""An answering stage has this many times the pilot's randomisations (default 8 x 8 = 64)."""
+ANSWER_FACTOR = 16
+"""An answering stage has this many times the pilot's randomisations (default 16 x 8 = 128)."""
 AIM = 0.75
 """An answering stage is sized for a predicted half-width of AIM x the tolerance: so that it meets the
 tolerance nearly always, and the condition that it does hardly selects its spread."""
 EXPLORE = 0.25
-JUMP = 16
+JUMP = 4 * ANSWER_FACTOR
 """An answering stage costs at most this multiple of every evaluation before it: a prediction from small
-stages may be far off (the totals then grow geometrically); 4 for that, times ANSWER_FACTOR."""
+stages may be far off (the totals then grow geometrically); 4 for that, times its more replicates."""
 SPECTRAL_MARGIN = 0.8
 """A Lebedev rule converging spectrally: the fitted decay per unit of sqrt(size), times this (slower)."""
 SHARE = {"lebedev": 2.0}

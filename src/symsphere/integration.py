@@ -93,7 +93,7 @@ def integrate(
         increasing order) or ``'fibonacci'`` (spherical Fibonacci sets), each replicate under its own
         uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
         (needs ``atol`` or ``rtol``): a pilot of small stages on f itself, then a fresh stage (new
-        rotations or base points, 8 x ``replicates`` of them) of the family predicted to reach the
+        rotations or base points, 16 x ``replicates`` of them) of the family predicted to reach the
         tolerance with the fewest evaluations, at the size predicted; the answer is always such a fresh
         stage, and its interval is its own Student-t interval at ``confidence_level``
         (``result.method`` says which family, ``result.history`` why).  A named rule family to a
@@ -115,7 +115,7 @@ or scipy.stats.qmc.QMCEngine, optional
         Independent randomisations for stratified and QMC points and for the rotated rule
         families (default 8); must be None or 1 for random points and for a QMCEngine.  With
         ``'auto'``, ``'lebedev'``, ``'fibonacci'`` to a tolerance: of the pilot's stages; the answering
-        stage has 8 times as many (default 64).
+        stage has 16 times as many (default 128).
     confidence_level : float
         Of the returned confidence interval, in (0, 1).  With a tolerance and one of the scheme's
         maps: of all stages' intervals at once (see the module's description); with ``'auto'``,
