@@ -11,13 +11,19 @@ are folded) it runs ``integrate(f, rtol=..., method='auto', rng=seed, n_max=N_MA
   larger fresh one, and only the last is returned).
 
 Then, for the rules and sizes that answer most often, the coverage of one stage at a fixed size with 8
-and with 64 randomisations (``integrate(f, n=R * size, replicates=R, method=family)``, 1000 seeds):
-what the rule's own t-interval does before any choice or stopping rule.
+and with 128 randomisations, as in an answering stage (``integrate(f, n=R * size, replicates=R,
+method=family)``, the same seeds): what the rule's own t-interval does before any choice or stopping rule.
 
 A calibrated 95 % interval covers in Binomial(runs, 0.95) of the runs: 950 of 1000 with a standard
 deviation of 6.9.  Counts, not times: the machine's load does not change them.
 
     python benchmarks/bench_auto_coverage.py [--runs 1000] [--only exp,cap] [--json PATH]
+
+``--tails`` instead estimates P(|error| > 5 standard errors) of one stage of R randomisations of the
+small folded rules (TAILS) by resampling: 40 000 rotations of the rule (symsphere._families), then
+200 000 draws of R of them with replacement, the error against the population's mean.
+
+    python benchmarks/bench_auto_coverage.py --tails
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ from symsphere.integrands import INTEGRANDS
 RTOL = {"exp": 1e-2, "phong": 1e-2, "cap": 5e-2, "exp_hemisphere": 1e-2, "cosine": 1e-2}
 """A run costs at most some 10^4 evaluations (the discontinuous cap's, at a looser tolerance, some 10^4)."""
 N_MAX = 48 * 2**14
+TAILS = (("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26))
 FIXED = (("exp", "lebedev", 6), ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26), ("cap", "lebedev", 50))
 
 
@@ -97,12 +104,33 @@ def fixed(name: str, method: str, size: int, replicates: int, runs: int) -> dict
                 largest_error_in_standard_errors=worst)  # fmt: skip
 
 
+def tails(name: str, method: str, size: int) -> None:
+    from symsphere._families import Rotated, haar_rotations
+
+    f = INTEGRANDS[name]
+    rule = Rotated(method, f, f.domain, np.array([0.0, 0.0, 1.0]), np.random.SeedSequence(5), 2, 2)
+    population = np.array([rule._rule(r, size)[0] for r in haar_rotations(40_000, np.random.SeedSequence(7))])
+    rng = np.random.default_rng(1)
+    for replicates in (8, 64, 128):
+        beyond = 0
+        for _ in range(20):
+            draws = population[rng.integers(0, len(population), size=(10_000, replicates))]
+            se = draws.std(axis=1, ddof=1) / np.sqrt(replicates)
+            beyond += int(np.sum(np.abs(draws.mean(axis=1) - population.mean()) > 5 * se))
+        print(f"{name}: {method} {size}, {replicates} randomisations: P(> 5 SE) {beyond / 200_000:.2g}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=1000)
     parser.add_argument("--only", default=None, help="comma-separated integrand names")
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--tails", action="store_true", help="P(> 5 SE) of single stages, by resampling")
     args = parser.parse_args()
+    if args.tails:
+        for case in TAILS:
+            tails(*case)
+        return
     names = [name for name in RTOL if args.only is None or name in args.only.split(",")]
     rows = []
     print("| integrand (rtol) | covers (of runs) | largest error / SE | family of the answer | answering stages |")
@@ -118,14 +146,14 @@ def main() -> None:
             flush=True,
         )
     print(
-        "\n| integrand: rule | 8 replicates: covers | largest error / SE | 64 replicates: covers | largest error / SE |"
+        "\n| integrand: rule | 8 replicates: covers | largest error / SE | 128 replicates: covers | largest error / SE |"
     )
     print("|---|---:|---:|---:|---:|")
     fixed_rows = []
     for name, method, size in FIXED:
         if name not in names:
             continue
-        pair = [fixed(name, method, size, replicates, args.runs) for replicates in (8, 64)]
+        pair = [fixed(name, method, size, replicates, args.runs) for replicates in (8, 128)]
         fixed_rows += pair
         cells = " | ".join(f"{r['covered']} of {r['runs']} | {r['largest_error_in_standard_errors']:.2f}" for r in pair)
         print(f"| `{name}`: {method} {size} | {cells} |", flush=True)
