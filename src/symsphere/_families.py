@@ -60,7 +60,13 @@ class Stage:
     integral: Float64Array
     standard_error: Float64Array
     units: int
+    replicates: int  # independent randomisations of the whole stage (1 for the scheme's random points)
     tied: bool = False  # every replicate gave the same value although f varies: the spread says nothing
+
+    @property
+    def spread(self) -> float:
+        """The standard deviation of one replicate's estimate (the largest over f's components)."""
+        return float(np.max(self.standard_error)) * math.sqrt(self.replicates)
 
 
 class Family:
@@ -69,10 +75,11 @@ class Family:
     name = ""
     points_name = "haar_rotations"
 
-    def __init__(self, replicates: int) -> None:
-        self.replicates = replicates
+    def __init__(self, replicates: int, answer_replicates: int) -> None:
+        self.replicates = replicates  # of the pilot's and the exploring stages
+        self.answer_replicates = answer_replicates  # of a fresh stage (:meth:`ladder`, :meth:`fresh`)
         self.stages: list[Stage] = []
-        self.chosen: list[Stage] = []  # fresh stages run by 'auto' after the pilot
+        self.chosen: list[Stage] = []  # fresh stages run to answer
         self.spent = 0
 
     def sizes(self) -> list[tuple[int, int]]:
@@ -83,19 +90,25 @@ class Family:
         raise NotImplementedError
 
     def ladder(self, k: int) -> tuple[int, int]:
-        """(size, evaluations) of stage k run afresh."""
+        """(size, evaluations) of stage k run afresh, with :attr:`answer_replicates`."""
         raise NotImplementedError
 
     def fresh(self, k: int) -> Stage:
-        """Stage k from a randomisation of its own, independent of every stage before."""
+        """Stage k from randomisations of its own (:attr:`answer_replicates`), independent of every stage before."""
         raise NotImplementedError
+
+    def answer_units(self, size: int) -> int:
+        """The independent units (the degrees of freedom + 1) of a fresh stage of *size*."""
+        return self.answer_replicates
 
 
 class Rotated(Family):
     """Lebedev or Fibonacci: replicate r of a stage is the rule under Haar rotation(s) of its own."""
 
-    def __init__(self, name: str, numpy_f: Integrand, domain: str, normal: Float64Array, seed: Any, replicates: int):
-        super().__init__(replicates)
+    def __init__(
+        self, name: str, numpy_f: Integrand, domain: str, normal: Float64Array, seed: Any, replicates: int, answer: int
+    ):
+        super().__init__(replicates, answer)
         self.name = name
         self.f = numpy_f
         self.normal = normal if domain == "hemisphere" else None
@@ -133,12 +146,13 @@ class Rotated(Family):
     def ladder(self, k: int) -> tuple[int, int]:
         """(size, evaluations) of stage k run afresh: every copy drawn."""
         size, copies = self.shape(k)
-        return size * copies, self.replicates * size * copies
+        return size * copies, self.answer_replicates * size * copies
 
     def fresh(self, k: int) -> Stage:
         """Stage k from rotations of its own (a child of this family's seed), nothing reused."""
         domain, normal = ("sphere", np.zeros(3)) if self.normal is None else ("hemisphere", self.normal)
-        other = Rotated(self.name, self.f, domain, normal, self.seed.spawn(1)[0], self.replicates)
+        answer = self.answer_replicates
+        other = Rotated(self.name, self.f, domain, normal, self.seed.spawn(1)[0], answer, answer)
         stage = other.run_stage(k)
         self.varies = self.varies or other.varies
         return stage
@@ -170,7 +184,8 @@ class Rotated(Family):
                 "scale f down"
             )
         tied = self.varies and bool(np.all(variance == 0))  # e.g. the same count of points in a cap every time
-        stage = Stage(size * copies, cost, integral, np.sqrt(variance / self.replicates), self.replicates, tied)
+        se = np.sqrt(variance / self.replicates)
+        stage = Stage(size * copies, cost, integral, se, self.replicates, self.replicates, tied)
         self.stages.append(stage)
         return stage
 
@@ -216,11 +231,12 @@ class Scheme(Family):
         seed: Any,
         replicates: int,
         n_max: int,
+        answer: int,
         first: int | None = None,
     ):
         units = 1 if points == "random" else replicates
-        super().__init__(units)
-        self.args = (f, domain, points, normal, seed, replicates, n_max)
+        super().__init__(units, 1 if points == "random" else answer)
+        self.args = (f, domain, points, normal, seed, n_max, answer)
         self.count = orbit_size(cast(Domain, domain))
         self.base = 16 if points == "random" else 1  # orbits (per replicate) of the first stage
         self.first = self.base if first is None else first
@@ -246,14 +262,17 @@ class Scheme(Family):
         orbits = self.base << k
         if orbits > self.largest.orbits_per_replicate:
             return self.count * orbits, 2**62  # beyond the plan for n_max: never affordable
-        return self.count * orbits, self.count * self.replicates * orbits
+        return self.count * orbits, self.count * self.answer_replicates * orbits
 
     def fresh(self, k: int) -> Stage:
         """Stage k from base points of their own (a child of this family's seed), nothing reused."""
-        f, domain, points, normal, seed, replicates, n_max = self.args
-        child = seed.spawn(1)[0]
-        other = Scheme(f, domain, points, normal, child, replicates, n_max, first=self.base << k)
+        f, domain, points, normal, seed, n_max, answer = self.args
+        other = Scheme(f, domain, points, normal, seed.spawn(1)[0], answer, n_max, answer, first=self.base << k)
         return other.run_next()
+
+    def answer_units(self, size: int) -> int:
+        """Random points: the orbits of the stage; else its replicates."""
+        return size // self.count if self.answer_replicates == 1 else self.answer_replicates
 
     def sizes(self) -> list[tuple[int, int]]:
         out = []
@@ -277,6 +296,7 @@ class Scheme(Family):
             np.atleast_1d(np.asarray(result.integral, dtype=np.float64)),
             np.atleast_1d(np.asarray(result.standard_error, dtype=np.float64)),
             result.n_units,
+            self.replicates,
         )
         self.stages.append(stage)
         return stage

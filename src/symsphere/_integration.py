@@ -63,6 +63,7 @@ __all__ = [
     "finish",
     "Compute",
     "compute_here",
+    "Request",
     "to_tolerance",
     "stage_result",
     "check_sums",
@@ -105,15 +106,17 @@ class IntegrationResult:
         half-width was compared with (None for a fixed n).
     n_stages : int
         With ``atol``/``rtol``: the doublings run (the interval is that stage's, at level
-        ``1 - (1 - requested level) / (n_stages (n_stages + 1))``); 1 for a fixed n.
+        ``1 - (1 - requested level) / (n_stages (n_stages + 1))``; with a rule family, the stages
+        run, and the level is the one requested); 1 for a fixed n.
     converged : bool
         Whether the half-width reached the tolerance (always True for a fixed n).
     history : tuple of dict
         With ``method`` ``'auto'``, ``'lebedev'`` or ``'fibonacci'`` to a tolerance: one dict per stage
-        run, in order: ``method`` (the family), ``size`` (points per replicate), ``evaluations`` (new),
+        run, in order: ``method`` (the family), ``size`` (points per replicate), ``replicates``,
+        ``evaluations`` (new),
         ``total_evaluations``, ``integral``, ``standard_error``, ``half_width``, ``tolerance``, ``level``
-        and ``reason`` (why this family ran this stage: the pilot, or the predicted costs of all
-        families).  Empty otherwise.
+        and ``reason`` (why this family ran this stage: the pilot, growing, exploring, or an answer,
+        with the predicted costs of all families).  Empty otherwise.
 
     Examples
     --------
@@ -192,6 +195,24 @@ class IntegrationResult:
         caption = (f"{self.n_evaluations} evaluations, {self.n_units} independent {self.unit}s "
                    f"({self.domain}, {self.method}, {escape(self.points)})")  # fmt: skip
         return f"<table><caption>{caption}</caption>{body}</table>"
+
+
+@dataclass(frozen=True)
+class Request:
+    """The arguments of :func:`symsphere.integrate` as given (each is checked where it is used)."""
+
+    f: Integrand
+    domain: str = "sphere"
+    n: int | None = None
+    method: str = "equal_area"
+    points: PointsLike | None = None
+    normal: npt.ArrayLike | None = None
+    rng: RNGLike = None
+    replicates: int | None = None
+    confidence_level: float = 0.95
+    atol: float | None = None
+    rtol: float | None = None
+    n_max: int | None = None
 
 
 @dataclass(frozen=True)
@@ -464,21 +485,7 @@ def compute_here(work: Plan, requests: Sequence[tuple[int, int, int]]) -> list[l
     return [block_partials(work, replicate, first, stop) for replicate, first, stop in requests]
 
 
-def to_tolerance(
-    f: Integrand,
-    domain: str,
-    n: int | None,
-    method: MapMethod,
-    points: PointsLike | None,
-    normal: npt.ArrayLike | None,
-    rng: RNGLike,
-    replicates: int | None,
-    confidence_level: float,
-    atol: float | None,
-    rtol: float | None,
-    n_max: int | None,
-    compute: Compute | None = None,
-) -> IntegrationResult:
+def to_tolerance(request: Request, compute: Compute | None = None) -> IntegrationResult:
     """Double n, reusing the blocks already summed, until the half-width meets the tolerance.
 
     *compute* sums the new blocks of a stage: ``compute(plan, [(replicate, first, stop), ...])`` gives
@@ -486,9 +493,12 @@ def to_tolerance(
     :func:`symsphere.distributed.integrate` passes one that runs them as Dask tasks).  The stages,
     the reuse and so the result do not depend on it.
     """
-    points = "random" if points is None else points  # integrate's default (distributed passes None on)
-    atol = 0.0 if atol is None else check_nonnegative(atol, "atol")
-    rtol = 0.0 if rtol is None else check_rtol(rtol, "rtol")
+    f, domain, n, replicates, n_max = request.f, request.domain, request.n, request.replicates, request.n_max
+    method, normal, rng = cast(MapMethod, request.method), request.normal, request.rng
+    points = "random" if request.points is None else request.points  # integrate's default (distributed: None)
+    confidence_level = request.confidence_level
+    atol = 0.0 if request.atol is None else check_nonnegative(request.atol, "atol")
+    rtol = 0.0 if request.rtol is None else check_rtol(request.rtol, "rtol")
     if atol == 0 and rtol == 0:
         raise ValueError("'atol' or 'rtol' must be positive")
     count = orbit_size(cast(Domain, check_choice(domain, "domain", DOMAINS)))

@@ -36,7 +36,17 @@ import numpy.typing as npt
 from . import frames
 from ._blocks import base_points
 from ._clients import client_or_local, close_client, connect, local_client
-from ._integration import Integrand, IntegrationResult, Partial, Plan, block_partials, finish, plan, to_tolerance
+from ._integration import (
+    Integrand,
+    IntegrationResult,
+    Partial,
+    Plan,
+    Request,
+    block_partials,
+    finish,
+    plan,
+    to_tolerance,
+)
 from ._kernels import Plan as KernelPlan
 from ._kernels import fill
 from ._threads import start_threads
@@ -222,7 +232,7 @@ def integrate(
                     clients.append(stack.enter_context(client_or_local(client)))
                 return _compute_on(clients[0], work, requests, chunk_blocks, progress, as_completed)
 
-            return to_tolerance(f, n=n, **arguments, **tolerance, compute=compute)
+            return to_tolerance(Request(f, n=n, **arguments, **tolerance), compute=compute)
     work = plan(f, **arguments)
     requests = [(replicate, 0, work.blocks_per_replicate) for replicate in range(work.replicates)]
     check_tasks(

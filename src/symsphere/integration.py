@@ -46,7 +46,7 @@ from typing import Literal, cast
 import numpy.typing as npt
 
 from ._auto import RULE_METHODS, integrate_rules
-from ._integration import Integrand, IntegrationResult, block_partials, finish, plan, to_tolerance
+from ._integration import Integrand, IntegrationResult, Request, block_partials, finish, plan, to_tolerance
 from ._threads import route_compiles
 from ._typing import Domain, MapMethod, PointsLike, RNGLike
 from ._validation import check_choice
@@ -93,9 +93,11 @@ def integrate(
         increasing order) or ``'fibonacci'`` (spherical Fibonacci sets), each replicate under its own
         uniform random rotation (the hemisphere: the rule folded about the normal); or ``'auto'``
         (needs ``atol`` or ``rtol``): a pilot of small stages on f itself, then a fresh stage (new
-        rotations or base points) of the family predicted to reach the tolerance with the fewest
-        evaluations, at the size predicted; the answer is always such a fresh stage
-        (``result.method`` says which family, ``result.history`` why).  Not in
+        rotations or base points, 16 x ``replicates`` of them) of the family predicted to reach the
+        tolerance with the fewest evaluations, at the size predicted; the answer is always such a fresh
+        stage, and its interval is its own Student-t interval at ``confidence_level``
+        (``result.method`` says which family, ``result.history`` why).  A named rule family to a
+        tolerance runs the same with that family alone.  Not in
         :func:`symsphere.distributed.integrate`.  See ``docs/explanation/fused-integration.md``.
     points : {'random', 'stratified', 'sobol', 'halton', 'sobol_interlaced2', 'sobol_interlaced3'} \
 or scipy.stats.qmc.QMCEngine, optional
@@ -111,10 +113,14 @@ or scipy.stats.qmc.QMCEngine, optional
         the work is split.
     replicates : int, optional
         Independent randomisations for stratified and QMC points and for the rotated rule
-        families (default 8); must be None or 1 for random points and for a QMCEngine.
+        families (default 8); must be None or 1 for random points and for a QMCEngine.  With
+        ``'auto'``, ``'lebedev'``, ``'fibonacci'`` to a tolerance: of the pilot's stages; the answering
+        stage has 16 times as many (default 128).
     confidence_level : float
-        Of the returned confidence interval, in (0, 1).  With a tolerance: of all stages'
-        intervals at once (see the module's description).
+        Of the returned confidence interval, in (0, 1).  With a tolerance and one of the scheme's
+        maps: of all stages' intervals at once (see the module's description); with ``'auto'``,
+        ``'lebedev'``, ``'fibonacci'``: of the answering stage's interval, whose size was fixed
+        before its values were seen.
     atol, rtol : float, optional
         Integrate to a tolerance: double n until the interval's half-width is at most
         ``max(atol, rtol * |integral|)``.  Needs an error estimate: not with a QMCEngine, and
@@ -163,15 +169,14 @@ or scipy.stats.qmc.QMCEngine, optional
 
     >>> result = integrate(lambda w: np.exp(w[:, 0]), rtol=1e-9, method="auto", rng=4)
     >>> result.method, result.converged, result.n_evaluations
-    ('lebedev', True, 560)
+    ('lebedev', True, 8992)
     >>> bool(abs(result.integral - exact) <= 1e-9 * exact), result.history[0]["reason"][:5]
     (True, 'pilot')
     """
     check_choice(method, "method", tuple(sorted((*METHODS, *RULE_METHODS))))
+    request = Request(f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
     if method in RULE_METHODS:
-        return integrate_rules(
-            f, domain, n, method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max
-        )
+        return integrate_rules(request)
     points = "random" if points is None else points
     map_method = cast(MapMethod, method)  # a map (plan checks it)
     if atol is None and rtol is None:
@@ -182,7 +187,7 @@ or scipy.stats.qmc.QMCEngine, optional
         work = plan(f, domain, n, map_method, points, normal, rng, replicates, confidence_level)
         partials = [block_partials(work, r, 0, work.blocks_per_replicate) for r in range(work.replicates)]
         return finish(work, partials)
-    return to_tolerance(f, domain, n, map_method, points, normal, rng, replicates, confidence_level, atol, rtol, n_max)
+    return to_tolerance(request)
 
 
 route_compiles(globals())  # the first compile of each numba function here: interruptible (_threads)
