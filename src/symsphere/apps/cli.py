@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from .. import IntegrationResult, __version__, integrate, iter_hemisphere, iter_sphere
+from .._auto import ANSWER_FACTOR
 from .._integration import DEFAULT_REPLICATES, check_partials_fit
 from .._typing import FloatArray
 from .._validation import check_count, check_nonnegative, check_output_path, check_rtol, check_seed
@@ -187,7 +188,11 @@ def build_parser(*, mitsuba: bool = False) -> argparse.ArgumentParser:
     integrate.add_argument("--points", choices=POINT_SETS, help="default: random (auto: sobol_interlaced3)")
     integrate.add_argument(
         "--replicates", type=int, default=None,
-        help="independent randomisations of stratified and QMC points; the error bar needs 2 or more (default 8)",
+        help=(
+            "independent randomisations of stratified and QMC points; the error bar needs 2 or more (default 8);"
+            f" with --method auto|lebedev|fibonacci and a tolerance: the pilot stages' count, the answering stage has {ANSWER_FACTOR}"
+            " times as many"
+        ),
     )  # fmt: skip
     integrate.add_argument("--seed", type=int, default=None, help="non-negative integer; default: fresh entropy")
     integrate.add_argument("--rtol", type=float, default=None, help="relative tolerance: double n until it is met")
