@@ -195,9 +195,9 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
     """Light sampling alone at diffuse vertices counts a triangle only through its choice: in two levels
     (320 triangles of a sphere facing outward, groups of 3 whose normals differ), every triangle that a
     point outside sees from its front (by more than float32's rounding: some of them at grazing angles near
-    the silhouette, from afar) has a choice probability > 0."""
+    the silhouette, from afar) has a choice probability > 0, with and without a receiver's normal (random:
+    its cosine weights the choice, but is 0 for no triangle that could light the point)."""
     mi = llvm
-    import drjit as dr
 
     from symsphere._testing import mitsuba_lights as lights
 
@@ -219,10 +219,52 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
     height = np.einsum("ij,ij->i", p - tris[:, 0], unit)
     facing = (height > 1e-4) & (table.lum[row] > 0)
     point = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
-    probability = table._probability(point, mi.UInt32(row), mi.Bool(True), table._total(point)).numpy()
-    dr.eval()
+    g = np.repeat(rng.standard_normal((len(points), 3)), table.count, axis=0)
+    normal = mi.Vector3f(*(mi.Float(g[:, k] / np.linalg.norm(g, axis=1)) for k in range(3)))
     assert facing.sum() > 1000
-    assert np.all(probability[facing] > 0), np.flatnonzero(facing & (probability <= 0))[:5]
+    for receiver in (None, normal):  # without and with the receiver's cosine in the weights
+        total = table._total(point, receiver)
+        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), total, receiver).numpy()
+        assert np.all(probability[facing] > 0), np.flatnonzero(facing & (probability <= 0))[:5]
+
+
+def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
+    """Brute force: at random points with random receiver normals, the probabilities with which the table
+    chooses each of its triangles (the exact choice of the Cornell box's 2, the two levels of the
+    mesh-light scene's 92) sum to 1 wherever a triangle faces the point, and a sampled row's probability is
+    the one computed for that row."""
+    mi = llvm
+    import drjit as dr
+
+    from symsphere._testing import mitsuba_lights as lights
+
+    rng = np.random.default_rng(21)
+    for name, mode in (("cornell", "exact"), ("mesh_light", "groups")):
+        table = lights.LightTable(_scene(mi, name, tmp_path))
+        assert table.mode == mode
+        m = 64
+        p = np.column_stack([rng.uniform(-1.0, 1.0, m), rng.uniform(0.05, 1.0, m), rng.uniform(-1.0, 1.0, m)])
+        g = rng.standard_normal((m, 3))
+        n = g / np.linalg.norm(g, axis=1, keepdims=True)
+        rows = np.arange(table.count)
+        pp, nn, row = np.repeat(p, table.count, axis=0), np.repeat(n, table.count, axis=0), np.tile(rows, m)
+        point = mi.Vector3f(*(mi.Float(pp[:, k]) for k in range(3)))
+        normal = mi.Vector3f(*(mi.Float(nn[:, k]) for k in range(3)))
+        total = table._total(point, normal)
+        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), total, normal).numpy()
+        sums = probability.reshape(m, table.count).sum(axis=1)
+        assert np.all(probability >= 0.0)
+        assert np.sum(sums > 0) > m // 2, name
+        np.testing.assert_allclose(sums[sums > 0], 1.0, rtol=1e-5, err_msg=name)
+        # the sampled row's probability is the computed one
+        point1 = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
+        normal1 = mi.Vector3f(*(mi.Float(n[:, k]) for k in range(3)))
+        chosen, chosen_p, _, total1 = table._choose(point1, mi.Float64(rng.random(m)), mi.Bool(True), normal1)
+        again = table._probability(point1, chosen, mi.Bool(True), total1, normal1)
+        dr.eval(chosen_p, again)
+        lit = chosen_p.numpy() > 0
+        assert lit.sum() > m // 2, name
+        np.testing.assert_allclose(again.numpy()[lit], chosen_p.numpy()[lit], rtol=1e-6, err_msg=name)
 
 
 @pytest.mark.statistical
