@@ -24,8 +24,10 @@ demo: $(STAMP)
 # -n auto: one worker per core; --dist loadgroup: the tests marked xdist_group("dask") (each starts a local
 # Dask cluster of worker processes) run on one worker, one after another.  A single file runs serially as
 # before: .venv/bin/python -m pytest tests/test_x.py
+# OPENBLAS_NUM_THREADS=1 unless set: each worker has its core, and numpy's BLAS threads beside the other
+# worker only wait for a core (docs/results/test-times.md: CPU time of the suite's files with one and two).
 test: $(STAMP) mitsuba-setup
-	$(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
+	OPENBLAS_NUM_THREADS=$${OPENBLAS_NUM_THREADS:-1} $(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
 
 # The Mitsuba 3 tests (tests/mitsuba) need the extra "mitsuba" and, for the LLVM variants, libLLVM >= 16
 # (the target libllvm).  Without them the tests skip with the reason; .ci/run sets SYMSPHERE_REQUIRE_MITSUBA=1,
