@@ -6,18 +6,20 @@ The Dr.Jit functions compute in the precision of their inputs; each test runs bo
 - float64: equal to :func:`symsphere.warps.square_to_projected_triangle` on the same inputs within 1e-9 in
   direction (measured 3e-12: Dr.Jit's own sin/cos/atan2 polynomials against libm's, a few ulp, and both
   root finders stop at their rounding level), E and the pdf within 1e-9 relative.
-- float32: E and the CDF are sums that cancel (terms ~ the triangle's angular size, sums ~ its square),
-  so they carry the terms' rounding, eps32 times their sum: for a triangle thin in the projection (near
-  the horizon, or seen nearly edge-on) a sample moves along the azimuth by up to 6.2e-4 (measured on this
-  test's triangles), E by up to 2e-4 relative here (1.6e-3 in the variance test's): bounds 2e-3, 1e-3.  The pdf stays that of the direction returned
-  (pdf E / cos = 1 within 1e-4), which is what keeps the estimator's variance at rounding level.
+- float32: E and the CDF are sums that cancel for a triangle thin in the projection (near the horizon,
+  or seen nearly edge-on: terms large against their sum), so they carry the terms' rounding.  E is
+  computed as the projection's flat (shoelace) area plus the arcs' segments, which leaves 1.0e-4 relative
+  at worst on these tests' triangles (Lambert's sum as such lost 1.6e-3); a sample moves along the
+  azimuth by up to 6.2e-4 rad against float64 (the CDF's sector differences): bounds 2e-3 and 5e-4.
+  The pdf stays that of the direction returned (pdf E / cos = 1 within 1e-4), which keeps the
+  estimator's variance at rounding level.
 - Mitsuba's own chi^2 test (``mitsuba.chi2.ChiSquareTest`` on ``SphericalDomain``) of the Dr.Jit map on
   several triangles and normals, cut by the horizon included, in both precisions; significance 0.01
   corrected over the CHI2_TESTS tests of this module by the harness (Sidak: ``test_count``), fixed seeds.
 - The target of projected sampling: a Lambertian point lit by one uniform triangle light, estimated
   with ``L rho / pi cos / pdf`` at 1 spp, has a relative standard deviation <= 1e-3 over many points and
   triangles; its mean is the irradiance from numpy's E (itself checked against quadrature in
-  tests/warps/test_projected_triangle.py) within 1e-5 (float64; float32 1e-3, E's own error).
+  tests/warps/test_projected_triangle.py) within 1e-5 (float64; float32 5e-4, E's own error).
 - No NaN or inf for random and adversarial triangles (the full scan of 1e8 samples is
   benchmarks/scan_projected_triangle.py).
 """
@@ -93,7 +95,7 @@ def _batch(mi, rng, count, per, precision="f32"):
 
 
 # precision: (direction, relative E and pdf) bounds against numpy's float64 map
-BOUNDS = {"f64": (1e-9, 1e-9), "f32": (2e-3, 1e-3)}
+BOUNDS = {"f64": (1e-9, 1e-9), "f32": (2e-3, 5e-4)}
 
 
 @pytest.mark.parametrize("precision", PRECISIONS)
@@ -203,8 +205,8 @@ def test_lambertian_direct_light_relative_std(llvm, precision):
     relative_std = np.std(estimate, axis=1) / np.mean(estimate, axis=1)
     mean_error = np.abs(np.mean(estimate, axis=1) / (radiance * albedo / np.pi * energies) - 1)
     assert np.max(relative_std) <= 1e-3, np.max(relative_std)
-    # float32: E's own rounding error, eps32 times the sum of Lambert's terms (1.6e-3 relative at worst here)
-    assert np.max(mean_error) <= (3e-3 if precision == "f32" else 1e-5), np.max(mean_error)
+    # float32: E's own rounding error (1.0e-4 relative at worst here)
+    assert np.max(mean_error) <= (5e-4 if precision == "f32" else 1e-5), np.max(mean_error)
 
 
 def _adversarial(rng):

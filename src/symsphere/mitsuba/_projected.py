@@ -15,20 +15,26 @@ finder a ``dr.while_loop``.
 The algorithm (see the numpy module): project onto the tangent disk, where the density is uniform in
 area; each ray from the origin of azimuth phi meets the projection in [r_lo, r_hi], each bound from one
 edge (``rho^2 = m_z^2 / (m_z^2 + k^2)``) or the horizon; the CDF of phi is a sum of elliptical sectors
-(closed form), inverted by a bracketed Newton iteration; then r^2 is uniform in [r_lo^2, r_hi^2].  The
+(closed form), inverted by a bracketed Halley iteration; then r^2 is uniform in [r_lo^2, r_hi^2].  The
 azimuths enter as unit vectors of the tangent plane (a piece's ends are its vertices' directions, its
 middle the bisector; the iterate is the start rotated by x), so the setup evaluates no sine or cosine and
 each step one sincos and two atan2.  The start is the inverse of a quadratic CDF with the piece's slopes
 at its ends (exact where the width of the projection is linear in phi, and a square root where a piece
-starts at a vertex, whose width starts at 0); a step stops once the CDF's residual is at its rounding
-level.  That makes the map 2-3 steps in float32 for most lanes.
+starts at a vertex, whose width starts at 0); Halley's step (the slope's derivative is rational in the
+azimuth's vector), Newton's where it leaves the bracket, bisection where that does; a lane stops once
+the CDF's residual is at its rounding level: 2.6 steps per lane on average in float32, 3.5 in float64
+(``benchmarks/projected_cost.py``'s triangles).
 
-What float32 loses (``benchmarks/scan_projected_triangle.py``, tests/mitsuba/test_projected.py): E and
-the CDF are sums that cancel for a small triangle (terms ~ its angular size s, the sum ~ s^2), so their
-relative error is ~ eps/s, the same order as the float32 inputs' own: a vector from the shading point
-rounded to float32 moves a vertex by eps times its distance, E by ~ eps/s relative.  A triangle whose E is
-within 1e-6 of the sum of Lambert's terms (``_CANCELLED``; float64 1e-10) is rounding noise and counts as
-empty.
+What float32 loses (tests/mitsuba/test_projected.py): E and the CDF are sums that cancel for a triangle
+thin in the projection (near the horizon, or seen nearly edge-on: terms large against their sum), so
+they carry the terms' rounding, eps32 times their sum.  In float32, E is the projection's flat
+(shoelace) area, which does not cancel, plus the arcs' segments (Lambert's terms times gamma / sin gamma
+- 1, ~ gamma^2 / 6 of them): within 1e-4 relative of float64 on the tests' random triangles, where
+Lambert's sum as such lost 1.6e-3.  The CDF's sector differences move a sample along the azimuth by up to
+5e-4 rad there (a jitter at the CDF's rounding level, in the thinnest
+projections; Mitsuba's chi^2 test passes in both precisions); the pdf is that of the direction returned, so the estimator's variance
+stays at rounding level.  A triangle whose E is within 1e-6 of the sum of Lambert's terms (float64:
+1e-10) is rounding noise and counts as empty.
 """
 
 from __future__ import annotations
@@ -124,17 +130,35 @@ class _Setup:
                 count += dr.select(keep, 1, 0)
         valid &= count >= 3
         self.poly, self.count = poly, count
-        # Lambert over the clipped polygon's edges (edge k from slot k to slot k + 1, the last back to 0)
+        # Lambert over the clipped polygon's edges (edge k from slot k to slot k + 1, the last back to 0),
+        # 1/2 sum gamma_k (p_k x q_k)_z / sin gamma_k.  In float32 its terms' rounding (eps32 times their sum,
+        # which is large against E for a triangle thin in the projection) is most of E's error; there it is
+        # the flat part, 1/2 sum (p_k x q_k)_z (the projected polygon's shoelace area, by its diagonals: no
+        # cancellation), plus 1/2 sum (p_k x q_k)_z (gamma_k / sin gamma_k - 1), terms ~ gamma^2 / 6 smaller.
         e, scale = f(0.0), f(0.0)
+        if not is64:
+            q3 = _select3(count == 4, poly[3], poly[0])
+            d0, d1 = (poly[2][0] - poly[0][0], poly[2][1] - poly[0][1]), (q3[0] - poly[1][0], q3[1] - poly[1][1])
+            e = 0.5 * (d0[0] * d1[1] - d0[1] * d1[0])
         for k in range(4):
             p = poly[k]
             q = _select3(count == k + 1, poly[0], poly[(k + 1) % 4])
             cr = _cross(p, (q[0] - p[0], q[1] - p[1], q[2] - p[2]))
             sin_g = dr.sqrt(_dot(cr, cr))
-            term = 0.5 * dr.atan2(sin_g, _dot(p, q)) * cr[2] / _safe(sin_g)
-            term = dr.select((k < count) & (sin_g > 0.0), term, 0.0)
-            e += term
-            scale += dr.abs(term)
+            gamma = dr.atan2(sin_g, _dot(p, q))
+            ok = (k < count) & (sin_g > 0.0)
+            term = 0.5 * gamma * cr[2] / _safe(sin_g)
+            if is64:
+                e += dr.select(ok, term, 0.0)
+            else:
+                g2 = gamma * gamma  # gamma / sin gamma - 1 by its series below 0.5 (to 1e-6 of itself)
+                excess = dr.select(
+                    gamma < 0.5,
+                    g2 * (1.0 / 6.0 + g2 * (7.0 / 360.0 + g2 * (31.0 / 15120.0))),
+                    (gamma - sin_g) / _safe(sin_g),
+                )
+                e += dr.select(ok, 0.5 * cr[2] * excess, 0.0)
+            scale += dr.select(ok, dr.abs(term), 0.0)
         # E within its rounding error of 0 (seen edge-on): nothing to sample
         valid &= (e > _CANCELLED[is64] * scale) & (e > _SMALLEST[is64])
         self.e = dr.select(valid, e, 0.0)
@@ -238,6 +262,18 @@ def _bounds(e: tuple[Any, Any], hi: Any, lo: Any, lo_none: Any) -> tuple[Any, An
     return out[0], out[1], dr.select(lo_none, 0.0, out[2]), dr.select(lo_none, 1.0, out[3])
 
 
+def _width(e: tuple[Any, Any], hi: Any, lo: Any, lo_none: Any) -> tuple[Any, Any]:
+    """The CDF's slope (rho_hi^2 - rho_lo^2) / 2 in the azimuth of the unit vector e, and its derivative by
+    the azimuth (d rho^2 = -2 rho^2 k k' / (m_z^2 + k^2), k' = m . e_perp)."""
+    out = []
+    for m in (hi, lo):
+        mz2, k, dk = m[2] * m[2], m[0] * e[0] + m[1] * e[1], m[1] * e[0] - m[0] * e[1]
+        inv = 1.0 / _safe(mz2 + k * k)
+        rho2 = mz2 * inv
+        out += [rho2, -2.0 * rho2 * k * dk * inv]
+    return 0.5 * (out[0] - dr.select(lo_none, 0.0, out[2])), 0.5 * (out[1] - dr.select(lo_none, 0.0, out[3]))
+
+
 def _pick(index: Any, values: list[Any]) -> Any:
     out = values[0]
     for j in range(1, len(values)):
@@ -310,9 +346,12 @@ def square_to_projected_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) -> tupl
         settled = dr.abs(g) <= 1.0 * eps * (upper + lower + tau)  # the residual is rounding noise
         hi_b = dr.select(g > 0.0, x, hi_b)
         lo_b = dr.select(g < 0.0, x, lo_b)
-        rh, _, rl, _ = _bounds(e, hi, lo, lo_none)
-        slope = 0.5 * (rh - rl)
-        xn = x - g / _safe(slope)
+        slope, curve = _width(e, hi, lo, lo_none)
+        newton = x - g / _safe(slope)
+        # Halley's step (cubic convergence), Newton's where it leaves the bracket
+        den = 2.0 * slope * slope - g * curve
+        xn = x - 2.0 * g * slope / _safe(den)
+        xn = dr.select((den > 0.0) & (xn > lo_b) & (xn < hi_b), xn, newton)
         bisect = ~(slope > 0.0) | (xn <= lo_b) | (xn >= hi_b)
         # settled: the Newton step if it stays in the bracket, else x (a bisection would leave the root)
         xn = dr.select(bisect, dr.select(settled, x, 0.5 * (lo_b + hi_b)), xn)
