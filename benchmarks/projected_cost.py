@@ -15,9 +15,11 @@ the square.  Cases, each in the precision of its inputs (``f32``: ``mi.Vector3f`
                  one triangle and sampling it).
 
 A case's per-sample cost is (t(N) - t(n)) / (N - n) for a launch of N = --lanes and of n = --small lanes
-(the difference removes the tracing and launch overhead, which a render pays once per kernel); each
-round times every case once, in turn, and the medians over --rounds rounds are reported, with each
-case's ratio to ``arvo`` in the same precision.  The machine may be shared: ratios of the same run only.
+(the difference removes the tracing and launch overhead, which a render pays once per kernel), in wall
+time and in this process's CPU time (Dr.Jit runs --threads worker threads, default 1, so that CPU time
+is the kernel's work, less disturbed by other processes on a shared machine); each round times every
+case once, in turn, and the medians over --rounds rounds are reported, with each case's ratio to
+``arvo`` in the same precision.  Ratios of the same run only.
 """
 
 from __future__ import annotations
@@ -75,9 +77,10 @@ def _run(mi, dr, case, args, sample):
 
 
 def _time(mi, dr, case, inputs):
-    t0 = time.perf_counter()
+    """(wall, CPU) seconds of one launch (the CPU time of every thread of this process)."""
+    t0, c0 = time.perf_counter(), time.process_time()
     _run(mi, dr, case, *inputs)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def main(argv=None):
@@ -86,6 +89,7 @@ def main(argv=None):
     parser.add_argument("--small", type=int, default=1 << 10)
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--threads", type=int, default=1, help="Dr.Jit's worker threads (default 1)")
     parser.add_argument("--json", metavar="FILE")
     args = parser.parse_args(argv)
 
@@ -93,6 +97,7 @@ def main(argv=None):
     import mitsuba as mi
 
     mi.set_variant("llvm_ad_rgb")
+    dr.set_thread_count(args.threads)
     rng = np.random.default_rng(args.seed)
     tri, n, uv = _triangles(rng, args.lanes)
     inputs = {
@@ -105,21 +110,30 @@ def main(argv=None):
             for size in (args.lanes, args.small):
                 _run(mi, dr, case, *inputs[(p, size)])
     per_sample = {(p, case): [] for p in PRECISIONS for case in CASES}
+    per_sample_cpu = {(p, case): [] for p in PRECISIONS for case in CASES}
     before, t0 = cpu_snapshot(), time.perf_counter()
     for _ in range(args.rounds):
         for p in PRECISIONS:
             for case in CASES:
                 big = _time(mi, dr, case, inputs[(p, args.lanes)])
                 small = _time(mi, dr, case, inputs[(p, args.small)])
-                per_sample[(p, case)].append((big - small) / (args.lanes - args.small))
+                per_sample[(p, case)].append((big[0] - small[0]) / (args.lanes - args.small))
+                per_sample_cpu[(p, case)].append((big[1] - small[1]) / (args.lanes - args.small))
     load = others_cpu(before, cpu_snapshot(), time.perf_counter() - t0)
     rows = []
     for p in PRECISIONS:
         arvo = statistics.median(per_sample[(p, "arvo")])
+        arvo_cpu = statistics.median(per_sample_cpu[(p, "arvo")])
         for case in CASES:
             ns = statistics.median(per_sample[(p, case)])
-            rows.append({"precision": p, "case": case, "ns_per_sample": 1e9 * ns, "vs_arvo": ns / arvo})
-            print(f"{p} {case:10s} {1e9 * ns:8.1f} ns/sample  {ns / arvo:6.2f}x arvo")
+            cpu = statistics.median(per_sample_cpu[(p, case)])
+            rows.append({
+                "precision": p, "case": case, "ns_per_sample": 1e9 * ns, "vs_arvo": ns / arvo,
+                "cpu_ns_per_sample": 1e9 * cpu, "cpu_vs_arvo": cpu / arvo_cpu,
+            })  # fmt: skip
+            print(
+                f"{p} {case:10s} {1e9 * ns:8.1f} ns/sample  {ns / arvo:6.2f}x arvo   CPU {1e9 * cpu:8.1f} ns  {cpu / arvo_cpu:6.2f}x"
+            )
     if load is not None:
         print(f"others' CPU share while timing: {load['share_of_all_cpus']:.0%}")
     if args.json:
@@ -130,6 +144,7 @@ def main(argv=None):
             "lanes": args.lanes,
             "small": args.small,
             "rounds": args.rounds,
+            "threads": args.threads,
             "others_cpu_share": None if load is None else load["share_of_all_cpus"],
             "rows": rows,
         }

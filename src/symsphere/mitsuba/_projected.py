@@ -170,29 +170,31 @@ class _Setup:
         f = self.f
         poly, count = self.poly, self.count
         # each slot's azimuth as a unit vector of the tangent plane ((1, 0) at the pole, as atan2(0, 0))
-        # and as an angle from slot 0's (the sort key)
+        # and its sort key, a pseudo-angle from slot 0's in [0, 4) (monotone in the angle, no atan2)
         dirs = []
         for k in range(4):
             x, y = poly[k][0], poly[k][1]
             r = dr.sqrt(x * x + y * y)
             inv = 1.0 / _safe(r)
             dirs.append((dr.select(r > 0.0, x * inv, 1.0), y * inv))
-        phi = [dr.atan2(d[1], d[0]) for d in dirs]
         s = [f(0.0)]
+        e0 = dirs[0]
         for k in range(1, 4):
-            d = phi[k] - phi[0]
-            d = dr.minimum(dr.select(d < 0.0, d + _TWO_PI, d), _TWO_PI)
+            cs, sn = e0[0] * dirs[k][0] + e0[1] * dirs[k][1], e0[0] * dirs[k][1] - e0[1] * dirs[k][0]
+            ac, asn = dr.abs(cs), dr.abs(sn)
+            t = asn / _safe(ac + asn)  # in [0, 1] within the quadrant
+            key = dr.select(sn >= 0.0, dr.select(cs >= 0.0, t, 2.0 - t), dr.select(cs < 0.0, 2.0 + t, 4.0 - t))
             unused = k >= count
-            s.append(dr.select(unused, _TWO_PI, d))
-            dirs[k] = (dr.select(unused, dirs[0][0], dirs[k][0]), dr.select(unused, dirs[0][1], dirs[k][1]))
+            s.append(dr.select(unused, 4.0, dr.minimum(key, 4.0)))
+            dirs[k] = (dr.select(unused, e0[0], dirs[k][0]), dr.select(unused, e0[1], dirs[k][1]))
         for i, j in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):  # a sorting network, the directions along
             swap = s[j] < s[i]
             s[i], s[j] = dr.select(swap, s[j], s[i]), dr.select(swap, s[i], s[j])
             di, dj = dirs[i], dirs[j]
             dirs[i] = (dr.select(swap, dj[0], di[0]), dr.select(swap, dj[1], di[1]))
             dirs[j] = (dr.select(swap, di[0], dj[0]), dr.select(swap, di[1], dj[1]))
-        s.append(f(_TWO_PI))
-        dirs.append(dirs[0])
+        s.append(f(4.0))
+        dirs.append(e0)
         self.s, self.dirs = s, dirs
         # each piece's upper bound (an edge's normal; (0, 0, 1) is the horizon) and lower bound (an edge's
         # normal, lo_none where none), and the cumulative areas
@@ -325,7 +327,10 @@ def square_to_projected_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) -> tupl
     ea, eb = _pick_n(j, st.dirs[:4]), _pick_n(j, st.dirs[1:])
     hi, lo, lo_none = _pick_n(j, st.hi), _pick_n(j, st.lo), _pick(j, st.lo_none)
     wa_hi, wa_lo = _arc_point(ea, hi), _arc_point(ea, lo)
-    width = s1 - s0
+    # the piece's width in radians (below 2 pi; a non-empty piece is at most pi wide)
+    width = dr.atan2(ea[0] * eb[1] - ea[1] * eb[0], ea[0] * eb[0] + ea[1] * eb[1])
+    width = dr.select(width < 0.0, width + _TWO_PI, width)
+    width = dr.select(s1 > s0, width, 0.0)
     rh, _, rl, _ = _bounds(ea, hi, lo, lo_none)
     rh1, _, rl1, _ = _bounds(eb, hi, lo, lo_none)
     x = _initial(tau, area, width, 0.5 * (rh - rl), 0.5 * (rh1 - rl1))
