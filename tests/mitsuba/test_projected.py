@@ -10,7 +10,7 @@ The Dr.Jit functions compute in the precision of their inputs; each test runs bo
   or seen nearly edge-on: terms large against their sum), so they carry the terms' rounding.  E is
   computed as the projection's flat (shoelace) area plus the arcs' segments, which leaves 1.0e-4 relative
   at worst on these tests' triangles (Lambert's sum as such lost 1.6e-3); a sample moves along the
-  azimuth by up to 6.2e-4 rad against float64 (the CDF's sector differences): bounds 2e-3 and 5e-4.
+  azimuth by up to 4.6e-4 rad against float64 (the CDF's sector differences): bounds 2e-3 and 5e-4.
   The pdf stays that of the direction returned (pdf E / cos = 1 within 1e-4), which keeps the
   estimator's variance at rounding level.
 - Mitsuba's own chi^2 test (``mitsuba.chi2.ChiSquareTest`` on ``SphericalDomain``) of the Dr.Jit map on
