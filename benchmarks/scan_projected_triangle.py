@@ -14,10 +14,10 @@ numpy (``square_to_projected_triangle``, float64 and float32 outputs): counted a
 directions, directions below the horizon or outside the triangle (float64; the random part of the
 square), non-finite or out-of-range inverses, non-finite densities; a triangle refused by the map
 (ValueError: below 1e-12 sr, or nothing above the horizon) is counted and another drawn.  Dr.Jit
-(``symsphere.mitsuba._projected``, llvm_ad_rgb, float32 in and out, one triangle per lane, with
---drjit-samples per triangle): non-finite or non-unit directions, non-finite or negative densities,
-directions below the horizon where the density is positive, and the distance of each direction from the
-numpy float64 map's on the same float32 inputs (max and quantiles; the refused triangles must give pdf 0).
+(``symsphere.mitsuba._projected``, llvm_ad_rgb, one triangle per lane, with --drjit-samples per
+triangle; --drjit-precision: float32 in, out and inside, float64 likewise, or both): non-finite or
+non-unit directions, non-finite or negative densities, directions below the horizon where the density
+is positive, and the distance of each direction from the numpy float64 map's on the same float32 inputs (max and quantiles; the refused triangles must give pdf 0).
 """
 
 from __future__ import annotations
@@ -120,7 +120,7 @@ def scan_numpy(dtype, triangles, samples, seed):
     return counts
 
 
-def scan_drjit(triangles, samples, seed, batch=1000):
+def scan_drjit(triangles, samples, seed, batch=1000, precision="f32"):
     import drjit as dr
     import mitsuba as mi
 
@@ -152,9 +152,12 @@ def scan_drjit(triangles, samples, seed, batch=1000):
             normals.append(np.broadcast_to(n32, (samples, 3)))
         tri = np.concatenate(tris)
         n = np.concatenate(normals)
-        args = [mi.Vector3f(*(tri[:, i, j] for j in range(3))) for i in range(3)]
-        args.append(mi.Vector3f(n[:, 0], n[:, 1], n[:, 2]))
-        d, pdf = mp.square_to_projected_triangle(*args, mi.Point2f(uv[:, 0], uv[:, 1]))
+        vector, point, dtype = (
+            (mi.Vector3d, mi.Point2d, np.float64) if precision == "f64" else (mi.Vector3f, mi.Point2f, np.float32)
+        )
+        args = [vector(*(tri[:, i, j].astype(dtype) for j in range(3))) for i in range(3)]
+        args.append(vector(*(n[:, j].astype(dtype) for j in range(3))))
+        d, pdf = mp.square_to_projected_triangle(*args, point(*(uv[:, j].astype(dtype) for j in range(2))))
         dr.eval(d, pdf)
         got = np.stack([np.asarray(d.x), np.asarray(d.y), np.asarray(d.z)], axis=1).astype(np.float64)
         pdf = np.asarray(pdf, dtype=np.float64)
@@ -193,6 +196,12 @@ def main(argv=None):
     parser.add_argument("--float32-triangles", type=int, default=None, help="default: --triangles")
     parser.add_argument("--drjit-triangles", type=int, default=10_000)
     parser.add_argument("--drjit-samples", type=int, default=1000)
+    parser.add_argument(
+        "--drjit-precision",
+        choices=("f32", "f64", "both"),
+        default="both",
+        help="the Dr.Jit map's inputs (and so its arithmetic)",
+    )
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--json", metavar="FILE")
     args = parser.parse_args(argv)
@@ -204,12 +213,15 @@ def main(argv=None):
         counts["seconds"] = round(time.perf_counter() - start, 1)
         record[np.dtype(dtype).name] = counts
         print(np.dtype(dtype).name, counts, flush=True)
-    if args.drjit_triangles:
+    for precision in ("f32", "f64") if args.drjit_triangles else ():
+        if args.drjit_precision not in (precision, "both"):
+            continue
         start = time.perf_counter()
-        counts = scan_drjit(args.drjit_triangles, args.drjit_samples, args.seed + 1)
+        counts = scan_drjit(args.drjit_triangles, args.drjit_samples, args.seed + 1, precision=precision)
         counts["seconds"] = round(time.perf_counter() - start, 1)
-        record["drjit_float32"] = counts
-        print("drjit float32", counts, flush=True)
+        name = "drjit_float32" if precision == "f32" else "drjit_float64"
+        record[name] = counts
+        print(name, counts, flush=True)
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
             json.dump(record, f, indent=1)

@@ -4,17 +4,37 @@
 ``square_to_projected_triangle(a, b, c, n, u) -> (d, pdf)``, ``square_to_projected_triangle_pdf(a, b, c,
 n, d) -> pdf`` and ``projected_solid_angle(a, b, c, n) -> E``: *a*, *b*, *c* are the vectors from the
 shading point to the triangle's vertices (``mi.Vector3f`` or ``mi.Vector3d``, any length), *n* the unit
-shading normal, *u* an ``mi.Point2f``; d is a unit ``mi.Vector3f`` with density ``pdf = max(0, n.d) / E``
-per unit solid angle (``mi.Float``), 0 when the triangle has no part above the horizon (below it,
-degenerate, seen edge-on): then d is n and nothing is sampled.  Every lane has its own triangle; the
-computation is float64 inside (as Arvo's map in :mod:`._warps`: in float32 the sector differences of a
-small triangle cancel) and traceable: the branches of the numba original are ``dr.select``, its clipping
-writes at most four vertices by their rank, its sort is a network, its root finder a ``dr.while_loop``.
+shading normal, *u* a point of the square; d is a unit vector with density ``pdf = max(0, n.d) / E`` per
+unit solid angle, 0 when the triangle has no part above the horizon (below it, degenerate, seen edge-on):
+then d is n and nothing is sampled.  Every lane has its own triangle.  **Each function computes in the
+precision of a** (float32 for ``mi.Vector3f``, float64 for ``mi.Vector3d``; n, u and d are converted to
+it) and returns that precision.  The code is traceable: the branches of the numba original are
+``dr.select``, its clipping writes at most four vertices by their rank, its sort is a network, its root
+finder a ``dr.while_loop``.
 
 The algorithm (see the numpy module): project onto the tangent disk, where the density is uniform in
 area; each ray from the origin of azimuth phi meets the projection in [r_lo, r_hi], each bound from one
 edge (``rho^2 = m_z^2 / (m_z^2 + k^2)``) or the horizon; the CDF of phi is a sum of elliptical sectors
-(closed form), inverted by a bracketed Newton iteration; then r^2 is uniform in [r_lo^2, r_hi^2].
+(closed form), inverted by a bracketed Halley iteration; then r^2 is uniform in [r_lo^2, r_hi^2].  The
+azimuths enter as unit vectors of the tangent plane (a piece's ends are its vertices' directions, its
+middle the bisector; the iterate is the start rotated by x), so the setup evaluates no sine or cosine and
+each step one sincos and two atan2.  The start is the inverse of a quadratic CDF with the piece's slopes
+at its ends (exact where the width of the projection is linear in phi, and a square root where a piece
+starts at a vertex, whose width starts at 0); Halley's step (the slope's derivative is rational in the
+azimuth's vector), Newton's where it leaves the bracket, bisection where that does; a lane stops once
+the CDF's residual is at its rounding level: 2.6 steps per lane on average in float32, 3.5 in float64
+(``benchmarks/projected_cost.py``'s triangles).
+
+What float32 loses (tests/mitsuba/test_projected.py): E and the CDF are sums that cancel for a triangle
+thin in the projection (near the horizon, or seen nearly edge-on: terms large against their sum), so
+they carry the terms' rounding, eps32 times their sum.  In float32, E is the projection's flat
+(shoelace) area, which does not cancel, plus the arcs' segments (Lambert's terms times gamma / sin gamma
+- 1, ~ gamma^2 / 6 of them): within 1.1e-4 relative of float64 on the tests' random triangles, where
+Lambert's sum as such lost 1.6e-3.  The CDF's sector differences move a sample along the azimuth by up to
+5e-4 rad there (a jitter at the CDF's rounding level, in the thinnest
+projections; Mitsuba's chi^2 test passes in both precisions); the pdf is that of the direction returned, so the estimator's variance
+stays at rounding level.  A triangle whose E is within 1e-6 of the sum of Lambert's terms (float64:
+1e-10) is rounding noise and counts as empty.
 """
 
 from __future__ import annotations
@@ -28,9 +48,11 @@ import mitsuba as mi
 __all__ = ["projected_solid_angle", "square_to_projected_triangle", "square_to_projected_triangle_pdf"]
 
 _TWO_PI = 2.0 * math.pi
-_TOL = 4.0 * 2.220446049250313e-16 * _TWO_PI  # the root finder's step tolerance on phi (as the numpy form)
-_MAX_STEPS = 100
-_CANCELLED = 1e-10  # as the numpy form: E below this fraction of Lambert's terms is rounding noise
+_EPS = {False: 2.0**-23, True: 2.0**-52}  # float32, float64 epsilon
+_MAX_STEPS = {False: 40, True: 100}  # bisection alone needs 26 (float32), 54 (float64) halvings of 2 pi
+_CANCELLED = {False: 1e-6, True: 1e-10}  # E below this fraction of Lambert's terms is rounding noise
+_SMALLEST = {False: 1e-30, True: 1e-300}  # and below this (absolute): so that 1 / E is finite
+_PLANE = {False: 2.0**-24, True: 1e-12}  # the pdf's slack at each edge's plane
 
 
 def _cross(p: tuple[Any, Any, Any], q: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
@@ -49,11 +71,17 @@ def _safe(x: Any) -> Any:
     return dr.select(x > 0.0, x, 1.0)
 
 
+def _is64(a: Any) -> bool:
+    return bool(dr.type_v(a) == dr.VarType.Float64)
+
+
 class _Setup:
     """The per-lane constants: frame, inward edge normals, clipped polygon, E, the four pieces."""
 
-    def __init__(self, a: Any, b: Any, c: Any, n: Any, pieces: bool) -> None:
-        f = mi.Float64
+    def __init__(self, a: Any, b: Any, c: Any, n: Any, edges: bool, pieces: bool) -> None:
+        self.is64 = is64 = _is64(a)
+        f: Any = mi.Float64 if is64 else mi.Float
+        self.f = f
         nx, ny, nz = f(n.x), f(n.y), f(n.z)
         inv_n = 1.0 / dr.sqrt(nx * nx + ny * ny + nz * nz)  # a float32 unit normal is unit to its rounding only
         nx, ny, nz = nx * inv_n, ny * inv_n, nz * inv_n
@@ -69,16 +97,16 @@ class _Setup:
         for p in (a, b, c):
             w = (f(p.x), f(p.y), f(p.z))
             x, y, z = _dot(w, self.t1), _dot(w, self.t2), _dot(w, self.n)
-            length = dr.sqrt(x * x + y * y + z * z)
-            valid &= length > 0.0
-            inv = 1.0 / _safe(length)
+            length2 = x * x + y * y + z * z
+            valid &= length2 > 0.0
+            inv = dr.rsqrt(_safe(length2))
             v.append((x * inv, y * inv, z * inv))
         triple = _dot(v[0], _cross(v[1], v[2]))
         valid &= (triple != 0.0) & dr.isfinite(triple)
         flip = triple < 0.0
         v[1], v[2] = _select3(flip, v[2], v[1]), _select3(flip, v[1], v[2])
         self.m = []
-        for i in range(3):
+        for i in range(3 if edges or pieces else 0):  # E alone needs no edge normals
             p, q = v[i], v[(i + 1) % 3]
             mm = _cross(p, (q[0] - p[0], q[1] - p[1], q[2] - p[2]))
             length = dr.sqrt(_dot(mm, mm))
@@ -102,37 +130,73 @@ class _Setup:
                 count += dr.select(keep, 1, 0)
         valid &= count >= 3
         self.poly, self.count = poly, count
-        # Lambert over the clipped polygon's edges (edge k from slot k to slot k + 1, the last back to 0)
+        # Lambert over the clipped polygon's edges (edge k from slot k to slot k + 1, the last back to 0),
+        # 1/2 sum gamma_k (p_k x q_k)_z / sin gamma_k.  In float32 its terms' rounding (eps32 times their sum,
+        # which is large against E for a triangle thin in the projection) is most of E's error; there it is
+        # the flat part, 1/2 sum (p_k x q_k)_z (the projected polygon's shoelace area, by its diagonals: no
+        # cancellation), plus 1/2 sum (p_k x q_k)_z (gamma_k / sin gamma_k - 1), terms ~ gamma^2 / 6 smaller.
         e, scale = f(0.0), f(0.0)
+        if not is64:
+            q3 = _select3(count == 4, poly[3], poly[0])
+            d0, d1 = (poly[2][0] - poly[0][0], poly[2][1] - poly[0][1]), (q3[0] - poly[1][0], q3[1] - poly[1][1])
+            e = 0.5 * (d0[0] * d1[1] - d0[1] * d1[0])
         for k in range(4):
             p = poly[k]
             q = _select3(count == k + 1, poly[0], poly[(k + 1) % 4])
             cr = _cross(p, (q[0] - p[0], q[1] - p[1], q[2] - p[2]))
             sin_g = dr.sqrt(_dot(cr, cr))
-            term = 0.5 * dr.atan2(sin_g, _dot(p, q)) * cr[2] / _safe(sin_g)
-            term = dr.select((k < count) & (sin_g > 0.0), term, 0.0)
-            e += term
-            scale += dr.abs(term)
-        valid &= e > _CANCELLED * scale  # E within its rounding error of 0 (seen edge-on): nothing to sample
+            gamma = dr.atan2(sin_g, _dot(p, q))
+            ok = (k < count) & (sin_g > 0.0)
+            inv_sin = 1.0 / _safe(sin_g)
+            term = 0.5 * gamma * cr[2] * inv_sin
+            if is64:
+                e += dr.select(ok, term, 0.0)
+            else:
+                g2 = gamma * gamma  # gamma / sin gamma - 1 by its series below 0.5 (to 1e-6 of itself)
+                excess = dr.select(
+                    gamma < 0.5,
+                    g2 * (1.0 / 6.0 + g2 * (7.0 / 360.0 + g2 * (31.0 / 15120.0))),
+                    (gamma - sin_g) * inv_sin,
+                )
+                e += dr.select(ok, 0.5 * cr[2] * excess, 0.0)
+            scale += dr.select(ok, dr.abs(term), 0.0)
+        # E within its rounding error of 0 (seen edge-on): nothing to sample
+        valid &= (e > _CANCELLED[is64] * scale) & (e > _SMALLEST[is64])
         self.e = dr.select(valid, e, 0.0)
         self.valid = valid
         if pieces:
             self._pieces()
 
     def _pieces(self) -> None:
-        f = mi.Float64
+        f = self.f
         poly, count = self.poly, self.count
-        self.phi0 = dr.atan2(poly[0][1], poly[0][0])
-        s = []
+        # each slot's azimuth as a unit vector of the tangent plane ((1, 0) at the pole, as atan2(0, 0))
+        # and its sort key, a pseudo-angle from slot 0's in [0, 4) (monotone in the angle, no atan2)
+        dirs = []
         for k in range(4):
-            d = dr.atan2(poly[k][1], poly[k][0]) - self.phi0
-            d = dr.select(d < 0.0, d + _TWO_PI, d)
-            d = dr.minimum(d, _TWO_PI)
-            s.append(dr.select(k < count, d, _TWO_PI) if k > 0 else f(0.0))
-        for i, j in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):  # a sorting network
-            s[i], s[j] = dr.minimum(s[i], s[j]), dr.maximum(s[i], s[j])
-        s.append(f(_TWO_PI))
-        self.s = s
+            x, y = poly[k][0], poly[k][1]
+            r = dr.sqrt(x * x + y * y)
+            inv = 1.0 / _safe(r)
+            dirs.append((dr.select(r > 0.0, x * inv, 1.0), y * inv))
+        s = [f(0.0)]
+        e0 = dirs[0]
+        for k in range(1, 4):
+            cs, sn = e0[0] * dirs[k][0] + e0[1] * dirs[k][1], e0[0] * dirs[k][1] - e0[1] * dirs[k][0]
+            ac, asn = dr.abs(cs), dr.abs(sn)
+            t = asn / _safe(ac + asn)  # in [0, 1] within the quadrant
+            key = dr.select(sn >= 0.0, dr.select(cs >= 0.0, t, 2.0 - t), dr.select(cs < 0.0, 2.0 + t, 4.0 - t))
+            unused = k >= count
+            s.append(dr.select(unused, 4.0, dr.minimum(key, 4.0)))
+            dirs[k] = (dr.select(unused, e0[0], dirs[k][0]), dr.select(unused, e0[1], dirs[k][1]))
+        for i, j in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):  # a sorting network, the directions along
+            swap = s[j] < s[i]
+            s[i], s[j] = dr.select(swap, s[j], s[i]), dr.select(swap, s[i], s[j])
+            di, dj = dirs[i], dirs[j]
+            dirs[i] = (dr.select(swap, dj[0], di[0]), dr.select(swap, dj[1], di[1]))
+            dirs[j] = (dr.select(swap, di[0], dj[0]), dr.select(swap, di[1], dj[1]))
+        s.append(f(4.0))
+        dirs.append(e0)
+        self.s, self.dirs = s, dirs
         # each piece's upper bound (an edge's normal; (0, 0, 1) is the horizon) and lower bound (an edge's
         # normal, lo_none where none), and the cumulative areas
         self.hi: list[tuple[Any, Any, Any]] = []
@@ -140,14 +204,15 @@ class _Setup:
         self.lo_none: list[Any] = []
         self.c = [f(0.0)]
         for j in range(4):
-            mid = self.phi0 + 0.5 * (s[j] + s[j + 1])
-            sm, cm = dr.sincos(mid)
+            ea, eb = dirs[j], dirs[j + 1]
+            # the bisector of the piece (unnormalised, any width below 2 pi): rot90(ea - eb)
+            cm, sm = eb[1] - ea[1], ea[0] - eb[0]
             hi = (f(0.0), f(0.0), f(1.0))
             lo = (f(0.0), f(0.0), f(0.0))
             # the bounds as (m_z^2, k^2), compared by cross products (rho^2 = m_z^2 / (m_z^2 + k^2) rounds to
             # 1 for an edge within 1e-8 of the horizon): the horizon (1, 0), no lower bound (0, 1)
             mh, kh, ml, kl = f(1.0), f(0.0), f(0.0), f(1.0)
-            lo_none = dr.full(mi.Bool, True, dr.width(mid))
+            lo_none = dr.full(mi.Bool, True, dr.width(cm))
             empty = ~self.valid
             for m in self.m:
                 mz, k = m[2], m[0] * cm + m[1] * sm
@@ -164,42 +229,52 @@ class _Setup:
             self.lo.append(lo)
             self.lo_none.append(lo_none)
             nonempty = ~empty & (mh * kl > ml * kh) & (s[j + 1] > s[j])
-            area = _piece_area(self.phi0 + s[j], self.phi0 + s[j + 1], hi, lo, lo_none)
+            area = _sector(_arc_point(ea, hi), eb, hi) - dr.select(lo_none, 0.0, _sector(_arc_point(ea, lo), eb, lo))
             self.c.append(self.c[j] + dr.select(nonempty, dr.maximum(area, 0.0), 0.0))
 
-    def to_world(self, x: Any, y: Any, z: Any) -> Any:
-        return mi.Vector3d(
+    def to_world(self, x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
+        return (
             x * self.t1[0] + y * self.t2[0] + z * self.n[0],
             x * self.t1[1] + y * self.t2[1] + z * self.n[1],
             x * self.t1[2] + y * self.t2[2] + z * self.n[2],
         )
 
 
-def _sector(phi_a: Any, phi_b: Any, m: tuple[Any, Any, Any]) -> Any:
-    """Area of the projection of the great circle m's sector between azimuths phi_a <= phi_b (the horizon
-    is m = (0, 0, 1), at most pi wide here): |m_z| / 2 times the arc between its points there."""
+def _arc_point(e: tuple[Any, Any], m: tuple[Any, Any, Any]) -> tuple[Any, Any, Any]:
+    """The point (unnormalised) of the great circle m in the azimuth of the unit vector e (m_z != 0; the
+    horizon's is e itself)."""
     az = dr.abs(m[2])
-    sa, ca = dr.sincos(phi_a)
-    sb, cb = dr.sincos(phi_b)
-    ka, kb = dr.abs(m[0] * ca + m[1] * sa), dr.abs(m[0] * cb + m[1] * sb)
-    wa, wb = (az * ca, az * sa, ka), (az * cb, az * sb, kb)
+    return (az * e[0], az * e[1], dr.abs(m[0] * e[0] + m[1] * e[1]))
+
+
+def _sector(wa: tuple[Any, Any, Any], eb: tuple[Any, Any], m: tuple[Any, Any, Any]) -> Any:
+    """Area of the projection of the great circle m's sector from its point wa (:func:`_arc_point`) to the
+    azimuth eb (at most pi wide here): |m_z| / 2 times the arc between its points there."""
+    wb = _arc_point(eb, m)
     cr = _cross(wa, wb)
-    return 0.5 * az * dr.atan2(dr.sqrt(_dot(cr, cr)), _dot(wa, wb))
+    return 0.5 * dr.abs(m[2]) * dr.atan2(dr.sqrt(_dot(cr, cr)), _dot(wa, wb))
 
 
-def _piece_area(phi_a: Any, phi: Any, hi: Any, lo: Any, lo_none: Any) -> Any:
-    return _sector(phi_a, phi, hi) - dr.select(lo_none, 0.0, _sector(phi_a, phi, lo))
-
-
-def _bounds(phi: Any, hi: Any, lo: Any, lo_none: Any) -> tuple[Any, Any, Any, Any]:
-    """(rho_hi^2, z_hi^2, rho_lo^2, z_lo^2) at azimuth phi."""
-    sn, cs = dr.sincos(phi)
+def _bounds(e: tuple[Any, Any], hi: Any, lo: Any, lo_none: Any) -> tuple[Any, Any, Any, Any]:
+    """(rho_hi^2, z_hi^2, rho_lo^2, z_lo^2) in the azimuth of the unit vector e."""
     out = []
     for m in (hi, lo):
-        mz, k = m[2], m[0] * cs + m[1] * sn
+        mz, k = m[2], m[0] * e[0] + m[1] * e[1]
         inv = 1.0 / _safe(mz * mz + k * k)
         out += [mz * mz * inv, k * k * inv]
     return out[0], out[1], dr.select(lo_none, 0.0, out[2]), dr.select(lo_none, 1.0, out[3])
+
+
+def _width(e: tuple[Any, Any], hi: Any, lo: Any, lo_none: Any) -> tuple[Any, Any]:
+    """The CDF's slope (rho_hi^2 - rho_lo^2) / 2 in the azimuth of the unit vector e, and its derivative by
+    the azimuth (d rho^2 = -2 rho^2 k k' / (m_z^2 + k^2), k' = m . e_perp)."""
+    out = []
+    for m in (hi, lo):
+        mz2, k, dk = m[2] * m[2], m[0] * e[0] + m[1] * e[1], m[1] * e[0] - m[0] * e[1]
+        inv = 1.0 / _safe(mz2 + k * k)
+        rho2 = mz2 * inv
+        out += [rho2, -2.0 * rho2 * k * dk * inv]
+    return 0.5 * (out[0] - dr.select(lo_none, 0.0, out[2])), 0.5 * (out[1] - dr.select(lo_none, 0.0, out[3]))
 
 
 def _pick(index: Any, values: list[Any]) -> Any:
@@ -209,23 +284,35 @@ def _pick(index: Any, values: list[Any]) -> Any:
     return out
 
 
-def _pick3(index: Any, values: list[tuple[Any, Any, Any]]) -> tuple[Any, Any, Any]:
-    return (_pick(index, [v[0] for v in values]), _pick(index, [v[1] for v in values]),
-            _pick(index, [v[2] for v in values]))  # fmt: skip
+def _pick_n(index: Any, values: list[tuple[Any, ...]]) -> tuple[Any, ...]:
+    return tuple(_pick(index, [v[i] for v in values]) for i in range(len(values[0])))
 
 
 def projected_solid_angle(a: Any, b: Any, c: Any, n: Any) -> Any:
     """The projected solid angle E of the triangle (vectors a, b, c from the shading point) about the unit
-    normal n, ``mi.Float``: Lambert's formula over its part above the horizon; 0 when there is none
+    normal n, in a's precision: Lambert's formula over its part above the horizon; 0 when there is none
     (``symsphere.warps.projected_solid_angle`` restated)."""
-    return mi.Float(_Setup(a, b, c, n, pieces=False).e)
+    return _Setup(a, b, c, n, edges=False, pieces=False).e
+
+
+def _initial(tau: Any, area: Any, width: Any, d0: Any, d1: Any) -> Any:
+    """The start of the root finder in [0, width]: the inverse of the quadratic CDF with the slopes d0, d1
+    at the piece's ends, scaled to its area (a = 2 d0 / (d0 + d1), y = a t + (1 - a) t^2)."""
+    y = dr.clip(tau / _safe(area), 0.0, 1.0)
+    sum_d = d0 + d1
+    a = dr.select(sum_d > 0.0, 2.0 * d0 / _safe(sum_d), 1.0)
+    root = dr.sqrt(dr.maximum(a * a + 4.0 * (1.0 - a) * y, 0.0))
+    t = 2.0 * y / _safe(a + root)  # the stable root of (1 - a) t^2 + a t - y = 0
+    return width * dr.clip(t, 0.0, 1.0)
 
 
 def square_to_projected_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) -> tuple[Any, Any]:
-    """(d, pdf): a direction with density ``max(0, n.d) / E`` on the triangle and that density (``mi.Float``;
-    0 and d = n when E = 0); ``symsphere.warps.square_to_projected_triangle`` restated lane by lane."""
-    f = mi.Float64
-    st = _Setup(a, b, c, n, pieces=True)
+    """(d, pdf): a direction with density ``max(0, n.d) / E`` on the triangle and that density, in a's
+    precision (d = n and pdf = 0 when E = 0); ``symsphere.warps.square_to_projected_triangle`` restated
+    lane by lane."""
+    st = _Setup(a, b, c, n, edges=True, pieces=True)
+    f, is64 = st.f, st.is64
+    eps = _EPS[is64]
     total = st.c[4]
     target = f(u.x) * total
     nonempty = [st.c[j + 1] > st.c[j] for j in range(4)]
@@ -238,54 +325,73 @@ def square_to_projected_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) -> tupl
     area = c1 - c0
     tau = dr.minimum(dr.maximum(target - c0, 0.0), area)
     s0, s1 = _pick(j, st.s[:4]), _pick(j, st.s[1:])
-    hi, lo, lo_none = _pick3(j, st.hi), _pick3(j, st.lo), _pick(j, st.lo_none)
-    phi_a = st.phi0 + s0
-    x = s0 + (s1 - s0) * (tau / _safe(area))
+    ea, eb = _pick_n(j, st.dirs[:4]), _pick_n(j, st.dirs[1:])
+    hi, lo, lo_none = _pick_n(j, st.hi), _pick_n(j, st.lo), _pick(j, st.lo_none)
+    wa_hi, wa_lo = _arc_point(ea, hi), _arc_point(ea, lo)
+    # the piece's width in radians (below 2 pi; a non-empty piece is at most pi wide)
+    width = dr.atan2(ea[0] * eb[1] - ea[1] * eb[0], ea[0] * eb[0] + ea[1] * eb[1])
+    width = dr.select(width < 0.0, width + _TWO_PI, width)
+    width = dr.select(s1 > s0, width, 0.0)
+    rh, _, rl, _ = _bounds(ea, hi, lo, lo_none)
+    rh1, _, rl1, _ = _bounds(eb, hi, lo, lo_none)
+    x = _initial(tau, area, width, 0.5 * (rh - rl), 0.5 * (rh1 - rl1))
+    tol = 4.0 * eps * _TWO_PI
+
+    def rotated(x: Any) -> tuple[Any, Any]:
+        sx, cx = dr.sincos(x)
+        return (ea[0] * cx - ea[1] * sx, ea[1] * cx + ea[0] * sx)
 
     def cond(x: Any, lo_b: Any, hi_b: Any, step: Any, done: Any) -> Any:
-        return ~done & (step < _MAX_STEPS)
+        return ~done & (step < _MAX_STEPS[is64])
 
     def body(x: Any, lo_b: Any, hi_b: Any, step: Any, done: Any) -> tuple[Any, Any, Any, Any, Any]:
-        g = _piece_area(phi_a, st.phi0 + x, hi, lo, lo_none) - tau
-        hit = g == 0.0
+        e = rotated(x)
+        upper = _sector(wa_hi, e, hi)
+        lower = dr.select(lo_none, 0.0, _sector(wa_lo, e, lo))
+        g = upper - lower - tau
+        settled = dr.abs(g) <= 1.0 * eps * (upper + lower + tau)  # the residual is rounding noise
         hi_b = dr.select(g > 0.0, x, hi_b)
         lo_b = dr.select(g < 0.0, x, lo_b)
-        rh, _, rl, _ = _bounds(st.phi0 + x, hi, lo, lo_none)
-        slope = 0.5 * (rh - rl)
-        xn = x - g / _safe(slope)
+        slope, curve = _width(e, hi, lo, lo_none)
+        newton = x - g / _safe(slope)
+        # Halley's step (cubic convergence), Newton's where it leaves the bracket
+        den = 2.0 * slope * slope - g * curve
+        xn = x - 2.0 * g * slope / _safe(den)
+        xn = dr.select((den > 0.0) & (xn > lo_b) & (xn < hi_b), xn, newton)
         bisect = ~(slope > 0.0) | (xn <= lo_b) | (xn >= hi_b)
-        xn = dr.select(bisect, 0.5 * (lo_b + hi_b), xn)
-        xn = dr.select(hit, x, xn)
-        done = hit | (dr.abs(xn - x) <= _TOL) | (hi_b - lo_b <= _TOL)
+        # settled: the Newton step if it stays in the bracket, else x (a bisection would leave the root)
+        xn = dr.select(bisect, dr.select(settled, x, 0.5 * (lo_b + hi_b)), xn)
+        done = settled | (dr.abs(xn - x) <= tol) | (hi_b - lo_b <= tol)
         return xn, lo_b, hi_b, step + 1, done
 
     x, _, _, _, _ = dr.while_loop(
-        state=(x, f(s0), f(s1), mi.UInt32(0), ~st.valid | ~(area > 0.0)), cond=cond, body=body
+        state=(x, f(0.0), f(width), mi.UInt32(0), ~st.valid | ~(area > 0.0)), cond=cond, body=body
     )
-    phi = st.phi0 + x
-    rh, zh, rl, zl = _bounds(phi, hi, lo, lo_none)
+    e = rotated(x)
+    rh, zh, rl, zl = _bounds(e, hi, lo, lo_none)
     v = f(u.y)
     r2 = dr.maximum(rl + v * (rh - rl), 0.0)
     z2 = dr.maximum(zl - v * (zl - zh), 0.0)
     r, z = dr.sqrt(r2), dr.sqrt(z2)
     inv = 1.0 / _safe(dr.sqrt(r2 + z2))
-    sp, cp = dr.sincos(phi)
     lz = z * inv
-    d = st.to_world(r * cp * inv, r * sp * inv, lz)
     ok = st.valid & (total > 0.0)
+    d = _select3(ok, st.to_world(r * e[0] * inv, r * e[1] * inv, lz), st.n)
     pdf = dr.select(ok, lz / _safe(st.e), 0.0)
-    return mi.Vector3f(dr.select(ok, d, mi.Vector3d(*st.n))), mi.Float(pdf)
+    vector = mi.Vector3d if is64 else mi.Vector3f
+    return vector(*d), pdf
 
 
 def square_to_projected_triangle_pdf(a: Any, b: Any, c: Any, n: Any, d: Any) -> Any:
     """The density ``max(0, n.d) / E`` at the unit direction d inside the triangle (each edge's plane within
-    1e-12), 0 elsewhere and when E = 0 (``mi.Float``); ``symsphere.warps.square_to_projected_triangle_pdf``."""
-    f = mi.Float64
-    st = _Setup(a, b, c, n, pieces=False)
+    1e-12; float32 2^-24), 0 elsewhere and when E = 0, in a's precision;
+    ``symsphere.warps.square_to_projected_triangle_pdf``."""
+    st = _Setup(a, b, c, n, edges=True, pieces=False)
+    f = st.f
     w = (f(d.x), f(d.y), f(d.z))
     lx, ly, lz = _dot(w, st.t1), _dot(w, st.t2), _dot(w, st.n)
     inside = st.valid & (lz > 0.0)
     for m in st.m:
-        inside &= m[0] * lx + m[1] * ly + m[2] * lz >= -1e-12
+        inside &= m[0] * lx + m[1] * ly + m[2] * lz >= -_PLANE[st.is64]
     length = dr.sqrt(lx * lx + ly * ly + lz * lz)
-    return mi.Float(dr.select(inside, lz / _safe(length) / _safe(st.e), 0.0))
+    return dr.select(inside, lz / _safe(length) / _safe(st.e), 0.0)
