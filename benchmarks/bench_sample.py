@@ -444,7 +444,7 @@ def profile_cases(n, rng):
         # the orbit stores alone, of a fixed point (no draws, no map)
         for part in prange(len(bounds) - 1):
             for i in range(bounds[part], bounds[part + 1]):
-                _store_orbit(0.25, 0.125, 0.5, rows[i], count)
+                _store_orbit(0.25, 0.125, 0.5, rows, i, count)
 
     @njit(parallel=True, cache=False)
     def parallel_fill(flat, value):

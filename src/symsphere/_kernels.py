@@ -140,51 +140,51 @@ def _map_batch(u, v, code, base):
 
 
 @register_jitable
-def _store_columns(row, at, a, b, c):
-    """The four columns of one row of Tables 1 and 2 at *row*[at ...]: (a, b, c), (-a, b, c), (-a, -b, c),
+def _store_columns(rows, i, at, a, b, c):
+    """The four columns of one row of Tables 1 and 2 at *rows*[i, at ...]: (a, b, c), (-a, b, c), (-a, -b, c),
     (a, -b, c) (symmetry._COLUMN_SIGNS), written out: plain copies, no table to read."""
-    row[at] = a
-    row[at + 1] = b
-    row[at + 2] = c
-    row[at + 3] = -a
-    row[at + 4] = b
-    row[at + 5] = c
-    row[at + 6] = -a
-    row[at + 7] = -b
-    row[at + 8] = c
-    row[at + 9] = a
-    row[at + 10] = -b
-    row[at + 11] = c
+    rows[i, at] = a
+    rows[i, at + 1] = b
+    rows[i, at + 2] = c
+    rows[i, at + 3] = -a
+    rows[i, at + 4] = b
+    rows[i, at + 5] = c
+    rows[i, at + 6] = -a
+    rows[i, at + 7] = -b
+    rows[i, at + 8] = c
+    rows[i, at + 9] = a
+    rows[i, at + 10] = -b
+    rows[i, at + 11] = c
 
 
 @register_jitable
-def _store_orbit(x, y, z, row, count):
-    """row[3k:3k+3] = (x, y, z) @ SPHERE_MAPS[k] for k < count (48 or 24), by the tables' structure
+def _store_orbit(x, y, z, rows, i, count):
+    """rows[i, 3k:3k+3] = (x, y, z) @ SPHERE_MAPS[k] for k < count (48 or 24), by the tables' structure
     (symmetry._build_maps: k = 24 half + 4 i + j): the six rows P0..P5 of Table 1
     (x, y, z), (y, x, z), (z, y, x), (z, x, y), (x, z, y), (y, z, x), each in its four columns;
     for the sphere the same again with the third coordinate negated (Table 2's barred rows).
     tests/test_kernels.py compares every image with the tables."""
-    _store_columns(row, 0, x, y, z)
-    _store_columns(row, 12, y, x, z)
-    _store_columns(row, 24, z, y, x)
-    _store_columns(row, 36, z, x, y)
-    _store_columns(row, 48, x, z, y)
-    _store_columns(row, 60, y, z, x)
+    _store_columns(rows, i, 0, x, y, z)
+    _store_columns(rows, i, 12, y, x, z)
+    _store_columns(rows, i, 24, z, y, x)
+    _store_columns(rows, i, 36, z, x, y)
+    _store_columns(rows, i, 48, x, z, y)
+    _store_columns(rows, i, 60, y, z, x)
     if count == _SPHERE_ORBIT:
-        _store_columns(row, 72, x, y, -z)
-        _store_columns(row, 84, y, x, -z)
-        _store_columns(row, 96, z, y, -x)
-        _store_columns(row, 108, z, x, -y)
-        _store_columns(row, 120, x, z, -y)
-        _store_columns(row, 132, y, z, -x)
+        _store_columns(rows, i, 72, x, y, -z)
+        _store_columns(rows, i, 84, y, x, -z)
+        _store_columns(rows, i, 96, z, y, -x)
+        _store_columns(rows, i, 108, z, x, -y)
+        _store_columns(rows, i, 120, x, z, -y)
+        _store_columns(rows, i, 132, y, z, -x)
 
 
 @register_jitable
-def _weighted(x, y, z, row, weights):
-    """row = x W[0] + y W[1] + z W[2]: image k in columns 3k ... 3k + 2, W from _rotated_weights
+def _weighted(x, y, z, rows, i, weights):
+    """rows[i] = x W[0] + y W[1] + z W[2]: image k in columns 3k ... 3k + 2, W from _rotated_weights
     (a loop over 72 contiguous columns, which LLVM vectorises)."""
     for column in range(weights.shape[1]):
-        row[column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
+        rows[i, column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
 
 
 # Rows about a normal are kept on or above its plane where they are stored, not in a pass over the
@@ -215,8 +215,8 @@ def _is_above(x, y, z, normal, slack):
 
 
 @register_jitable
-def _keep_above(row, normal):
-    """Move the images in *row* (3 count, the output dtype) that fail :func:`_is_above` onto the
+def _keep_above(rows, i, normal):
+    """Move the images in *rows*[i] (3 count, the output dtype) that fail :func:`_is_above` onto the
     upper side of the plane of *normal*, in place.
 
     A direction on the equator of the local hemisphere (z = 0), rotated onto the normal and rounded
@@ -226,12 +226,12 @@ def _keep_above(row, normal):
     renormalised, until it passes.  Only rows within rounding of the plane are moved (by a few ulps),
     so the density is unchanged.
     """
-    eps = np.finfo(row.dtype).eps
+    eps = np.finfo(rows.dtype).eps
     slack = 4.0 * eps
-    for k in range(row.shape[0] // 3):
-        if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+    for k in range(rows.shape[1] // 3):
+        if _is_above(rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2], normal, slack):
             continue
-        x, y, z = np.float64(row[3 * k]), np.float64(row[3 * k + 1]), np.float64(row[3 * k + 2])
+        x, y, z = np.float64(rows[i, 3 * k]), np.float64(rows[i, 3 * k + 1]), np.float64(rows[i, 3 * k + 2])
         below = min(x * normal[0] + y * normal[1] + z * normal[2], 0.0)
         x, y, z = x - below * normal[0], y - below * normal[1], z - below * normal[2]
         lift = eps
@@ -240,20 +240,20 @@ def _keep_above(row, normal):
             b = y + lift * normal[1]
             c = z + lift * normal[2]
             norm = np.sqrt(a * a + b * b + c * c)
-            row[3 * k], row[3 * k + 1], row[3 * k + 2] = a / norm, b / norm, c / norm
-            if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+            rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2] = a / norm, b / norm, c / norm
+            if _is_above(rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2], normal, slack):
                 break
             lift *= 2.0
 
 
 @register_jitable
 def _copy_members(scratch, tail, offset):
-    """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (3 count,)."""
-    count = scratch.shape[0] // 3
+    """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (1, 3 count)."""
+    count = scratch.shape[1] // 3
     for i in range(tail.shape[0]):
         k = (offset + i) % count
         for l in range(3):
-            tail[i, l] = scratch[3 * k + l]
+            tail[i, l] = scratch[0, 3 * k + l]
 
 
 @register_jitable
@@ -323,7 +323,7 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             u[j] = 0.5
             v[j] = 0.5
         base = np.empty((3, _BATCH))
-        scratch = np.empty(rows.shape[1], dtype=tail.dtype)  # the cut orbit, stored whole
+        scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)  # the cut orbit, stored whole
         if source == _RANDOM:
             for j in range(min(_BATCH, hi - lo)):
                 u[j] = pcg64_random(points)
@@ -338,26 +338,26 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _SPHERE_ORBIT)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows, first + j, _SPHERE_ORBIT)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _HEMISPHERE_ORBIT)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], rows, first + j, _HEMISPHERE_ORBIT)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
+                    _weighted(base[0, j], base[1, j], base[2, j], rows, first + j, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
-                        _keep_above(rows[first + j], normal)
+                        _keep_above(rows, first + j, normal)
                 if source == _RANDOM and j < upcoming:
                     u[j] = pcg64_random(points)
                     v[j] = pcg64_random(points)
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _SPHERE_ORBIT)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 0, _SPHERE_ORBIT)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _HEMISPHERE_ORBIT)
+                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 0, _HEMISPHERE_ORBIT)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
+                    _weighted(base[0, j], base[1, j], base[2, j], scratch, 0, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
-                        _keep_above(scratch, normal)
+                        _keep_above(scratch, 0, normal)
                 _copy_members(scratch, tail, offset)
 
     return fill
