@@ -1,7 +1,7 @@
 """numba kernels: (draws +) map + orbit (+ frame) fused in one pass, one part of the points per thread.
 
 The map formulas are the elementwise functions of :func:`symsphere.warps.square_to_triangle`
-(``register_jitable``), the orbit stores gather from the tables of
+(``register_jitable``), the orbit stores (:mod:`symsphere._vector_stores`) permute by the tables of
 :mod:`symsphere.symmetry`, and about a normal a weights table is built from the
 same tables, so nothing here restates a formula.  The numpy path
 (``warps.Warp.points`` + ``symmetry.orbit`` + ``frames.to_world``) is the
@@ -37,6 +37,7 @@ from ._numba_cache import invalidate_if_changed
 from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
+from ._vector_stores import store_hemisphere_orbit, store_rotated_hemisphere, store_sphere_orbit
 from .symmetry import SIGNS, SOURCES, orbit_size
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
@@ -137,54 +138,6 @@ def _map_batch(u, v, code, base):
     else:
         for j in range(_BATCH):
             base[0, j], base[1, j], base[2, j] = _paper2_point(u[j], v[j])
-
-
-@register_jitable
-def _store_columns(rows, i, at, a, b, c):
-    """The four columns of one row of Tables 1 and 2 at *rows*[i, at ...]: (a, b, c), (-a, b, c), (-a, -b, c),
-    (a, -b, c) (symmetry._COLUMN_SIGNS), written out: plain copies, no table to read."""
-    rows[i, at] = a
-    rows[i, at + 1] = b
-    rows[i, at + 2] = c
-    rows[i, at + 3] = -a
-    rows[i, at + 4] = b
-    rows[i, at + 5] = c
-    rows[i, at + 6] = -a
-    rows[i, at + 7] = -b
-    rows[i, at + 8] = c
-    rows[i, at + 9] = a
-    rows[i, at + 10] = -b
-    rows[i, at + 11] = c
-
-
-@register_jitable
-def _store_orbit(x, y, z, rows, i, count):
-    """rows[i, 3k:3k+3] = (x, y, z) @ SPHERE_MAPS[k] for k < count (48 or 24), by the tables' structure
-    (symmetry._build_maps: k = 24 half + 4 i + j): the six rows P0..P5 of Table 1
-    (x, y, z), (y, x, z), (z, y, x), (z, x, y), (x, z, y), (y, z, x), each in its four columns;
-    for the sphere the same again with the third coordinate negated (Table 2's barred rows).
-    tests/test_kernels.py compares every image with the tables."""
-    _store_columns(rows, i, 0, x, y, z)
-    _store_columns(rows, i, 12, y, x, z)
-    _store_columns(rows, i, 24, z, y, x)
-    _store_columns(rows, i, 36, z, x, y)
-    _store_columns(rows, i, 48, x, z, y)
-    _store_columns(rows, i, 60, y, z, x)
-    if count == _SPHERE_ORBIT:
-        _store_columns(rows, i, 72, x, y, -z)
-        _store_columns(rows, i, 84, y, x, -z)
-        _store_columns(rows, i, 96, z, y, -x)
-        _store_columns(rows, i, 108, z, x, -y)
-        _store_columns(rows, i, 120, x, z, -y)
-        _store_columns(rows, i, 132, y, z, -x)
-
-
-@register_jitable
-def _weighted(x, y, z, rows, i, weights):
-    """rows[i] = x W[0] + y W[1] + z W[2]: image k in columns 3k ... 3k + 2, W from _rotated_weights
-    (a loop over 72 contiguous columns, which LLVM vectorises)."""
-    for column in range(weights.shape[1]):
-        rows[i, column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
 
 
 # Rows about a normal are kept on or above its plane where they are stored, not in a pass over the
@@ -313,9 +266,8 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
     @njit(**_OPTIONS)
     def fill(points, lo, hi, weights, normal, rows, tail, offset):  # pragma: no cover - compiled by numba
         # The branches on source and kind are at this function's top level and the map's in
-        # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are functions of
-        # their own (register_jitable: compiled once per process and shared by the cases; LLVM
-        # inlines them), not numba-IR inlines, which cost compile time in every case.
+        # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are intrinsics
+        # (symsphere._vector_stores): a few vector instructions in place, no call per orbit.
         whole = rows.shape[0]
         u = np.empty(_BATCH)
         v = np.empty(_BATCH)
@@ -338,11 +290,11 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows, first + j, _SPHERE_ORBIT)
+                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows, first + j, _HEMISPHERE_ORBIT)
+                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], rows, first + j, weights)
+                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], rows, first + j, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
                         _keep_above(rows, first + j, normal)
                 if source == _RANDOM and j < upcoming:
@@ -351,11 +303,11 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 0, _SPHERE_ORBIT)
+                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], scratch, 0)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, 0, _HEMISPHERE_ORBIT)
+                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], scratch, 0)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], scratch, 0, weights)
+                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], scratch, 0, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
                         _keep_above(scratch, 0, normal)
                 _copy_members(scratch, tail, offset)
@@ -545,6 +497,8 @@ def _store_kind(count, basis):
     """(kind of store, the image weights: none without a frame)."""
     if basis is None:
         return (_SPHERE if count == _SPHERE_ORBIT else _HEMISPHERE), _NO_WEIGHTS
+    if count != _HEMISPHERE_ORBIT:
+        raise ValueError(f"a frame applies to the hemisphere's orbits of {_HEMISPHERE_ORBIT}, not {count}")
     return _HEMISPHERE_ROTATED, _rotated_weights(np.ascontiguousarray(basis, dtype=np.float64), count)
 
 
