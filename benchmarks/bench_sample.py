@@ -402,9 +402,9 @@ def profile_cases(n, rng):
 
     from symsphere._kernels import (
         _BATCH,
+        RandomPoints,
         _map_batch,
         fill_orbits,
-        fill_random_orbits,
         part_bounds,
     )
     from symsphere._random.pcg64 import pcg64_advanced, pcg64_random, pcg64_seeded
@@ -522,11 +522,11 @@ def profile_cases(n, rng):
                 ),
                 Case(
                     "kernel",
-                    f"{domain}: kernel drawing its points (fill_random_orbits)",
+                    f"{domain}: kernel drawing its points (fill_orbits, RandomPoints)",
                     name,
                     "piece",
-                    lambda s=source, o=out, c=count, k=m: fill_random_orbits(
-                        s.seed_words, 0, k, "equal_area", c, None, o
+                    lambda s=source, o=out, c=count, k=m: fill_orbits(
+                        RandomPoints(s.seed_words, 0, k), "equal_area", c, None, o
                     ),
                     n,
                     "draws + map + stores",
@@ -540,7 +540,9 @@ def profile_cases(n, rng):
                         "hemisphere: kernel drawing its points, normal=(1,1,1)",
                         name,
                         "piece",
-                        lambda s=source, o=out, k=m: fill_random_orbits(s.seed_words, 0, k, "equal_area", 24, basis, o),
+                        lambda s=source, o=out, k=m: fill_orbits(
+                            RandomPoints(s.seed_words, 0, k), "equal_area", 24, basis, o
+                        ),
                         n,
                         "draws + map + rotated stores",
                         "sample_hemisphere, normal=(1,1,1), out=",

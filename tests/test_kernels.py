@@ -64,7 +64,7 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
     for dtype in (np.float64, np.float32):
         expected = kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
         got = np.full((m * count, 3), np.nan, dtype)
-        kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
+        kernels.fill_orbits(kernels.RandomPoints(source.seed_words, 5, m), method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
 
 
@@ -72,7 +72,8 @@ def test_random_kernel_far_into_the_stream():
     first = 1_000_003
     source = BasePoints("random", 22, total=first + 333)
     expected = kernels.fill_orbits(source.take(first, first + 333), "equal_area", 48, None, np.empty((333 * 48, 3)))
-    got = kernels.fill_random_orbits(source.seed_words, first, 333, "equal_area", 48, None, np.empty((333 * 48, 3)))
+    random_points = kernels.RandomPoints(source.seed_words, first, 333)
+    got = kernels.fill_orbits(random_points, "equal_area", 48, None, np.empty((333 * 48, 3)))
     assert np.array_equal(got, expected)
 
 
@@ -184,7 +185,7 @@ def test_store_keeps_rows_about_a_normal_on_or_above_the_plane(dtype):
         source = BasePoints("random", 4, total=300)
         expected = kernels.fill_orbits(source.take(0, 300), "equal_area", 24, basis, np.empty((7200, 3), dtype),
                                        above=True)  # fmt: skip
-        got = kernels.fill_random_orbits(source.seed_words, 0, 300, "equal_area", 24, basis,
-                                         np.empty((7200, 3), dtype), parts=3, above=True)  # fmt: skip
+        got = kernels.fill_orbits(kernels.RandomPoints(source.seed_words, 0, 300), "equal_area", 24, basis,
+                                  np.empty((7200, 3), dtype), parts=3, above=True)  # fmt: skip
         assert np.array_equal(got, expected)
     assert found_below  # the points put rows below the plane before the store's check: it was tested

@@ -53,7 +53,7 @@ __all__ = [
     "rotated_weights",
     "prepare_kernels",
     "fill_orbits",
-    "fill_random_orbits",
+    "RandomPoints",
     "part_bounds",
     "part_range",
     "part_count",
@@ -328,8 +328,8 @@ def _prepare_kernels():
 
 
 def _run(source, method, count, basis, out, m, parts, part_input, offset, above):
-    """Run the case's kernel over the parts of m points (the entry of :func:`fill_orbits` and
-    :func:`fill_random_orbits`, which take the run's facts one by one instead of a :class:`Plan`)."""
+    """Run the case's kernel over the parts of m points (the entry of :func:`fill_orbits`, which takes
+    the run's facts one by one instead of a :class:`Plan`)."""
     _prepare_kernels()
     kind, weights = _store_kind(count, basis)
     normal = np.ascontiguousarray(basis[2], dtype=np.float64) if above and kind == _HEMISPHERE_ROTATED else _NO_NORMAL
@@ -390,12 +390,8 @@ def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, pa
     source = plan.source
     part_input: Callable[[int], npt.NDArray[Any]]
     if source.kind == "random":
-        seed_words = source.seed_words
-        assert seed_words is not None  # random sources always have the stream's seed
-
-        def part_input(lo: int) -> npt.NDArray[Any]:
-            return pcg64_state(seed_words, 2 * (start + lo))
-
+        assert source.seed_words is not None  # random sources always have the stream's seed
+        part_input = RandomPoints(source.seed_words, start, stop - start).part_input
         kernel = _fill_kernel(_RANDOM, METHOD_CODES[plan.method], plan.kind)
     else:
         uv = np.ascontiguousarray(source.take(start, stop), dtype=np.float64)
@@ -408,8 +404,23 @@ def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, pa
     return out
 
 
+@dataclass(frozen=True)
+class RandomPoints:
+    """The random base points ``first ... first + m - 1``: point i is draws 2i, 2i + 1 of numpy's
+    ``PCG64(seed_sequence)``, *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
+    (:attr:`symsphere.points.BasePoints.seed_words`); the kernel draws them itself."""
+
+    seed_words: npt.NDArray[np.unsignedinteger[Any]]
+    first: int
+    m: int
+
+    def part_input(self, lo: int) -> npt.NDArray[np.uint64]:
+        """The kernel's *points* for the part from point ``first + lo`` on: the stream's state there."""
+        return pcg64_state(self.seed_words, 2 * (self.first + lo))
+
+
 def fill_orbits(
-    uv: FloatArray,
+    points: FloatArray | RandomPoints,
     method: str,
     count: int,
     basis: Float64Array | None,
@@ -418,44 +429,25 @@ def fill_orbits(
     offset: int = 0,
     above: bool = False,
 ) -> FloatArray:
-    """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
+    """Write the orbits of the m base *points* into *out* (m * count, 3): points given as an (m, 2) array
+    of (u, v), or :class:`RandomPoints`, which the kernel draws.
 
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
-    (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
-    C-contiguous float32 or float64.  *parts*: how many stretches to split the points
-    into (0: numba's thread count, but at most one part per 256 points; the output does not depend on it).  If *out* has
+    (hemisphere only).  Trusts its inputs: *out* C-contiguous float32 or float64.  *parts*: how many
+    stretches to split the points into (0: numba's thread count, but at most one part per 256 points;
+    the output does not depend on it).  If *out* has
     ``(m - 1) * count + rest`` rows, ``0 < rest < count``, the last point's orbit is cut:
     the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
     same kernel call.  With *above* (and a *basis*), every row is on or above the plane of the
     normal ``basis[2]`` (scaled or not), its dot product with it >= 0 in *out*'s dtype and in float64
-    whatever the order of the sum (:func:`_is_above`; moved in the store by :func:`_keep_above`); without, the rows are the rotated images as computed.
+    whatever the order of the sum (:func:`_is_above`; moved in the store by :func:`_keep_above`);
+    without, the rows are the rotated images as computed.
     """
-    uv = np.ascontiguousarray(uv, dtype=np.float64)
-    _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset, above)
-    return out
-
-
-def fill_random_orbits(
-    seed_words: npt.NDArray[np.unsignedinteger[Any]],
-    first_point: int,
-    m: int,
-    method: str,
-    count: int,
-    basis: Float64Array | None,
-    out: FloatArray,
-    parts: int = 0,
-    offset: int = 0,
-    above: bool = False,
-) -> FloatArray:
-    """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
-    point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
-    *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
-    (:attr:`symsphere.points.BasePoints.seed_words`); the last orbit cut as there."""
-
-    def stream(lo):
-        return pcg64_state(seed_words, 2 * (first_point + lo))
-
-    _run(_RANDOM, method, count, basis, out, m, parts, stream, offset, above)
+    if isinstance(points, RandomPoints):
+        _run(_RANDOM, method, count, basis, out, points.m, parts, points.part_input, offset, above)
+    else:
+        uv = np.ascontiguousarray(points, dtype=np.float64)
+        _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset, above)
     return out
 
 

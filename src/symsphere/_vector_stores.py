@@ -5,13 +5,15 @@ the float32 kernels were bounded by them: each store holds a store-buffer entry 
 arrives, a vector store one for up to 16 values.  These stores are numba intrinsics (LLVM IR built
 here, inlined where called, no call or reference count per orbit) that write the same values as the
 tables give, bit for bit: :func:`orbit_mask` reads the tables of :mod:`symsphere.symmetry`, and the
-rotated store sums in the order of numpy's ``local @ basis`` (no fused multiply-add).
+rotated store sums ``(x w0 + y w1) + z w2`` without fused multiply-adds, as the kernels always have
+(tests/test_public_outputs.py pins the rows).
 tests/test_kernels.py compares every image with the tables and with the numpy path.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import Any, cast
 
 from llvmlite import ir
 from numba import types
@@ -19,6 +21,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .symmetry import SIGNS, SOURCES, orbit_size
+
+_item_pointer = cast(Callable[..., Any], cgutils.get_item_pointer)  # numba: untyped
 
 __all__ = ["orbit_mask", "store_hemisphere_orbit", "store_rotated_hemisphere", "store_sphere_orbit"]
 
@@ -41,7 +45,7 @@ def _row_pointer(context: Any, builder: Any, array_type: Any, array: Any, index:
     else:
         index = context.cast(builder, index, index_type, types.intp)
     view = context.make_array(array_type)(context, builder, array)
-    return cgutils.get_item_pointer(context, builder, array_type, view, [index, _intp(context, 0)])
+    return _item_pointer(context, builder, array_type, view, [index, _intp(context, 0)])
 
 
 def _coordinates(context: Any, builder: Any, signature: Any, args: Any, dtype: Any) -> list[Any]:
@@ -74,11 +78,11 @@ def _orbit_store(count: int) -> Any:
     mask = orbit_mask(count)
 
     @intrinsic
-    def store(typingctx, x, y, z, rows, i):
+    def store(typingctx: Any, x: Any, y: Any, z: Any, rows: Any, i: Any) -> Any:
         if not (isinstance(rows, types.Array) and rows.ndim == 2 and rows.layout == "C"):
             return None
 
-        def codegen(context, builder, signature, args):
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
             rows_type = signature.args[3]
             element = context.get_value_type(rows_type.dtype)
             width = 64 // context.get_abi_sizeof(element)  # values per 64-byte vector (one AVX-512 register)
@@ -102,22 +106,22 @@ store_hemisphere_orbit = _orbit_store(orbit_size("hemisphere"))
 
 def _rotated_store(count: int) -> Any:
     """``store(x, y, z, rows, i, weights)``: rows[i] = x W[0] + y W[1] + z W[2] (float64, rounded once to
-    the output's dtype), W the (3, 3 count) weights of :func:`_rotated_weights`: image k in columns
+    the output's dtype), W the (3, 3 count) weights of ``_kernels._rotated_weights``: image k in columns
     3k ... 3k + 2.
 
-    In vectors of 8 columns (one AVX-512 register of float64), each value summed in the order
-    ``(x w0 + y w1) + z w2`` without fused multiply-adds, as numpy's ``local @ basis`` sums it, and each
-    vector stored at once.  A loop over the columns in numba vectorised to half that width and, not
-    inlined, cost a call with the arrays' fields on the stack per orbit.
+    In vectors of 8 columns (one AVX-512 register of float64), each value summed as ``(x w0 + y w1) + z w2``
+    without fused multiply-adds (the order tests/test_public_outputs.py pins), and each vector stored at
+    once: numba's loop over the columns vectorises to half this width, and is a call per orbit unless
+    LLVM inlines it.
     """
     columns = 3 * count
 
     @intrinsic
-    def store(typingctx, x, y, z, rows, i, weights):
+    def store(typingctx: Any, x: Any, y: Any, z: Any, rows: Any, i: Any, weights: Any) -> Any:
         if not all(isinstance(a, types.Array) and a.ndim == 2 and a.layout == "C" for a in (rows, weights)):
             return None
 
-        def codegen(context, builder, signature, args):
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
             rows_type, weights_type = signature.args[3], signature.args[5]
             element = context.get_value_type(rows_type.dtype)
             row = _row_pointer(context, builder, rows_type, args[3], args[4], signature.args[4])
