@@ -393,8 +393,8 @@ def profile_cases(n, rng):
     """The pieces of sample_sphere / sample_hemisphere, each timed alone (kind 'piece').
 
     Each piece runs the library's own functions (``pcg64_random``, ``_map_batch``,
-    the orbit store ``_store_orbit``) in the kernel's layout -- one part per numba thread, batches of
-    ``_BATCH`` base points -- with the other pieces left out, so that the sum of the
+    the orbit stores ``store_sphere_orbit`` / ``store_hemisphere_orbit``) in the kernel's layout --
+    one part per numba thread, batches of ``_BATCH`` base points -- with the other pieces left out, so that the sum of the
     pieces against the whole kernel shows how much of them overlaps.
     """
     import numba
@@ -402,13 +402,13 @@ def profile_cases(n, rng):
 
     from symsphere._kernels import (
         _BATCH,
+        RandomPoints,
         _map_batch,
-        _store_orbit,
         fill_orbits,
-        fill_random_orbits,
         part_bounds,
     )
     from symsphere._random.pcg64 import pcg64_advanced, pcg64_random, pcg64_seeded
+    from symsphere._vector_stores import store_hemisphere_orbit, store_sphere_orbit
     from symsphere.points import BasePoints
 
     @njit(parallel=True, cache=False)
@@ -444,14 +444,17 @@ def profile_cases(n, rng):
         # the orbit stores alone, of a fixed point (no draws, no map)
         for part in prange(len(bounds) - 1):
             for i in range(bounds[part], bounds[part + 1]):
-                _store_orbit(0.25, 0.125, 0.5, rows[i], count)
+                if count == 48:
+                    store_sphere_orbit(0.25, 0.125, 0.5, rows, i)
+                else:
+                    store_hemisphere_orbit(0.25, 0.125, 0.5, rows, i)
 
     @njit(parallel=True, cache=False)
     def parallel_fill(flat, value):
         for i in prange(flat.shape[0]):
             flat[i] = value
 
-    basis = symsphere.frames.frame(np.asarray(NORMAL))
+    basis = symsphere.frames.frame(np.asarray(NORMAL) / np.linalg.norm(NORMAL))
     sink = np.zeros(numba.get_num_threads() + 1)
     cases = []
     for count, whole in ((48, "sample_sphere, out="), (24, "sample_hemisphere, out=")):
@@ -519,11 +522,11 @@ def profile_cases(n, rng):
                 ),
                 Case(
                     "kernel",
-                    f"{domain}: kernel drawing its points (fill_random_orbits)",
+                    f"{domain}: kernel drawing its points (fill_orbits, RandomPoints)",
                     name,
                     "piece",
-                    lambda s=source, o=out, c=count, k=m: fill_random_orbits(
-                        s.seed_words, 0, k, "equal_area", c, None, o
+                    lambda s=source, o=out, c=count, k=m: fill_orbits(
+                        RandomPoints(s.seed_words, 0, k), "equal_area", c, None, o
                     ),
                     n,
                     "draws + map + stores",
@@ -537,7 +540,9 @@ def profile_cases(n, rng):
                         "hemisphere: kernel drawing its points, normal=(1,1,1)",
                         name,
                         "piece",
-                        lambda s=source, o=out, k=m: fill_random_orbits(s.seed_words, 0, k, "equal_area", 24, basis, o),
+                        lambda s=source, o=out, k=m: fill_orbits(
+                            RandomPoints(s.seed_words, 0, k), "equal_area", 24, basis, o
+                        ),
                         n,
                         "draws + map + rotated stores",
                         "sample_hemisphere, normal=(1,1,1), out=",

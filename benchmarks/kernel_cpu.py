@@ -5,7 +5,10 @@
 For a loaded machine: ``time.thread_time()`` around each call counts only the time the calling thread ran
 (with ``numba.set_num_threads(1)`` the kernel runs in that thread), not the time it waited for a core, so
 it is the kernel's own cost, stalls on memory included.  It says nothing about two threads sharing the
-memory system (``regress.py`` on an idle machine does).  The base revision's ``src/symsphere`` is
+memory system (``regress.py`` on an idle machine does).  With ``--threads 2`` the kernels run on two
+threads and the clock is ``time.process_time()``, the CPU time of all the process's threads: what two
+threads cost together, stalls included (e.g. on a cache line both write), still blind to waiting for a
+core; numpy's ``fill`` stays on one thread.  The base revision's ``src/symsphere`` is
 copied out of git under another package name (``symsphere_base``) and imported beside this checkout's;
 the rows (numpy's ``fill`` of the same buffer, ``sample_sphere``, ``sample_hemisphere`` and
 ``sample_hemisphere`` about (1, 1, 1), all ``out=``, n = 48 * 2**16, float64 and float32) take turns in
@@ -31,6 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--base", default="HEAD", help="git revision to compare against (default: HEAD)")
     parser.add_argument("--rounds", type=int, default=25, help="interleaved rounds (default: 25)")
+    parser.add_argument("--threads", type=int, default=1, help="numba threads of the kernels (default: 1)")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.base, "src/symsphere"], check=True,
@@ -39,18 +43,19 @@ def main(argv: list[str] | None = None) -> int:
         (Path(folder) / "src" / "symsphere").rename(Path(folder) / "symsphere_base")
         sys.path.insert(0, folder)
         sys.path.insert(0, str(ROOT / "src"))
-        _run(args.base, args.rounds)
+        _run(args.base, args.rounds, args.threads)
     return 0
 
 
-def _run(base: str, rounds: int) -> None:
+def _run(base: str, rounds: int, threads: int) -> None:
     import numpy as np
     import symsphere_base  # type: ignore[import-not-found]  # the copy made above
     from numba import set_num_threads
 
     import symsphere
 
-    set_num_threads(1)
+    set_num_threads(threads)
+    clock = time.thread_time if threads == 1 else time.process_time
     rows = {}
     for dtype in (np.float64, np.float32):
         buffer = np.empty((N, 3), dtype)
@@ -72,10 +77,11 @@ def _run(base: str, rounds: int) -> None:
     keys = list(rows)
     for r in range(rounds):
         for key in keys[r % len(keys) :] + keys[: r % len(keys)]:
-            start = time.thread_time()
+            start = clock()
             rows[key]()
-            times[key].append(time.thread_time() - start)
-    print(f"kernel_cpu.py: one thread, thread CPU ms over {rounds} interleaved rounds, n = {N}")
+            times[key].append(clock() - start)
+    what = "one thread, thread CPU ms" if threads == 1 else f"{threads} threads, process CPU ms"
+    print(f"kernel_cpu.py: {what} over {rounds} interleaved rounds, n = {N}")
     for key in keys:
         fill = min(times[f"fill ({'float64' if 'float64' in key else 'float32'})"])
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}"

@@ -64,7 +64,7 @@ def test_random_kernel_draws_the_same_points_as_take(method, count, normal, m, p
     for dtype in (np.float64, np.float32):
         expected = kernels.fill_orbits(source.take(5, m + 5), method, count, basis, np.empty((m * count, 3), dtype))
         got = np.full((m * count, 3), np.nan, dtype)
-        kernels.fill_random_orbits(source.seed_words, 5, m, method, count, basis, got, parts=parts)
+        kernels.fill_orbits(kernels.RandomPoints(source.seed_words, 5, m), method, count, basis, got, parts=parts)
         assert np.array_equal(got, expected)
 
 
@@ -72,7 +72,8 @@ def test_random_kernel_far_into_the_stream():
     first = 1_000_003
     source = BasePoints("random", 22, total=first + 333)
     expected = kernels.fill_orbits(source.take(first, first + 333), "equal_area", 48, None, np.empty((333 * 48, 3)))
-    got = kernels.fill_random_orbits(source.seed_words, first, 333, "equal_area", 48, None, np.empty((333 * 48, 3)))
+    random_points = kernels.RandomPoints(source.seed_words, first, 333)
+    got = kernels.fill_orbits(random_points, "equal_area", 48, None, np.empty((333 * 48, 3)))
     assert np.array_equal(got, expected)
 
 
@@ -184,7 +185,41 @@ def test_store_keeps_rows_about_a_normal_on_or_above_the_plane(dtype):
         source = BasePoints("random", 4, total=300)
         expected = kernels.fill_orbits(source.take(0, 300), "equal_area", 24, basis, np.empty((7200, 3), dtype),
                                        above=True)  # fmt: skip
-        got = kernels.fill_random_orbits(source.seed_words, 0, 300, "equal_area", 24, basis,
-                                         np.empty((7200, 3), dtype), parts=3, above=True)  # fmt: skip
+        got = kernels.fill_orbits(kernels.RandomPoints(source.seed_words, 0, 300), "equal_area", 24, basis,
+                                  np.empty((7200, 3), dtype), parts=3, above=True)  # fmt: skip
         assert np.array_equal(got, expected)
     assert found_below  # the points put rows below the plane before the store's check: it was tested
+
+
+_store_sphere, _store_hemisphere = kernels.store_sphere_orbit, kernels.store_hemisphere_orbit
+_store_rotated = kernels.store_rotated_hemisphere
+
+
+@njit
+def _write_orbit(rows, i, x, y, z, weights):  # pragma: no cover - compiled by numba
+    if weights.shape[1]:
+        _store_rotated(x, y, z, rows, i, weights)
+    elif rows.shape[1] == 3 * 48:
+        _store_sphere(x, y, z, rows, i)
+    else:
+        _store_hemisphere(x, y, z, rows, i)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+def test_vector_stores_write_their_row_of_the_tables_and_nothing_else(dtype, count, normal):
+    # The orbit stores (LLVM vectors) write row i, and only row i, of a C-contiguous array: exactly the
+    # tables' images (p @ SPHERE_MAPS[k], rounded to the dtype: values that float32 does not hold, so the
+    # rounding of -x must be -(rounding of x)), and about a normal (x w0 + y w1) + z w2 in float64 with
+    # the weights of rotated_weights, by numpy's elementwise products and sums (no FMA), rounded once.
+    p = np.array([0.1, 0.7, 0.3])
+    if normal is None:
+        weights = np.zeros((3, 0))
+        expected = (p @ SPHERE_MAPS[:count]).reshape(-1)
+    else:
+        weights = kernels.rotated_weights(frame(np.array(normal) / np.linalg.norm(normal)), count)
+        expected = (p[0] * weights[0] + p[1] * weights[1]) + p[2] * weights[2]
+    rows = np.full((3, 3 * count), np.nan, dtype)
+    _write_orbit(rows, 1, p[0], p[1], p[2], weights)
+    assert np.array_equal(rows[1], expected.astype(dtype))
+    assert np.isnan(rows[0]).all() and np.isnan(rows[2]).all()

@@ -438,15 +438,12 @@ def test_cut_orbit_is_made_in_the_kernel_call(count, normal, rest, offset):
     source = BasePoints("random", 11, total=m + 3)
     members = (m - 1) * count + (offset + np.arange(rest)) % count
     for dtype in (np.float64, np.float32):
-        whole = kernels.fill_random_orbits(
-            source.seed_words, 3, m, "equal_area", count, basis, np.empty((m * count, 3), dtype)
-        )
+        random_points = kernels.RandomPoints(source.seed_words, 3, m)
+        whole = kernels.fill_orbits(random_points, "equal_area", count, basis, np.empty((m * count, 3), dtype))
         expected = np.concatenate([whole[: (m - 1) * count], whole[members]])
         for parts in (1, 2, 3, 7):
             got = np.full(((m - 1) * count + rest, 3), np.nan, dtype)
-            kernels.fill_random_orbits(
-                source.seed_words, 3, m, "equal_area", count, basis, got, parts=parts, offset=offset
-            )
+            kernels.fill_orbits(random_points, "equal_area", count, basis, got, parts=parts, offset=offset)
             assert np.array_equal(got, expected)
             got[:] = np.nan
             kernels.fill_orbits(source.take(3, m + 3), "equal_area", count, basis, got, parts=parts, offset=offset)

@@ -1,7 +1,7 @@
 """numba kernels: (draws +) map + orbit (+ frame) fused in one pass, one part of the points per thread.
 
 The map formulas are the elementwise functions of :func:`symsphere.warps.square_to_triangle`
-(``register_jitable``), the orbit stores gather from the tables of
+(``register_jitable``), the orbit stores (:mod:`symsphere._vector_stores`) permute by the tables of
 :mod:`symsphere.symmetry`, and about a normal a weights table is built from the
 same tables, so nothing here restates a formula.  The numpy path
 (``warps.Warp.points`` + ``symmetry.orbit`` + ``frames.to_world``) is the
@@ -37,6 +37,7 @@ from ._numba_cache import invalidate_if_changed
 from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
+from ._vector_stores import store_hemisphere_orbit, store_rotated_hemisphere, store_sphere_orbit
 from .symmetry import SIGNS, SOURCES, orbit_size
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
@@ -52,7 +53,7 @@ __all__ = [
     "rotated_weights",
     "prepare_kernels",
     "fill_orbits",
-    "fill_random_orbits",
+    "RandomPoints",
     "part_bounds",
     "part_range",
     "part_count",
@@ -139,54 +140,6 @@ def _map_batch(u, v, code, base):
             base[0, j], base[1, j], base[2, j] = _paper2_point(u[j], v[j])
 
 
-@register_jitable
-def _store_columns(row, at, a, b, c):
-    """The four columns of one row of Tables 1 and 2 at *row*[at ...]: (a, b, c), (-a, b, c), (-a, -b, c),
-    (a, -b, c) (symmetry._COLUMN_SIGNS), written out: plain copies, no table to read."""
-    row[at] = a
-    row[at + 1] = b
-    row[at + 2] = c
-    row[at + 3] = -a
-    row[at + 4] = b
-    row[at + 5] = c
-    row[at + 6] = -a
-    row[at + 7] = -b
-    row[at + 8] = c
-    row[at + 9] = a
-    row[at + 10] = -b
-    row[at + 11] = c
-
-
-@register_jitable
-def _store_orbit(x, y, z, row, count):
-    """row[3k:3k+3] = (x, y, z) @ SPHERE_MAPS[k] for k < count (48 or 24), by the tables' structure
-    (symmetry._build_maps: k = 24 half + 4 i + j): the six rows P0..P5 of Table 1
-    (x, y, z), (y, x, z), (z, y, x), (z, x, y), (x, z, y), (y, z, x), each in its four columns;
-    for the sphere the same again with the third coordinate negated (Table 2's barred rows).
-    tests/test_kernels.py compares every image with the tables."""
-    _store_columns(row, 0, x, y, z)
-    _store_columns(row, 12, y, x, z)
-    _store_columns(row, 24, z, y, x)
-    _store_columns(row, 36, z, x, y)
-    _store_columns(row, 48, x, z, y)
-    _store_columns(row, 60, y, z, x)
-    if count == _SPHERE_ORBIT:
-        _store_columns(row, 72, x, y, -z)
-        _store_columns(row, 84, y, x, -z)
-        _store_columns(row, 96, z, y, -x)
-        _store_columns(row, 108, z, x, -y)
-        _store_columns(row, 120, x, z, -y)
-        _store_columns(row, 132, y, z, -x)
-
-
-@register_jitable
-def _weighted(x, y, z, row, weights):
-    """row = x W[0] + y W[1] + z W[2]: image k in columns 3k ... 3k + 2, W from _rotated_weights
-    (a loop over 72 contiguous columns, which LLVM vectorises)."""
-    for column in range(weights.shape[1]):
-        row[column] = x * weights[0, column] + y * weights[1, column] + z * weights[2, column]
-
-
 # Rows about a normal are kept on or above its plane where they are stored, not in a pass over the
 # output afterwards.  Image k's dot product with the normal is its local third coordinate, one of the
 # base point's x, y, z (Table 1 keeps the third coordinate's sign), up to rounding: the stored row's
@@ -215,8 +168,8 @@ def _is_above(x, y, z, normal, slack):
 
 
 @register_jitable
-def _keep_above(row, normal):
-    """Move the images in *row* (3 count, the output dtype) that fail :func:`_is_above` onto the
+def _keep_above(rows, i, normal):
+    """Move the images in *rows*[i] (3 count, the output dtype) that fail :func:`_is_above` onto the
     upper side of the plane of *normal*, in place.
 
     A direction on the equator of the local hemisphere (z = 0), rotated onto the normal and rounded
@@ -226,12 +179,12 @@ def _keep_above(row, normal):
     renormalised, until it passes.  Only rows within rounding of the plane are moved (by a few ulps),
     so the density is unchanged.
     """
-    eps = np.finfo(row.dtype).eps
+    eps = np.finfo(rows.dtype).eps
     slack = 4.0 * eps
-    for k in range(row.shape[0] // 3):
-        if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+    for k in range(rows.shape[1] // 3):
+        if _is_above(rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2], normal, slack):
             continue
-        x, y, z = np.float64(row[3 * k]), np.float64(row[3 * k + 1]), np.float64(row[3 * k + 2])
+        x, y, z = np.float64(rows[i, 3 * k]), np.float64(rows[i, 3 * k + 1]), np.float64(rows[i, 3 * k + 2])
         below = min(x * normal[0] + y * normal[1] + z * normal[2], 0.0)
         x, y, z = x - below * normal[0], y - below * normal[1], z - below * normal[2]
         lift = eps
@@ -240,20 +193,20 @@ def _keep_above(row, normal):
             b = y + lift * normal[1]
             c = z + lift * normal[2]
             norm = np.sqrt(a * a + b * b + c * c)
-            row[3 * k], row[3 * k + 1], row[3 * k + 2] = a / norm, b / norm, c / norm
-            if _is_above(row[3 * k], row[3 * k + 1], row[3 * k + 2], normal, slack):
+            rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2] = a / norm, b / norm, c / norm
+            if _is_above(rows[i, 3 * k], rows[i, 3 * k + 1], rows[i, 3 * k + 2], normal, slack):
                 break
             lift *= 2.0
 
 
 @register_jitable
 def _copy_members(scratch, tail, offset):
-    """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (3 count,)."""
-    count = scratch.shape[0] // 3
+    """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (1, 3 count)."""
+    count = scratch.shape[1] // 3
     for i in range(tail.shape[0]):
         k = (offset + i) % count
         for l in range(3):
-            tail[i, l] = scratch[3 * k + l]
+            tail[i, l] = scratch[0, 3 * k + l]
 
 
 @register_jitable
@@ -313,9 +266,8 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
     @njit(**_OPTIONS)
     def fill(points, lo, hi, weights, normal, rows, tail, offset):  # pragma: no cover - compiled by numba
         # The branches on source and kind are at this function's top level and the map's in
-        # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are functions of
-        # their own (register_jitable: compiled once per process and shared by the cases; LLVM
-        # inlines them), not numba-IR inlines, which cost compile time in every case.
+        # _map_batch, inlined in numba's IR: numba prunes them all.  The stores are intrinsics
+        # (symsphere._vector_stores): a few vector instructions in place, no call per orbit.
         whole = rows.shape[0]
         u = np.empty(_BATCH)
         v = np.empty(_BATCH)
@@ -323,7 +275,7 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             u[j] = 0.5
             v[j] = 0.5
         base = np.empty((3, _BATCH))
-        scratch = np.empty(rows.shape[1], dtype=tail.dtype)  # the cut orbit, stored whole
+        scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)  # the cut orbit, stored whole
         if source == _RANDOM:
             for j in range(min(_BATCH, hi - lo)):
                 u[j] = pcg64_random(points)
@@ -338,26 +290,26 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _SPHERE_ORBIT)
+                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], rows[first + j], _HEMISPHERE_ORBIT)
+                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], rows[first + j], weights)
+                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], rows, first + j, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
-                        _keep_above(rows[first + j], normal)
+                        _keep_above(rows, first + j, normal)
                 if source == _RANDOM and j < upcoming:
                     u[j] = pcg64_random(points)
                     v[j] = pcg64_random(points)
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _SPHERE_ORBIT)
+                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], scratch, 0)
                 elif kind == _HEMISPHERE:
-                    _store_orbit(base[0, j], base[1, j], base[2, j], scratch, _HEMISPHERE_ORBIT)
+                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], scratch, 0)
                 else:
-                    _weighted(base[0, j], base[1, j], base[2, j], scratch, weights)
+                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], scratch, 0, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
-                        _keep_above(scratch, normal)
+                        _keep_above(scratch, 0, normal)
                 _copy_members(scratch, tail, offset)
 
     return fill
@@ -376,8 +328,8 @@ def _prepare_kernels():
 
 
 def _run(source, method, count, basis, out, m, parts, part_input, offset, above):
-    """Run the case's kernel over the parts of m points (the entry of :func:`fill_orbits` and
-    :func:`fill_random_orbits`, which take the run's facts one by one instead of a :class:`Plan`)."""
+    """Run the case's kernel over the parts of m points (the entry of :func:`fill_orbits`, which takes
+    the run's facts one by one instead of a :class:`Plan`)."""
     _prepare_kernels()
     kind, weights = _store_kind(count, basis)
     normal = np.ascontiguousarray(basis[2], dtype=np.float64) if above and kind == _HEMISPHERE_ROTATED else _NO_NORMAL
@@ -438,12 +390,8 @@ def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, pa
     source = plan.source
     part_input: Callable[[int], npt.NDArray[Any]]
     if source.kind == "random":
-        seed_words = source.seed_words
-        assert seed_words is not None  # random sources always have the stream's seed
-
-        def part_input(lo: int) -> npt.NDArray[Any]:
-            return pcg64_state(seed_words, 2 * (start + lo))
-
+        assert source.seed_words is not None  # random sources always have the stream's seed
+        part_input = RandomPoints(source.seed_words, start, stop - start).part_input
         kernel = _fill_kernel(_RANDOM, METHOD_CODES[plan.method], plan.kind)
     else:
         uv = np.ascontiguousarray(source.take(start, stop), dtype=np.float64)
@@ -456,8 +404,23 @@ def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, pa
     return out
 
 
+@dataclass(frozen=True)
+class RandomPoints:
+    """The random base points ``first ... first + m - 1``: point i is draws 2i, 2i + 1 of numpy's
+    ``PCG64(seed_sequence)``, *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
+    (:attr:`symsphere.points.BasePoints.seed_words`); the kernel draws them itself."""
+
+    seed_words: npt.NDArray[np.unsignedinteger[Any]]
+    first: int
+    m: int
+
+    def part_input(self, lo: int) -> npt.NDArray[np.uint64]:
+        """The kernel's *points* for the part from point ``first + lo`` on: the stream's state there."""
+        return pcg64_state(self.seed_words, 2 * (self.first + lo))
+
+
 def fill_orbits(
-    uv: FloatArray,
+    points: FloatArray | RandomPoints,
     method: str,
     count: int,
     basis: Float64Array | None,
@@ -466,44 +429,25 @@ def fill_orbits(
     offset: int = 0,
     above: bool = False,
 ) -> FloatArray:
-    """Write the orbits of the points *uv* (m, 2) into *out* (m * count, 3).
+    """Write the orbits of the m base *points* into *out* (m * count, 3): points given as an (m, 2) array
+    of (u, v), or :class:`RandomPoints`, which the kernel draws.
 
     *basis* is None or the (3, 3) frame of :func:`symsphere.frames.frame`
-    (hemisphere only).  Trusts its inputs: *uv* float64 C-contiguous, *out*
-    C-contiguous float32 or float64.  *parts*: how many stretches to split the points
-    into (0: numba's thread count, but at most one part per 256 points; the output does not depend on it).  If *out* has
+    (hemisphere only).  Trusts its inputs: *out* C-contiguous float32 or float64.  *parts*: how many
+    stretches to split the points into (0: numba's thread count, but at most one part per 256 points;
+    the output does not depend on it).  If *out* has
     ``(m - 1) * count + rest`` rows, ``0 < rest < count``, the last point's orbit is cut:
     the last *rest* rows are its members ``(offset + i) % count``, ``i < rest``, in the
     same kernel call.  With *above* (and a *basis*), every row is on or above the plane of the
     normal ``basis[2]`` (scaled or not), its dot product with it >= 0 in *out*'s dtype and in float64
-    whatever the order of the sum (:func:`_is_above`; moved in the store by :func:`_keep_above`); without, the rows are the rotated images as computed.
+    whatever the order of the sum (:func:`_is_above`; moved in the store by :func:`_keep_above`);
+    without, the rows are the rotated images as computed.
     """
-    uv = np.ascontiguousarray(uv, dtype=np.float64)
-    _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset, above)
-    return out
-
-
-def fill_random_orbits(
-    seed_words: npt.NDArray[np.unsignedinteger[Any]],
-    first_point: int,
-    m: int,
-    method: str,
-    count: int,
-    basis: Float64Array | None,
-    out: FloatArray,
-    parts: int = 0,
-    offset: int = 0,
-    above: bool = False,
-) -> FloatArray:
-    """As :func:`fill_orbits` for the random points ``first_point ... first_point + m - 1``:
-    point i is draws 2i, 2i + 1 of numpy's ``PCG64(seed_sequence)`` with
-    *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``
-    (:attr:`symsphere.points.BasePoints.seed_words`); the last orbit cut as there."""
-
-    def stream(lo):
-        return pcg64_state(seed_words, 2 * (first_point + lo))
-
-    _run(_RANDOM, method, count, basis, out, m, parts, stream, offset, above)
+    if isinstance(points, RandomPoints):
+        _run(_RANDOM, method, count, basis, out, points.m, parts, points.part_input, offset, above)
+    else:
+        uv = np.ascontiguousarray(points, dtype=np.float64)
+        _run(_GIVEN, method, count, basis, out, len(uv), parts, lambda lo: uv, offset, above)
     return out
 
 
@@ -545,6 +489,8 @@ def _store_kind(count, basis):
     """(kind of store, the image weights: none without a frame)."""
     if basis is None:
         return (_SPHERE if count == _SPHERE_ORBIT else _HEMISPHERE), _NO_WEIGHTS
+    if count != _HEMISPHERE_ORBIT:
+        raise ValueError(f"a frame applies to the hemisphere's orbits of {_HEMISPHERE_ORBIT}, not {count}")
     return _HEMISPHERE_ROTATED, _rotated_weights(np.ascontiguousarray(basis, dtype=np.float64), count)
 
 

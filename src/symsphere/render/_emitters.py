@@ -48,6 +48,7 @@ from ..frames import frame_rows
 from ..warps._spherical_rectangle import rectangle_frame, rectangle_point
 
 __all__ = [
+    "ALWAYS_COMPILED",
     "INLINED",
     "choose_light",
     "disk_point",
@@ -94,12 +95,18 @@ LIGHT_KINDS = ("sphere", "cone", "quad", "rectangle")
 """The emitter kinds the renderer's kernel is specialised on (:func:`light_kinds`): any sphere, a full
 (unclipped) sphere, which may be sampled by its cone, any quad, a rectangle, which may be sampled in
 solid angle."""
+ALWAYS_COMPILED = ("sphere", "quad")
+"""Kinds whose code every kernel holds: a cap sampled by its height and a parallelogram by its area are
+a few lines each, and with them compiled for every scene, scenes that differ only in these kinds share
+one kernel (one compile in a process or a test run, not one per set of kinds).  The cone and the
+rectangle in solid angle are most of the light sampling's compile time (docs/results/cold-start.md)."""
 
 
 def light_kinds(
     spheres: Any, sphere_material: Any, quads: Any, quad_material: Any, materials: Any
 ) -> tuple[bool | None, ...]:
-    """For each of :data:`LIGHT_KINDS`: True if the scene has an emitter of that kind, else None.
+    """For each of :data:`LIGHT_KINDS`: True if the kernel is compiled for it, else None: always for the
+    kinds of :data:`ALWAYS_COMPILED`, and for the others if the scene has an emitter of that kind.
 
     The tables are those of :meth:`symsphere.render.Scene.arrays`; an emitter is an object whose
     material emits (what the kernel tests before it asks :func:`emitter_pdf`).  A kernel called with
@@ -110,13 +117,13 @@ def light_kinds(
     quad_lights = emits[np.asarray(quad_material, dtype=np.int64)]
     full = np.asarray(spheres)[8] == -np.inf
     rectangle = np.asarray(quads)[25] != 0.0
-    found = (
-        bool(sphere_lights.any()),
-        bool((sphere_lights & full).any()),
-        bool(quad_lights.any()),
-        bool((quad_lights & rectangle).any()),
-    )
-    return tuple(True if kind else None for kind in found)
+    found = {
+        "sphere": bool(sphere_lights.any()),
+        "cone": bool((sphere_lights & full).any()),
+        "quad": bool(quad_lights.any()),
+        "rectangle": bool((quad_lights & rectangle).any()),
+    }
+    return tuple(True if found[kind] or kind in ALWAYS_COMPILED else None for kind in LIGHT_KINDS)
 
 
 @njit(**TABLE_FUNCTION)
