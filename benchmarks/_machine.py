@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import os
 import platform
+import sys
+import time
 
-__all__ = ["cpu_name", "cpu_snapshot", "others_cpu"]
+__all__ = ["cpu_name", "cpu_snapshot", "others_cpu", "run_header"]
 
 
 def cpu_name():
@@ -44,3 +46,19 @@ def others_cpu(before, after, wall):
         return None
     seconds = max((after[0] - before[0]) - (after[1] - before[1]), 0.0)
     return {"cpu_s": seconds, "wall_s": wall, "share_of_all_cpus": seconds / (wall * (os.cpu_count() or 1))}
+
+
+def run_header():
+    """What every results file starts with: the command, the CPU, the time, the load and the measured sources.
+
+    The sources' hashes let ``tables.py`` say when a file predates a change of the code it measures.
+    """
+    from tables import source_hashes  # tables.py is the one home of the hashing
+
+    return dict(
+        command="python " + " ".join(sys.argv),
+        cpu=cpu_name(),
+        date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        load_average=list(os.getloadavg()),
+        sources=source_hashes(),
+    )

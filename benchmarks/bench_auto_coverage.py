@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 import warnings
@@ -40,8 +39,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import cpu_name
-from tables import source_hashes
+from _machine import run_header
 
 import symsphere
 from symsphere.integrands import INTEGRANDS
@@ -161,12 +159,8 @@ def main() -> None:
         args.json.write_text(
             json.dumps(
                 dict(
-                    command="python " + " ".join(sys.argv),
-                    cpu=cpu_name(),
-                    date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    **run_header(),
                     n_max=N_MAX,
-                    load_average=list(os.getloadavg()),
-                    sources=source_hashes(),
                     rows=rows,
                     fixed=fixed_rows,
                 ),

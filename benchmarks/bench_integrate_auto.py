@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import time
 import warnings
@@ -34,8 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import cpu_name
-from tables import source_hashes
+from _machine import run_header
 
 import symsphere
 from symsphere.harmonics import real_sh
@@ -147,13 +145,9 @@ def main():
         args.json.write_text(
             json.dumps(
                 dict(
-                    command="python " + " ".join(sys.argv),
-                    cpu=cpu_name(),
-                    date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    **run_header(),
                     n_max=args.n_max,
                     seed=args.seed,
-                    load_average=list(os.getloadavg()),
-                    sources=source_hashes(),
                     summary=summary,
                     rows=rows,
                 ),
