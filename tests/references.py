@@ -181,6 +181,18 @@ def assert_power(result, w, power=0.99):
     )
 
 
+def raises_naming(call, error, named):
+    """*call()* raises *error* whose message matches *named* (the argument it names), with no warning first."""
+    import warnings
+
+    import pytest
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=named):
+            call()
+
+
 def one_line_error(stderr: str) -> str:
     """The one line a command wrote on stderr (no traceback), for the one-line-error tests."""
     # tqdm bars aside, and the line saying numba compiles (a first run with an empty cache)

@@ -3,11 +3,11 @@
 under random inputs in test_properties.py."""
 
 import math
-import warnings
 
 import numpy as np
 import pytest
 from numba import njit
+from references import raises_naming
 
 from symsphere import frames
 from symsphere.frames import frame, frame_rows, to_local, to_world
@@ -100,7 +100,4 @@ def test_bad_arguments_name_themselves(call, error, name):
     ],
 )  # fmt: skip
 def test_wrong_types_and_values_name_the_argument(call, error, named):
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(error, match=named):
-            call()
+    raises_naming(call, error, named)

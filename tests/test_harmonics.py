@@ -7,11 +7,10 @@ z axis x trapezoid in the azimuth, exact for the degrees involved.
 
 import itertools
 import math
-import warnings
 
 import numpy as np
 import pytest
-from references import cap_rule
+from references import cap_rule, raises_naming
 from scipy import special
 
 import symsphere as ss
@@ -163,7 +162,4 @@ def test_bad_input(call, error, word):
     ],
 )  # fmt: skip
 def test_wrong_types_and_values_name_the_argument(call, error, named):
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(error, match=named):
-            call()
+    raises_naming(call, error, named)

@@ -6,11 +6,11 @@ import math
 import os
 import pathlib
 import pickle
-import warnings
 
 import numba
 import numpy as np
 import pytest
+from references import raises_naming
 
 import symsphere
 from symsphere._testing import render_integrator as K
@@ -356,7 +356,4 @@ def test_write_outputs_is_all_or_nothing_and_names_the_failing_file(tmp_path, mo
     ],
 )  # fmt: skip
 def test_wrong_types_and_values_name_the_argument(call, error, named):
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(error, match=named):
-            call()
+    raises_naming(call, error, named)

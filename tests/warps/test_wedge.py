@@ -2,12 +2,11 @@
 
 import itertools
 import math
-import warnings
 
 import numpy as np
 import pytest
 from numba import njit
-from references import ELEMENTARY_ULPS, assert_power, assert_within_eps
+from references import ELEMENTARY_ULPS, assert_power, assert_within_eps, raises_naming
 from scipy import integrate
 
 from symsphere import frames, warps
@@ -436,7 +435,4 @@ def test_scalar_functions_still_compile_in_kernels():
     ],
 )  # fmt: skip
 def test_wrong_types_and_values_name_the_argument(call, error, named):
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        with pytest.raises(error, match=named):
-            call()
+    raises_naming(call, error, named)
