@@ -13,6 +13,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import cast
 
+from .._signals import deferred as signals_deferred
 from .values import short_repr
 
 __all__ = [
@@ -156,11 +157,14 @@ def check_output_path(path: object, name: str = "path", *, probe: bool = True) -
         raise NotADirectoryError(errno.ENOTDIR, f"{str(given.parent)!r} is not a directory", str(given))
     if probe:
         trial = folder / f".{target.name}.{secrets.token_hex(4)}.probe"
-        try:
-            os.close(os.open(trial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
-        except OSError as exc:
-            raise OSError(exc.errno, f"cannot create a file in {str(folder)!r} ({exc.strerror})", str(given)) from None
-        os.unlink(trial)
+        with signals_deferred():  # a Ctrl-C between creating and removing it would leave the probe behind
+            try:
+                os.close(os.open(trial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            except OSError as exc:
+                raise OSError(
+                    exc.errno, f"cannot create a file in {str(folder)!r} ({exc.strerror})", str(given)
+                ) from None
+            os.unlink(trial)
     return given
 
 
