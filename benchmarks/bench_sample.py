@@ -7,11 +7,16 @@ median (and the minimum) over the repeats, directions per second, bytes
 written per second and speed ratios (reference time / case time: above 1 is
 faster than the reference):
 
-* ``vs fill``        -- numpy ``ndarray.fill`` of the same bytes (n * 3 * itemsize)
+* ``vs write limit (touched)`` -- the fastest fill of the same bytes (n * 3 * itemsize)
                         into an already touched buffer: the memory write limit
-                        for ``out=`` cases (target >= 0.8);
-* ``vs empty+fill``  -- ``np.empty`` + ``fill`` of the same bytes: the limit for
-                        freshly allocated output, page faults included (target >= 0.9);
+                        for ``out=`` cases (target >= 0.8).  The fills are those of
+                        benchmarks/_write_limit.py, with the samplers' threads: numpy's
+                        ``ndarray.fill`` (one thread), a numba ``prange`` loop, the same
+                        with non-temporal stores, a numba loop on Python threads.  Files
+                        written before had numpy's ``fill`` alone ("vs fill (touched)");
+* ``vs write limit (fresh)``  -- the fastest of ``np.empty`` + each fill: the limit for
+                        freshly allocated output, page faults included (target >= 0.9;
+                        before: ``np.empty`` + numpy's ``fill``, "vs empty+fill");
 * ``vs classic``     -- numpy's textbook recipe z = 1 - 2u, phi = 2 pi v in the
                         same dtype (target >= 20);
 * ``vs Mitsuba``     -- Mitsuba 3's ``mi.warp.square_to_uniform_sphere`` in the
@@ -57,6 +62,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from _machine import cpu_name, cpu_snapshot, others_cpu  # benchmarks/_machine.py (the script's folder is on sys.path)
+from _write_limit import FILLS  # benchmarks/_write_limit.py: the write limit's fills
 
 import symsphere
 from symsphere import sample_hemisphere, sample_sphere
@@ -130,6 +136,30 @@ def reference_cases(n, rng):
                 lambda d=dtype: np.empty((n, 3), dtype=d).fill(FILL_VALUE),
                 n,
             ),
+        ]
+        for way, fill in FILLS.items():
+            if way == "numpy fill":  # the two cases above, under the labels of the earlier files
+                continue
+            touched_way = np.full(n * 3, FILL_VALUE, dtype=dtype)  # its own: see _write_limit.fills
+            cases += [
+                Case(
+                    "limit",
+                    f"{way} fill, touched buffer",
+                    name,
+                    "ref",
+                    lambda f=fill, b=touched_way: f(b, FILL_VALUE),
+                    n,
+                ),
+                Case(
+                    "limit",
+                    f"np.empty + {way} fill",
+                    name,
+                    "ref",
+                    lambda f=fill, d=dtype: f(np.empty(n * 3, dtype=d), FILL_VALUE),
+                    n,
+                ),  # fmt: skip
+            ]
+        cases += [
             Case(
                 "numpy",
                 "numpy classic (z = 1 − 2u, φ = 2πv)",
@@ -581,6 +611,18 @@ def measure(cases, repeats, warmup=2):
             case.times.append(time.perf_counter() - t0)
 
 
+def write_limit(cases):
+    """Whether *cases* have the write limit's fills (results files written before have numpy's alone)."""
+    return any(c.group == "limit" and c.kind == "ref" and c.label.startswith("numba") for c in cases)
+
+
+def _fastest(cases, dtype, fresh, best=False):
+    """The fastest write-limit case of *dtype* (fresh: ``np.empty`` + a fill; else into a touched buffer)."""
+    found = [c for c in cases if c.group == "limit" and c.kind == "ref" and c.dtype == dtype
+             and c.label.startswith("np.empty") == fresh and (fresh or c.label.endswith("touched buffer"))]  # fmt: skip
+    return min(found, key=lambda c: c.best if best else c.median, default=None)
+
+
 def _find(cases, group, label, dtype):
     for case in cases:
         if case.group == group and case.label.startswith(label) and case.dtype == dtype:
@@ -610,24 +652,31 @@ def ratios(cases):
             mitsuba = mitsuba_frame
         elif case.label.startswith("sample_hemisphere"):
             mitsuba = mitsuba_hemisphere
-        fill = _find(cases, "limit", "numpy fill, touched", case.dtype)
-        empty_fill = _find(cases, "limit", "np.empty + fill", case.dtype)
         classic = _find(cases, "numpy", "numpy classic", case.dtype)
-        references = {
-            "vs_fill": fill if case.directions else None,
-            "vs_empty_fill": empty_fill if case.directions else None,
-            "vs_classic": classic if case.kind != "piece" else None,
-            "vs_mitsuba": mitsuba if case.dtype == "float32" and case.kind != "piece" else None,
-        }
-        result[id(case)] = {key: _ratio(ref, case) for key, ref in references.items()}
-        result[id(case)].update({key + "_min": _ratio(ref, case, best=True) for key, ref in references.items()})
+        result[id(case)] = {}
+        for best, suffix in ((False, ""), (True, "_min")):  # the fastest fill by medians, and by minima
+            references = {
+                "vs_fill": _fastest(cases, case.dtype, False, best) if case.directions else None,
+                "vs_empty_fill": _fastest(cases, case.dtype, True, best) if case.directions else None,
+                "vs_classic": classic if case.kind != "piece" else None,
+                "vs_mitsuba": mitsuba if case.dtype == "float32" and case.kind != "piece" else None,
+            }
+            result[id(case)].update({key + suffix: _ratio(ref, case, best) for key, ref in references.items()})
     return result
 
 
+def _limit_headers(cases):
+    """The write-limit columns' headers: the fastest fill, or numpy's fill in files written before."""
+    if write_limit(cases):
+        return "vs write limit (touched)", "vs write limit (fresh)"
+    return "vs fill (touched)", "vs empty+fill"
+
+
 def main_table(cases, table_ratios, n):
+    touched, fresh = _limit_headers(cases)
     lines = [
-        "| case | dtype | median ms | min ms | directions/s | GB/s written | vs fill (touched) "
-        "| vs empty+fill | vs numpy classic | vs Mitsuba (f32, same domain) |",
+        f"| case | dtype | median ms | min ms | directions/s | GB/s written | {touched} "
+        f"| {fresh} | vs numpy classic | vs Mitsuba (f32, same domain) |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for case in cases:
@@ -645,7 +694,8 @@ def main_table(cases, table_ratios, n):
 
 def profile_table(cases, table_ratios):
     lines = [
-        "| piece | dtype | median ms | min ms | share of the whole call (float64 / float32) | vs fill (touched) | note |",
+        "| piece | dtype | median ms | min ms | share of the whole call (float64 / float32) "
+        f"| {_limit_headers(cases)[0]} | note |",
         "|---|---|---:|---:|---|---:|---|",
     ]
     for case in cases:
@@ -717,6 +767,8 @@ TARGETS = (
 def target_rows(cases, table_ratios):
     rows = []
     for what, label, dtype, key, threshold in TARGETS:
+        if write_limit(cases):
+            what = what.replace("× (empty+fill)", "× write limit (fresh)").replace("× fill", "× write limit")
         case = next((c for c in cases if c.group == "symsphere" and c.label == label and c.dtype == dtype), None)
         value = None if case is None else table_ratios[id(case)][key]
         best = None if case is None else table_ratios[id(case)][key + "_min"]
@@ -776,6 +828,9 @@ def main(argv=None):
     import numba
     import scipy
 
+    # the write limit's prange may start numba's OpenMP threads before symsphere does: make them wait
+    # passively as symsphere would (spinning, they hold the cores the samplers' threads need)
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")
     n = args.n
     rng = np.random.default_rng(12345)
     load_before = os.getloadavg()

@@ -13,8 +13,12 @@ workers take turns row by row: in every round each row runs once in each, the or
 alternating, and only one process runs at a time, so both see the same machine.  Reported per row:
 the median over the rounds of each revision and the speed ratio base / new (above 1: this checkout is
 faster); for the sampling rows also each one's fraction of the memory write limit of its revision's
-process (numpy ``fill`` of the same bytes into a touched buffer for ``out=``, ``np.empty`` + ``fill``
-for fresh output, as in bench_sample.py).
+process, and the ceiling: the base's time over the write limit's in this checkout's process, the
+highest speed-up over the base that writing the bytes allows.  The write limit is the fastest of four
+fills of the same bytes with the samplers' thread count (benchmarks/_write_limit.py: numpy ``fill``,
+a numba ``prange`` loop, the same with non-temporal stores, a numba loop on Python threads), into a touched buffer for ``out=`` and
+``np.empty`` + the fill for fresh output, so that the page faults count as for the sampler; the fills
+are this script's own code, the same in both workers.
 
 Rows: ``sample_sphere``, ``sample_hemisphere`` and ``sample_hemisphere`` about the normal (1, 1, 1),
 float64 and float32, ``out=`` and fresh (n = 48 * 2**16); ``integrate`` of a numba-compiled f (the
@@ -38,6 +42,7 @@ import time
 from pathlib import Path
 
 from _machine import cpu_name, cpu_snapshot  # benchmarks/_machine.py (the script's folder is on sys.path)
+from _write_limit import fills  # benchmarks/_write_limit.py: the write limit's fills
 from tables import source_hashes  # benchmarks/tables.py: the measured files, for the tables' stale note
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,8 +64,8 @@ def _sampling_rows(n):
     for dtype in (np.float64, np.float32):
         name = np.dtype(dtype).name
         buffer = np.empty((n, 3), dtype)
-        rows[f"fill limit, out= ({name})"] = lambda b=buffer: b.fill(0.5)
-        rows[f"fill limit, fresh ({name})"] = lambda d=dtype: np.empty((n, 3), d).fill(0.5)
+        for (way, kind), fill in fills(n, dtype).items():
+            rows[f"write limit: {way}, {kind} ({name})"] = fill
         for label, function, extra in (
             ("sample_sphere", symsphere.sample_sphere, {}),
             ("sample_hemisphere", symsphere.sample_hemisphere, {}),
@@ -162,6 +167,9 @@ def worker(args):
 class Worker:
     def __init__(self, tree, cache, args):
         env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=str(cache))
+        # the write limit's prange starts numba's OpenMP threads, maybe before symsphere does: make them wait
+        # passively as symsphere would (spinning, they hold the cores the samplers' threads need)
+        env.setdefault("OMP_WAIT_POLICY", "passive")
         if args.threads:  # one thread: the kernels' own speed, less sensitive to a loaded machine
             env["NUMBA_NUM_THREADS"] = str(args.threads)
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--n", str(args.n)]
@@ -202,12 +210,20 @@ def _dirty():
     return bool(status.strip())
 
 
-def _limit(name):
-    """The fill-limit row a sampling row is compared with (same dtype, out= or fresh), or None."""
+def _limits(name, names):
+    """The write-limit rows a sampling row is compared with (same dtype, out= or fresh; the fastest of them
+    is the limit), or []."""
     if not name.startswith("sample_"):
-        return None
+        return []
     dtype = name.rsplit("(", 1)[1]
-    return f"fill limit, {'out=' if ', out= (' in name else 'fresh'} ({dtype}"
+    kind = "out=" if ", out= (" in name else "fresh"
+    return [r for r in names if r.startswith("write limit: ") and r.endswith(f", {kind} ({dtype}")]
+
+
+def _limit(medians, rows):
+    """(median, row) of the fastest of *rows* in one worker's medians, or (None, None)."""
+    timed = [(medians[r], r) for r in rows if medians.get(r)]
+    return min(timed) if timed else (None, None)
 
 
 def report(result):
@@ -220,18 +236,33 @@ def report(result):
     for name, why in sorted({**result["missing"]["base"], **result["missing"]["new"]}.items()):
         print(f"  skipped in {'new' if name in result['missing']['new'] else 'base'}: {name}: {why}")
     print()
-    print("| row | base (ms) | new (ms) | speed new / base | base of fill limit | new of fill limit |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print(table_text(result))
+
+
+def table_text(result):
+    """The table of a result (also benchmarks/tables.py's, for the docs); files written before the write
+    limit and the ceiling have "fill limit" rows (numpy's one-thread ``fill``) and no ceiling column."""
+    ceiling = any("ceiling" in row for row in result["table"])
+    limit = "write limit" if ceiling else "fill limit"
+    lines = [
+        f"| row | base (ms) | new (ms) | speed new / base | base of {limit} | new of {limit} |"
+        + " ceiling new / base |" * ceiling,
+        "|---|---:|---:|---:|---:|---:|" + "---:|" * ceiling,
+    ]
+    limits = {row.get("limit_new") for row in result["table"]}  # the fastest fill in this checkout's process
     for row in result["table"]:
         base, new = row["base_ms"], row["new_ms"]
         cells = [f"{base:.2f}" if base else "—", f"{new:.2f}" if new else "—"]
         cells.append(f"{row['speed_ratio']:.2f}×" if row["speed_ratio"] else "—")
-        for key in ("base_of_limit", "new_of_limit"):
-            cells.append(f"{row[key]:.2f}×" if row.get(key) else "")
+        keys = ("base_of_limit", "new_of_limit") + ("ceiling",) * ceiling
+        cells += [f"{row[key]:.2f}×" if row.get(key) else "" for key in keys]
         label = row["row"]
         if row.get("mpaths_per_s_new"):
             label += f" ({row['mpaths_per_s_base'] or 0:.2f} → {row['mpaths_per_s_new']:.2f} M paths/s)"
-        print(f"| {label} | " + " | ".join(cells) + " |")
+        if label in limits:
+            label += " — the limit"  # of the ceiling
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def main(argv=None):
@@ -290,11 +321,15 @@ def main(argv=None):
         base, new = medians["base"][row], medians["new"][row]
         entry = {"row": row, "base_ms": base and base * 1e3, "new_ms": new and new * 1e3,
                  "speed_ratio": base / new if base and new else None}  # fmt: skip
-        limit = _limit(row)
-        if limit:
+        limits = _limits(row, names)
+        if limits:
             for name in ("base", "new"):
-                own, ref = medians[name][row], medians[name].get(limit)
+                ref, entry[f"limit_{name}"] = _limit(medians[name], limits)
+                own = medians[name][row]
                 entry[f"{name}_of_limit"] = ref / own if own and ref else None
+            # no revision writes faster than the limit in this checkout's process: the highest speed-up possible
+            ref, _ = _limit(medians["new"], limits)
+            entry["ceiling"] = base / ref if base and ref else None
         for prefix, size in PATHS.items():
             if row.startswith(prefix):
                 paths = size["width"] * size["height"] * size["spp"]

@@ -233,27 +233,18 @@ def _targets(loaded):
 
 
 def _regress(loaded):
+    sys.path.insert(0, str(Path(__file__).parent))
+    import regress
+
     (_, result), *_ = loaded
-    lines = [
+    caption = (
         f"`{result.get('command') or 'python benchmarks/regress.py --base ' + result['base']}`: base "
         f"{result['base']} against {result['new']}, {result['date'][:16].replace('T', ' ')} UTC; "
         f"{result['rounds']} interleaved rounds, n = {result['n']}; {result['cpu']}, numba threads: "
         f"{result.get('threads', 'numba' + chr(39) + 's default')}; other processes used {result['others_share']} "
-        "of the CPUs while it timed.",
-        "",
-        "| row | base (ms) | new (ms) | speed new / base | base of fill limit | new of fill limit |",
-        "|---|---:|---:|---:|---:|---:|",
-    ]
-    for row in result["table"]:
-        base, new = row["base_ms"], row["new_ms"]
-        cells = [f"{base:.2f}" if base else "—", f"{new:.2f}" if new else "—"]
-        cells.append(f"{row['speed_ratio']:.2f}×" if row["speed_ratio"] else "—")
-        cells += [f"{row[k]:.2f}×" if row.get(k) else "" for k in ("base_of_limit", "new_of_limit")]
-        label = row["row"]
-        if row.get("mpaths_per_s_new"):
-            label += f" ({row['mpaths_per_s_base'] or 0:.2f} → {row['mpaths_per_s_new']:.2f} M paths/s)"
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        "of the CPUs while it timed."
+    )
+    return caption + "\n\n" + regress.table_text(result)
 
 
 def _sentence(loaded):
@@ -266,10 +257,11 @@ def _sentence(loaded):
     normal = find("sample_hemisphere, normal=(1,1,1), out=", "float32")
     sphere64 = find("sample_sphere, out=", "float64")
     meta = results["meta"]
+    limit = "the fastest of four fills" if bench_sample.write_limit(cases) else "numpy's own `fill`"
     return (
         f"On a {meta['cpus']}-core {meta['cpu']}, `sample_sphere(n, out=...)` writes "
         f"{meta['n'] / sphere.median / 1e6:,.0f} million float32 directions per second "
-        f"({table[id(sphere)]['vs_fill']:.2f}× numpy's own `fill` of the same bytes; float64 "
+        f"({table[id(sphere)]['vs_fill']:.2f}× {limit} of the same bytes; float64 "
         f"{table[id(sphere64)]['vs_fill']:.2f}×), and the hemisphere about a normal "
         f"{table[id(normal)]['vs_fill']:.2f}× (medians of {meta['repeats']} interleaved rounds, "
         f"[docs/results/bench-sample.md](docs/results/bench-sample.md); `{name}`)."
