@@ -12,13 +12,13 @@ with its own numba cache (a temporary directory: the first call of each row comp
 workers take turns row by row: in every round each row runs once in each, the order of the two
 alternating, and only one process runs at a time, so both see the same machine.  Reported per row:
 the median over the rounds of each revision and the speed ratio base / new (above 1: this checkout is
-faster); for the sampling rows also each one's fraction of the memory write limit of its revision's
-process, and the ceiling: the base's time over the write limit's (the faster of the two processes'),
-the highest speed-up over the base that writing the bytes allows.  The write limit is the fastest of four
+faster); for the sampling rows also each one's fraction of the memory write limit, and the ceiling: the
+base's time over the write limit's, the highest speed-up over the base that writing the bytes allows.  The write limit is the fastest of four
 fills of the same bytes with the samplers' thread count (benchmarks/_write_limit.py: numpy ``fill``,
 a numba ``prange`` loop, the same with non-temporal stores, a numba loop on Python threads), into a touched buffer for ``out=`` and
 ``np.empty`` + the fill for fresh output, so that the page faults count as for the sampler; the fills
-are this script's own code, the same in both workers.
+are this script's own code, timed in both workers, and the limit is the faster of the two workers'
+fastest fill (files written before: each worker's numpy ``fill``, "fill limit").
 
 Rows: ``sample_sphere``, ``sample_hemisphere`` and ``sample_hemisphere`` about the normal (1, 1, 1),
 float64 and float32, ``out=`` and fresh (n = 48 * 2**16); ``integrate`` of a numba-compiled f (the
@@ -323,15 +323,17 @@ def main(argv=None):
                  "speed_ratio": base / new if base and new else None}  # fmt: skip
         limits = _limits(row, names)
         if limits:
+            # the fills are the same code in both processes: the faster of their fastest is the machine's write
+            # limit in this run (one process's alone moved by up to 1.8x under load)
+            refs = []
             for name in ("base", "new"):
                 ref, entry[f"limit_{name}"] = _limit(medians[name], limits)
+                refs += [ref] if ref else []
+            ref = min(refs, default=None)
+            for name in ("base", "new"):
                 own = medians[name][row]
                 entry[f"{name}_of_limit"] = ref / own if own and ref else None
-            # no code writes the bytes faster than the fastest fill in either process (the same code in both:
-            # the faster of the two is the machine's limit in this run): the highest speed-up possible
-            refs = [_limit(medians[name], limits)[0] for name in ("base", "new")]
-            ref = min((r for r in refs if r), default=None)
-            entry["ceiling"] = base / ref if base and ref else None
+            entry["ceiling"] = base / ref if base and ref else None  # the highest speed-up over the base possible
         for prefix, size in PATHS.items():
             if row.startswith(prefix):
                 paths = size["width"] * size["height"] * size["spp"]
