@@ -12,12 +12,13 @@ with its own numba cache (a temporary directory: the first call of each row comp
 workers take turns row by row: in every round each row runs once in each, the order of the two
 alternating, and only one process runs at a time, so both see the same machine.  Reported per row:
 the median over the rounds of each revision and the speed ratio base / new (above 1: this checkout is
-faster); for the sampling rows also each one's fraction of the memory write limit, and the ceiling: the
-base's time over the write limit's, the highest speed-up over the base that writing the bytes allows.  The write limit is the fastest of four
-fills of the same bytes with the samplers' thread count (benchmarks/_write_limit.py: numpy ``fill``,
-a numba ``prange`` loop, the same with non-temporal stores, a numba loop on Python threads), into a touched buffer for ``out=`` and
-``np.empty`` + the fill for fresh output, so that the page faults count as for the sampler; the fills
-are this script's own code, timed in both workers, and the limit is the faster of the two workers'
+faster); for the sampling rows also each one's fraction of the memory write limit, and the ceiling:
+the base's time over the write limit's, the highest speed-up over the base that writing the bytes
+allows.  The write limit is the fastest of four fills of the same bytes with the samplers' thread count
+(benchmarks/_write_limit.py: numpy ``fill``, a numba ``prange`` loop, the same with non-temporal
+stores, a numba loop on Python threads), into a touched buffer for ``out=`` and ``np.empty`` + the fill
+for fresh output, so that the page faults count as for the sampler; the fills are this script's own
+code, timed in both workers, and the limit is the faster of the two workers'
 fastest fill (files written before: each worker's numpy ``fill``, "fill limit").
 
 Rows: ``sample_sphere``, ``sample_hemisphere`` and ``sample_hemisphere`` about the normal (1, 1, 1),
