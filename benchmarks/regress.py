@@ -325,7 +325,7 @@ def main(argv=None):
         limits = _limits(row, names)
         if limits:
             # the fills are the same code in both processes: the faster of their fastest is the machine's write
-            # limit in this run (one process's alone moved by up to 1.8x under load)
+            # limit in this run (one process's alone moved by up to 2.2x under load)
             refs = []
             for name in ("base", "new"):
                 ref, entry[f"limit_{name}"] = _limit(medians[name], limits)
