@@ -266,6 +266,35 @@ def table_text(result):
     return "\n".join(lines)
 
 
+def table_rows(names, medians):
+    """The table's entries from each worker's medians in seconds (``medians[name][row]``, name base or new)."""
+    table = []
+    for row in names:
+        base, new = medians["base"][row], medians["new"][row]
+        entry = {"row": row, "base_ms": base and base * 1e3, "new_ms": new and new * 1e3,
+                 "speed_ratio": base / new if base and new else None}  # fmt: skip
+        limits = _limits(row, names)
+        if limits:
+            # the fills are the same code in both processes: the faster of their fastest is the machine's write
+            # limit in this run (one process's alone moved by up to 2.2x under load)
+            refs = []
+            for name in ("base", "new"):
+                ref, entry[f"limit_{name}"] = _limit(medians[name], limits)
+                refs += [ref] if ref else []
+            ref = min(refs, default=None)
+            for name in ("base", "new"):
+                own = medians[name][row]
+                entry[f"{name}_of_limit"] = ref / own if own and ref else None
+            entry["ceiling"] = base / ref if base and ref else None  # the highest speed-up over the base possible
+        for prefix, size in PATHS.items():
+            if row.startswith(prefix):
+                paths = size["width"] * size["height"] * size["spp"]
+                for name in ("base", "new"):
+                    entry[f"mpaths_per_s_{name}"] = paths / medians[name][row] / 1e6 if medians[name][row] else None
+        table.append(entry)
+    return table
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--base", default="HEAD", help="git revision to compare against (default: %(default)s)")
@@ -317,30 +346,7 @@ def main(argv=None):
         others = (after[0] - before[0]) - worker_cpu - (_own_cpu() - ours_before)
         share = f"{max(others, 0.0) / (wall * (os.cpu_count() or 1)):.0%}"
     medians = {name: {r: statistics.median(t) if t else None for r, t in rows.items()} for name, rows in times.items()}
-    table = []
-    for row in names:
-        base, new = medians["base"][row], medians["new"][row]
-        entry = {"row": row, "base_ms": base and base * 1e3, "new_ms": new and new * 1e3,
-                 "speed_ratio": base / new if base and new else None}  # fmt: skip
-        limits = _limits(row, names)
-        if limits:
-            # the fills are the same code in both processes: the faster of their fastest is the machine's write
-            # limit in this run (one process's alone moved by up to 2.2x under load)
-            refs = []
-            for name in ("base", "new"):
-                ref, entry[f"limit_{name}"] = _limit(medians[name], limits)
-                refs += [ref] if ref else []
-            ref = min(refs, default=None)
-            for name in ("base", "new"):
-                own = medians[name][row]
-                entry[f"{name}_of_limit"] = ref / own if own and ref else None
-            entry["ceiling"] = base / ref if base and ref else None  # the highest speed-up over the base possible
-        for prefix, size in PATHS.items():
-            if row.startswith(prefix):
-                paths = size["width"] * size["height"] * size["spp"]
-                for name in ("base", "new"):
-                    entry[f"mpaths_per_s_{name}"] = paths / medians[name][row] / 1e6 if medians[name][row] else None
-        table.append(entry)
+    table = table_rows(names, medians)
     result = {
         "base": base_rev, "new": new_rev, "rounds": args.rounds, "n": args.n, "cpu": cpu_name(),
         "threads": args.threads or "numba's default",

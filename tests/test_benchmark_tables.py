@@ -5,6 +5,7 @@ and compares the text, so a number edited by hand, a results file replaced witho
 bench-tables``, or a change of the measured code without the stale note, fails.
 """
 
+import json
 import re
 import subprocess
 import sys
@@ -55,3 +56,57 @@ def test_the_check_sees_a_speed_table_written_by_hand_without_its_date(tmp_path)
     assert run.returncode == 1 and "| case | median ms |" in run.stdout
     assert _check(dated).returncode == 0, _check(dated).stdout
     assert _check(other).returncode == 0
+
+
+def _benchmarks_run(code, tmp_path):
+    """Run *code* with benchmarks/ on sys.path, in a numba cache of its own."""
+    env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "OMP_WAIT_POLICY": "passive"}
+    return subprocess.run([sys.executable, "-c", f"import sys; sys.path.insert(0, 'benchmarks')\n{code}"],
+                          capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)  # fmt: skip
+
+
+def test_the_write_limit_fills_write_their_bytes_and_nothing_beside(tmp_path):
+    # every way of benchmarks/_write_limit.py, on slices that start off a 64-byte boundary and end inside a
+    # line (the non-temporal fill's scalar head and tail), shorter and longer than one line; ~10 s (compiles)
+    code = """
+import numpy as np
+from _write_limit import FILLS
+for way, fill in FILLS.items():
+    for dtype in (np.float64, np.float32):
+        for start in (0, 1, 3, 5):
+            for n in (0, 3, 17, 1000, 4099):
+                buffer = np.zeros(n + 40, dtype)
+                fill(buffer[start : start + n], 0.5)
+                assert (buffer[start : start + n] == 0.5).all(), (way, dtype, start, n)
+                assert not buffer[:start].any() and not buffer[start + n :].any(), (way, dtype, start, n)
+print("ok", len(FILLS))
+"""
+    run = _benchmarks_run(code, tmp_path)
+    assert run.returncode == 0 and run.stdout.split() == ["ok", "4"], run.stdout + run.stderr
+
+
+def test_regress_takes_the_faster_fastest_fill_of_both_workers_as_the_limit(tmp_path):
+    # medians in seconds: the base's fastest fill is "a" (2 s), the new's "b" (1.5 s): the limit is 1.5 s
+    code = """
+import json
+from regress import table_rows, table_text
+names = ["write limit: a, out= (float64)", "write limit: b, out= (float64)", "write limit: a, fresh (float64)",
+         "sample_sphere, out= (float64)", "sample_sphere (float64)", "integrate"]
+medians = {"base": dict(zip(names, [2.0, 4.0, 8.0, 10.0, 16.0, 1.0])),
+           "new": dict(zip(names, [3.0, 1.5, 9.0, 5.0, 12.0, 1.0]))}
+table = table_rows(names, medians)
+print(json.dumps(table))
+print(table_text({"table": table}))
+"""
+    run = _benchmarks_run(code, tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    rows = {row["row"]: row for row in json.loads(run.stdout.splitlines()[0])}
+    out = rows["sample_sphere, out= (float64)"]
+    assert (out["limit_base"], out["limit_new"]) == ("write limit: a, out= (float64)", "write limit: b, out= (float64)")
+    assert out["ceiling"] == 10.0 / 1.5 and out["base_of_limit"] == 1.5 / 10.0 and out["new_of_limit"] == 1.5 / 5.0
+    fresh = rows["sample_sphere (float64)"]  # only the fresh fill: the base's 8 s
+    assert fresh["ceiling"] == 16.0 / 8.0 and fresh["new_of_limit"] == 8.0 / 12.0
+    assert "ceiling" not in rows["integrate"] and "ceiling" not in rows["write limit: a, out= (float64)"]
+    text = run.stdout.split("\n", 1)[1]
+    assert "| ceiling new / base |" in text and "| sample_sphere, out= (float64) | 10000.00 | 5000.00 | 2.00× |" in text
+    assert "| write limit: b, out= (float64) — the limit |" in text and "6.67× |" in text
