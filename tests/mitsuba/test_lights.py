@@ -162,7 +162,7 @@ def test_projected_direct_light_of_one_polygon_light_has_no_variance(llvm):
         si.sh_frame = mi.Frame3f(si.n)
         si.wi = mi.Vector3f(0, 0, 1)
         sample = mi.Point2f(rng.random(n), rng.random(n))
-        ds, weight, _ = table.sample_direction(scene, si, sample, mi.Bool(True), mi.Bool(True), True)
+        ds, weight, _ = table.sample_direction(scene, si, sample, mi.Bool(True), cos=mi.Bool(True), only=True)
         value = (weight.x * dr.maximum(ds.d.y, 0.0)).numpy()  # L cos / pdf
         assert np.all(value > 0), (x, z)
         assert value.std() / value.mean() <= 1e-3, (x, z, value.std() / value.mean())

@@ -27,8 +27,10 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 With ``emitter_sampling`` ``'solid_angle'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
 differs at diffuse
 vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
-light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters,
-and every emitter at other vertices, keep the power heuristic.  The two weights of each (vertex,
+light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters
+keep the power heuristic.  At every other vertex all emitters are sampled as Mitsuba's ``path`` samples
+them, with its MIS (so no hit needs the table's density, and a scene whose every BSDF is glossy renders
+as ``path`` bit for bit); the technique of a vertex depends only on its BSDF.  The two weights of each (vertex,
 emitter) pair still sum to 1, and light sampling covers every direction in which a front-facing table
 triangle is seen (its density is positive there), so the estimator is unbiased; by solid angle, light
 sampling alone at a diffuse vertex leaves only the cosine's variation over the light, which MIS with
@@ -352,7 +354,7 @@ class _PathMethods:
             ours = None
         else:
             ds, em_weight, ours = lights.sample_direction(
-                scene, si, sampler.next_2d(), active, cosine, cosine_only, alone
+                scene, si, sampler.next_2d(), active, table=alone, cos=cosine, only=cosine_only
             )
         active = active & (ds.pdf != 0.0)
         if not primal:

@@ -34,13 +34,17 @@ shading point p:
    own samples (a shortened ray to q), and the emitter's ``eval_direction`` gives the radiance there
    (texture coordinates interpolated from the triangle's vertices; the one-sided test).
 
-The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it).  A BSDF-sampled ray that hits such an
-emitter gets this same density at its previous vertex (:meth:`LightTable.pdf_direction`, for MIS).
+The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it;
+:meth:`LightTable.pdf_direction`).  ``symsphere_path`` samples so at diffuse vertices only, where a
+BSDF-sampled ray that hits such an emitter counts 0, so no hit needs this density; at its other vertices
+:meth:`LightTable.sample_direction` (lanes outside *table*) samples every emitter as Mitsuba's
+``scene.sample_emitter_direction`` does.
 
 Every other emitter (sphere, disk, point, spot, directional, environment, constant) keeps Mitsuba's
 own sampling: with probability ``P_other`` (the Mitsuba selection probabilities of those emitters,
-summed) one of them is chosen as Mitsuba would and samples itself; the table's triangles share the
-rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out of the table.
+summed) one of them is chosen as Mitsuba would and samples itself (so its density is Mitsuba's); the
+table's triangles share the rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out of
+the table.
 """
 
 from __future__ import annotations
@@ -348,14 +352,7 @@ class LightTable:
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
     def sample_direction(
-        self,
-        scene: Any,
-        si: Any,
-        sample: Any,
-        active: Any,
-        cosine: Any = None,
-        cosine_only: bool = False,
-        table: Any = None,
+        self, scene: Any, si: Any, sample: Any, active: Any, *, table: Any = None, cos: Any = None, only: bool = False
     ) -> tuple[Any, Any, Any]:
         """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, ours),
         with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
@@ -363,13 +360,14 @@ class LightTable:
         samples (None: every lane); elsewhere Mitsuba's own emitter sampling, with the operations of
         ``scene.sample_emitter_direction`` (so its density there is ``scene.pdf_emitter_direction``'s).
 
-        *cosine* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
+        *cos* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
         triangle is chosen by its projected solid angle about the shading normal (on the side of si.wi)
         x radiance and the direction drawn by projected solid angle
         (:func:`symsphere.mitsuba._projected.square_to_projected_triangle`); their density is then not the
         one :meth:`pdf_direction` gives, so the caller weights their BSDF hits on the table's emitters 0
-        (light sampling alone).  *cosine_only*: every lane is such a lane (the solid-angle technique is
+        (light sampling alone).  *only*: every lane is such a lane (the solid-angle technique is
         not traced)."""
+        cosine, cosine_only = cos, only
         u = mi.Float(sample.x)
         ds = dr.zeros(mi.DirectionSample3f)
         weight = dr.zeros(mi.Spectrum)
