@@ -109,8 +109,8 @@ def test_unknown_emitter_sampling_names_the_parameter_and_the_values(llvm):
 
 
 def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path):
-    """MIS: for directions sampled at random shading points, the density the table gives the emitter hit
-    (selection probability x solid-angle density, at the previous vertex) equals the sampled one."""
+    """The table's pair: for directions sampled at random shading points, the density ``pdf_direction``
+    gives the emitter hit (selection probability x solid-angle density) equals the sampled one."""
     mi = llvm
     import drjit as dr
 
@@ -127,17 +127,14 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
         si.p = origin
         si.n = mi.Normal3f(0, 1, 0)
         si.sh_frame = mi.Frame3f(si.n)
-        ds, weight, total, _ = table.sample_direction(
-            scene, si, mi.Point2f(rng.random(n), rng.random(n)), mi.Bool(True)
-        )
+        ds, weight, _ = table.sample_direction(scene, si, mi.Point2f(rng.random(n), rng.random(n)), mi.Bool(True))
         hit = scene.ray_intersect(mi.Ray3f(si.p, ds.d))  # from p itself: the points are on no surface
         # (the Cornell box's light is coplanar with its ceiling: a traced ray may hit either)
         lit = (dr.max(weight) > 0).numpy() & (hit.shape.emitter() != None).numpy()  # noqa: E711 - Dr.Jit
         assert lit.sum() > n // 10, name
         hit_ds = mi.DirectionSample3f(scene, si=hit, ref=si)
-        for cached in (None, total):  # evaluated at si.p here, or the normaliser sample_direction found there
-            pdf = table.pdf_direction(scene, si, hit, hit_ds, mi.Bool(True), cached).numpy()
-            np.testing.assert_allclose(pdf[lit], ds.pdf.numpy()[lit], rtol=2e-3, err_msg=name)
+        pdf = table.pdf_direction(scene, si, hit, hit_ds, mi.Bool(True)).numpy()
+        np.testing.assert_allclose(pdf[lit], ds.pdf.numpy()[lit], rtol=2e-3, err_msg=name)
 
 
 def test_projected_direct_light_of_one_polygon_light_has_no_variance(llvm):
@@ -165,7 +162,7 @@ def test_projected_direct_light_of_one_polygon_light_has_no_variance(llvm):
         si.sh_frame = mi.Frame3f(si.n)
         si.wi = mi.Vector3f(0, 0, 1)
         sample = mi.Point2f(rng.random(n), rng.random(n))
-        ds, weight, _, _ = table.sample_direction(scene, si, sample, mi.Bool(True), mi.Bool(True), True)
+        ds, weight, _ = table.sample_direction(scene, si, sample, mi.Bool(True), cos=mi.Bool(True), only=True)
         value = (weight.x * dr.maximum(ds.d.y, 0.0)).numpy()  # L cos / pdf
         assert np.all(value > 0), (x, z)
         assert value.std() / value.mean() <= 1e-3, (x, z, value.std() / value.mean())
@@ -316,7 +313,8 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, sampl
 
 
 # 12 triangles (exact choice), 108 (groups), 4332 (by power); and 12 with a perfect mirror ball inside,
-# which leaves the radiance at 2 but makes the scene not all diffuse (BSDF hits need the table's density)
+# which leaves the radiance at 2 but makes the scene not all diffuse (Mitsuba's sampling and MIS at the
+# ball's vertices, with no smooth part: its BSDF hits count in full)
 # projected: by projected solid angle at every vertex (12 triangles, exact choice), or at the diffuse ones
 # (the mirror ball: both techniques in one kernel)
 FURNACE_CASES = [(1, False, "solid_angle"), (3, False, "solid_angle"), (19, False, "solid_angle")]
@@ -461,3 +459,25 @@ def test_a_scene_without_rectangle_or_mesh_lights_renders_as_with_area(llvm):
         for sampling in ("area", "solid_angle")
     ]  # fmt: skip
     np.testing.assert_array_equal(images[0], images[1])
+
+
+def test_glossy_vertices_sample_emitters_as_mitsubas_path(llvm):
+    """At a vertex whose BSDF is not diffuse only, every emitter is sampled as Mitsuba's ``path`` samples it
+    (and MIS takes Mitsuba's densities): a scene whose every BSDF is glossy or smooth renders as ``path``,
+    bit for bit, with one emitter (the rectangle light: Mitsuba's fast path) and with two (and a sky)."""
+    mi = llvm
+    import symsphere.mitsuba  # noqa: F401
+
+    for sky in (False, True):
+        scene = scene_dict(mi, "textured", SIZE)
+        for name in ("floor", "wall"):
+            scene[name]["bsdf"] = {"type": "roughplastic", "alpha": 0.3}
+        if not sky:
+            del scene["sky"]
+        scene = mi.load_dict(scene)
+        images = [
+            np.array(mi.render(scene, integrator=mi.load_dict(spec | {"max_depth": 5}), spp=16, seed=3))
+            for spec in ({"type": "path"}, {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"})
+        ]  # fmt: skip
+        assert images[0].mean() > 0
+        np.testing.assert_array_equal(images[0], images[1])

@@ -27,8 +27,10 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 With ``emitter_sampling`` ``'solid_angle'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
 differs at diffuse
 vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
-light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters,
-and every emitter at other vertices, keep the power heuristic.  The two weights of each (vertex,
+light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters
+keep the power heuristic.  At every other vertex all emitters are sampled as Mitsuba's ``path`` samples
+them, with its MIS (so no hit needs the table's density, and a scene whose every BSDF is glossy renders
+as ``path`` bit for bit); the technique of a vertex depends only on its BSDF.  The two weights of each (vertex,
 emitter) pair still sum to 1, and light sampling covers every direction in which a front-facing table
 triangle is seen (its density is positive there), so the estimator is unbiased; by solid angle, light
 sampling alone at a diffuse vertex leaves only the cosine's variation over the light, which MIS with
@@ -331,26 +333,28 @@ class _PathMethods:
         active: Any,
         primal: bool,
         lights: Any,
+        alone: Any = None,
         cosine: Any = None,
         cosine_only: bool = False,
-    ) -> tuple[Any, Any, Any, Any, Any]:
+    ) -> tuple[Any, Any, Any, Any]:
         """Next-event estimation at *si*: (direction sample ``ds``, emitter weight Le / pdf, the lanes where
-        the sample is valid, the light table's normaliser at si for :meth:`_emitter_pdf`, the lanes whose
-        sample is the table's; the last two None without a table).  ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the BSDF's direction;
-        :meth:`_emitter_pdf` must give the same density for MIS at BSDF-sampled hits.
+        the sample is valid, the lanes whose sample is the light table's: None without a table).
+        ``ds.pdf`` (solid angle) and ``ds.delta`` feed the MIS weight against the BSDF's direction; at a
+        BSDF-sampled hit the density is ``scene.pdf_emitter_direction``'s wherever it is needed.
 
         Without a light table (``emitter_sampling='area'``, or a scene without rectangle or mesh lights)
-        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample); with one, the
-        table's choice of a triangle by solid angle x radiance and a uniform direction in its solid angle
-        (:mod:`._lights`).  Detached; in a differential mode the weight's derivative is re-attached as
-        ``prb`` does (emitter parameters: radiance, textures), without the terms of moving geometry.
+        Mitsuba's emitter sampling (area measure converted to solid angle, one 2D sample); with one, at the
+        lanes *alone* (diffuse vertices) the table's choice of a triangle by solid angle x radiance and a
+        uniform direction in its solid angle (:mod:`._lights`), elsewhere Mitsuba's.  Detached; in a
+        differential mode the weight's derivative is re-attached as ``prb`` does (emitter parameters:
+        radiance, textures), without the terms of moving geometry.
         """
         if dr.hint(lights is None, mode="scalar"):
             ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, active)
-            total, ours = None, None
+            ours = None
         else:
-            ds, em_weight, total, ours = lights.sample_direction(
-                scene, si, sampler.next_2d(), active, cosine, cosine_only
+            ds, em_weight, ours = lights.sample_direction(
+                scene, si, sampler.next_2d(), active, table=alone, cos=cosine, only=cosine_only
             )
         active = active & (ds.pdf != 0.0)
         if not primal:
@@ -358,14 +362,7 @@ class _PathMethods:
                 em_val = scene.eval_emitter_direction(si, ds, active)
                 inv_pdf = dr.select(ds.pdf != 0.0, dr.rcp(ds.pdf), 0.0)
                 em_weight = _REPLACE_GRAD(em_weight, em_val * dr.detach(inv_pdf))
-        return ds, em_weight, active, total, ours
-
-    def _emitter_pdf(self, scene: Any, ref: Any, si: Any, ds: Any, active: Any, lights: Any, total: Any) -> Any:
-        """The density (solid angle) with which :meth:`_sample_emitter` at *ref* samples *ds* (the emitter
-        hit at *si*), for MIS; *total*: the normaliser :meth:`_sample_emitter` returned at *ref*."""
-        if dr.hint(lights is None, mode="scalar"):
-            return scene.pdf_emitter_direction(ref, ds, active)
-        return lights.pdf_direction(scene, ref, si, ds, active, total)
+        return ds, em_weight, active, ours
 
     # --- the path loop (path.cpp; in a differential mode, prb's path replay) ---------------------------
 
@@ -380,7 +377,6 @@ class _PathMethods:
             key, s = self._lanes(sampler, dr.width(ray))
             table = self._lambertian_table(scene)
         lights: Any = _lights.build(scene, self.emitter_sampling)
-        light_total: Any = mi.Float64(0.0) if lights is not None else None  # the choice's normaliser at prev_si
         # At a diffuse vertex the table's emitters are sampled by light sampling alone (weight 1; a BSDF-
         # sampled ray that finds one of them counts 0): see the module docstring.  In a scene whose every BSDF is diffuse
         # and whose every emitter is in the table, no BSDF hit needs the light sampling's density, and the
@@ -419,9 +415,11 @@ class _PathMethods:
             if dr.hint(only_table, mode="scalar"):  # after the camera ray, every hit is weighted 0 below
                 mis_bsdf: Any = mi.Float(1.0)
             else:
-                em_pdf = self._emitter_pdf(scene, prev_si, si, ds, ~prev_bsdf_delta, lights, light_total)
+                em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
                 mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
             if dr.hint(only_table, mode="scalar"):
+                mis_bsdf = dr.select(prev_alone, 0.0, mis_bsdf)
+            elif dr.hint(lights is not None and lights.covers_all, mode="scalar"):  # every emitter is the table's
                 mis_bsdf = dr.select(prev_alone, 0.0, mis_bsdf)
             elif dr.hint(lights is not None, mode="scalar"):
                 mis_bsdf = dr.select(prev_alone & lights.holds(si, prev_alone), 0.0, mis_bsdf)
@@ -443,11 +441,9 @@ class _PathMethods:
             cosine = None
             if dr.hint(projected, mode="scalar"):
                 cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, bsdf_ids(bsdf), alone) != 0)
-            ds, em_weight, active_em, total, ours = self._sample_emitter(
-                scene, si, sampler, active_em, primal, lights, cosine, cosine_only
+            ds, em_weight, active_em, ours = self._sample_emitter(
+                scene, si, sampler, active_em, primal, lights, None if only_table else alone, cosine, cosine_only
             )
-            if dr.hint(lights is not None, mode="scalar"):
-                light_total = total
             wo = si.to_local(ds.d)
 
             sample_1 = sampler.next_1d()

@@ -18,7 +18,7 @@ shading point p:
    closer to the weights, and they cost 20 % of the CPU time of direct light under a 1024-triangle
    light).  Above that, in two levels: the triangles, in a spatial order (by the axis of their normal, then a Morton curve of their centroids), form about
    :data:`GROUP_COUNT` runs of at most :data:`GROUP_MAX`; a run is chosen by an estimate
-   ``power cos cos_r / max(d^2, r^2)`` (:class:`_Group`; cos_r a bound of the receiver's cosine, as
+   ``power cos cos_r / max(d^2, r^2)`` (:class:`Group`; cos_r a bound of the receiver's cosine, as
    pbrt-v4's ``LightBounds::Importance`` has one), then a triangle of it by its exact w_i.  Beyond
    GROUP_COUNT x GROUP_MAX (2048) triangles, the triangle is chosen by its power ``area L_e``, as
    Mitsuba chooses it, and only the map below is gained.  (pbrt-v4's BVH light sampler, its
@@ -34,13 +34,17 @@ shading point p:
    own samples (a shortened ray to q), and the emitter's ``eval_direction`` gives the radiance there
    (texture coordinates interpolated from the triangle's vertices; the one-sided test).
 
-The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it).  A BSDF-sampled ray that hits such an
-emitter gets this same density at its previous vertex (:meth:`LightTable.pdf_direction`, for MIS).
+The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it;
+:meth:`LightTable.pdf_direction`).  ``symsphere_path`` samples so at diffuse vertices only, where a
+BSDF-sampled ray that hits such an emitter counts 0, so no hit needs this density; at its other vertices
+:meth:`LightTable.sample_direction` (lanes outside *table*) samples every emitter as Mitsuba's
+``scene.sample_emitter_direction`` does.
 
 Every other emitter (sphere, disk, point, spot, directional, environment, constant) keeps Mitsuba's
 own sampling: with probability ``P_other`` (the Mitsuba selection probabilities of those emitters,
-summed) one of them is chosen as Mitsuba would and samples itself; the table's triangles share the
-rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out of the table.
+summed) one of them is chosen as Mitsuba would and samples itself (so its density is Mitsuba's); the
+table's triangles share the rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out of
+the table.
 """
 
 from __future__ import annotations
@@ -51,6 +55,18 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ._light_rows import (
+    Group,
+    branch,
+    importance,
+    registry_ids,
+    scalar_radiance,
+    shape_id,
+    spatial_order,
+    triangles,
+    uniform_rgb,
+    weight_sum,
+)
 from ._projected import projected_solid_angle, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
@@ -69,124 +85,6 @@ triangle is chosen by its power, as Mitsuba chooses it."""
 _NONE = 0xFFFFFFFF  # no table row: the shape is not one of the table's emitters
 
 
-def _registry_ids(pointers: Any) -> Any:
-    """The Dr.Jit registry ids (UInt32) of an array of Mitsuba object pointers."""
-    return dr.reinterpret_array(mi.UInt32, pointers)
-
-
-def _shape_id(shape: Any) -> int:
-    return int(_registry_ids(mi.ShapePtr(shape))[0])
-
-
-def _radiance(emitter: Any) -> float:
-    """A scalar radiance of an area emitter: the mean of its RGB value (of the texture's mean), else 1."""
-    params = mi.traverse(emitter)
-    for key in ("radiance.value", "radiance.data"):
-        if key in params:
-            value = np.asarray(params[key], dtype=np.float64)
-            if value.size and np.all(np.isfinite(value)):
-                return float(np.mean(np.maximum(value, 0.0)))
-    return 1.0
-
-
-def _triangles(shape: Any) -> tuple[np.ndarray, np.ndarray] | None:
-    """The triangles (n, 3, 3) of a rectangle or mesh, in the orientation of its emitting side, and their
-    vertices' texture coordinates (n, 3, 2); None for other shapes."""
-    name = shape.class_name()
-    if name == "Rectangle":
-        m = np.asarray(mi.traverse(shape)["to_world"].matrix, dtype=np.float64).reshape(4, 4)
-        local = ((-1, -1), (1, -1), (1, 1), (-1, 1))
-        corners = [(m @ np.array([x, y, 0.0, 1.0]))[:3] for x, y in local]
-        # Mitsuba's rectangle: uv = ((x + 1) / 2, (y + 1) / 2); the first triangle is uv.y <= uv.x
-        uv = [((x + 1) / 2, (y + 1) / 2) for x, y in local]
-        tris = np.array([[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]])
-        uvs = np.array([[uv[0], uv[1], uv[2]], [uv[0], uv[2], uv[3]]], dtype=np.float64)
-    elif shape.is_mesh():
-        vertices = np.asarray(shape.vertex_positions_buffer(), dtype=np.float64).reshape(-1, 3)
-        faces = np.asarray(shape.faces_buffer(), dtype=np.int64).reshape(-1, 3)
-        tris = vertices[faces]
-        texcoords = np.asarray(shape.vertex_texcoords_buffer(), dtype=np.float64)
-        uvs = texcoords.reshape(-1, 2)[faces] if texcoords.size else np.zeros((len(faces), 3, 2))
-    else:
-        return None
-    if shape.has_flipped_normals():
-        tris, uvs = tris[:, [0, 2, 1]], uvs[:, [0, 2, 1]]
-    return tris, uvs
-
-
-def _spatial_order(tris: np.ndarray) -> np.ndarray:
-    """An order of the triangles by the axis their normal is closest to (and its sign), then along a
-    Morton curve of their centroids: runs of it are compact, similarly oriented groups."""
-    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    axis = np.argmax(np.abs(normal), axis=1)
-    facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
-    centroid = tris.mean(axis=1)
-    lo, hi = centroid.min(axis=0), centroid.max(axis=0)
-    cells = ((centroid - lo) / np.where(hi > lo, hi - lo, 1.0) * 1023).astype(np.int64)
-    code = np.zeros(len(tris), dtype=np.int64)
-    for bit in range(10):
-        for k in range(3):
-            code |= ((cells[:, k] >> bit) & 1) << (3 * bit + k)
-    return np.lexsort((code, facing))
-
-
-class _Group:
-    """A run of rows [start, stop) and the constants of its importance at a point p:
-    ``power cos cos_r / max(d^2, r^2)``, d = |p - centre|, r the radius of its bounding sphere about the
-    centre, cos = the cosine between the mean normal and p - centre plus r / d plus s, the largest
-    distance between a member's unit normal and the mean one (and 1e-5 for float32's rounding), clipped to
-    [0, 1]; 1 when the normals spread over more than 60 degrees; cos_r (given a receiver normal n at p)
-    ``(|(p - centre).n| + r) / max(d, r)`` clipped to [0, 1], a bound of the receiver's unsigned cosine
-    towards any point of the sphere, 0 for no group that could light p.  It is 0 only where no member faces p:
-    for x in a member with normal n_t, (p - x).n_t <= (p - centre).axis + d |n_t - axis| + r.  (Light
-    sampling alone at diffuse vertices needs this: a triangle never chosen there would be lost.)"""
-
-    def __init__(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray, start: int, stop: int):
-        self.start, self.stop = start, stop
-        weights = area[start:stop] * lum[start:stop]
-        self.power = float(weights.sum())
-        centroid = tris[start:stop].mean(axis=1)
-        self.centre = centroid.mean(axis=0)
-        self.radius = float(np.max(np.linalg.norm(tris[start:stop] - self.centre, axis=2)))
-        unit = normal[start:stop] / np.maximum(np.linalg.norm(normal[start:stop], axis=1, keepdims=True), 1e-300)
-        mean = (unit * area[start:stop, None]).sum(axis=0)
-        mean /= max(float(np.linalg.norm(mean)), 1e-300)
-        self.axis = mean if np.all(unit @ mean > 0.5) else None
-        self.spread = float(np.max(np.linalg.norm(unit - mean, axis=1))) + 1e-5
-
-    def importance(self, p: Any, n: Any = None) -> Any:
-        axis = None if self.axis is None else mi.ScalarVector3f(*self.axis)
-        centre = mi.ScalarVector3f(*self.centre)
-        return _importance(p, centre, self.radius, self.radius**2, axis, self.spread, self.power, n)
-
-
-def _importance(
-    p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, spread: Any, power: Any, n: Any = None
-) -> Any:
-    """A group's importance at p (see :class:`_Group`), from constants or from gathered values alike:
-    the same float32 operations in the same order, so that both give the same bits."""
-    e = p - centre
-    d2 = dr.squared_norm(e)
-    value = power / dr.maximum(d2, radius2)
-    if axis is None and n is None:
-        return value
-    d = dr.sqrt(d2)
-    if axis is not None:
-        value *= dr.clip((dr.dot(e, axis) + radius + spread * d) / dr.maximum(d, radius), 0.0, 1.0)
-    if n is not None:  # the receiver's cosine, unsigned: |(x - p).n| <= |(centre - p).n| + r
-        value *= dr.clip((dr.abs(dr.dot(e, n)) + radius) / dr.maximum(d, radius), 0.0, 1.0)
-    return value
-
-
-def _sum(weights: list[Any]) -> Any:
-    """The sum of the weights (None: left out) in float32, in order: :meth:`LightTable._pick`'s total."""
-    total = mi.Float(0.0)
-    for w in weights:
-        if w is not None:
-            total += w
-    return total
-
-
 class LightTable:
     """The emitter triangles of a scene and their selection (see the module docstring)."""
 
@@ -198,26 +96,29 @@ class LightTable:
         uv_rows: list[np.ndarray] = []
         emitter_rows: list[int] = []
         radiance: list[float] = []
+        rgb_rows: list[np.ndarray | None] = []
         shape_rows: dict[int, tuple[int, bool]] = {}  # shape id -> (first row, is a rectangle)
         in_table = [False] * len(emitters)
-        emitter_index = {int(k): i for i, k in enumerate(_registry_ids(scene.emitters_dr()))}
+        emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
         for shape in scene.shapes():
             emitter = shape.emitter()
             if emitter is None:
                 continue
-            index = emitter_index.get(int(_registry_ids(mi.EmitterPtr(emitter))[0]))
+            index = emitter_index.get(int(registry_ids(mi.EmitterPtr(emitter))[0]))
             if index is None or pmf[index] <= 0.0:
                 continue
-            found = _triangles(shape)
+            found = triangles(shape)
             if found is None or len(found[0]) == 0:
                 continue
             tris, uvs = found
             in_table[index] = True
-            shape_rows[_shape_id(shape)] = (sum(len(r) for r in rows), shape.class_name() == "Rectangle")
+            shape_rows[shape_id(shape)] = (sum(len(r) for r in rows), shape.class_name() == "Rectangle")
             rows.append(tris)
             uv_rows.append(uvs)
             emitter_rows += [index] * len(tris)
-            radiance += [_radiance(emitter)] * len(tris)
+            radiance += [scalar_radiance(emitter)] * len(tris)
+            rgb_rows.append(uniform_rgb(emitter))
+            rgb_rows[-1:] = [rgb_rows[-1]] * len(tris)
         self.count = sum(len(r) for r in rows)
         # every emitter of the scene is in the table: a ray can find no other emission
         self.covers_all = all(in_table)
@@ -229,7 +130,7 @@ class LightTable:
         uvs = np.concatenate(uv_rows)
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
-        order = _spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        order = spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
         tris, uvs, lum, emitter_of = tris[order], uvs[order], lum[order], emitter_of[order]
         row_of = np.empty(self.count, dtype=np.uint32)
         row_of[order] = np.arange(self.count, dtype=np.uint32)  # table index (shape's first + prim) -> row
@@ -240,6 +141,11 @@ class LightTable:
         self._columns32 = [mi.Float(np.ascontiguousarray(tris[:, k, j])) for k in range(3) for j in range(3)]
         self._normal32 = [mi.Float(np.ascontiguousarray(normal[:, j])) for j in range(3)]
         self._lum32 = mi.Float(lum)
+        # every table emitter's radiance one RGB value: gathered, instead of a call of the emitter per sample
+        self._rgb = None
+        if all(rgb is not None for rgb in rgb_rows):
+            rgb = np.asarray(rgb_rows, dtype=np.float32)[order]
+            self._rgb = [mi.Float(np.ascontiguousarray(rgb[:, j])) for j in range(3)]
         self._uv = [mi.Float(np.ascontiguousarray(uvs[:, k, j])) for k in range(3) for j in range(2)]
         self._emitter = mi.UInt32(emitter_of)
         self._row_of = mi.UInt32(row_of)
@@ -253,7 +159,7 @@ class LightTable:
         self.mode = "exact" if self.group_size == 1 else ("groups" if self.group_size <= GROUP_MAX else "power")
         if self.mode == "power":
             self._power = mi.DiscreteDistribution(mi.Float(area * lum))
-        self.groups = [_Group(tris, normal, area, lum, start, min(start + self.group_size, self.count))
+        self.groups = [Group(tris, normal, area, lum, start, min(start + self.group_size, self.count))
                        for start in range(0, self.count, self.group_size)]  # fmt: skip
         self._group_of = mi.UInt32(np.arange(self.count, dtype=np.uint32) // self.group_size)
         groups = self.groups
@@ -298,7 +204,7 @@ class LightTable:
 
     def _group_weights(self, p: Any, n: Any = None) -> list[Any]:
         """The first level's weights at p (float32; None for a group that is never chosen): a triangle's
-        exact weight, or a group's estimate ``power cos / max(d^2, r^2)`` (see :class:`_Group`)."""
+        exact weight, or a group's estimate ``power cos / max(d^2, r^2)`` (see :class:`Group`)."""
         weights: list[Any] = []
         for g in self.groups:
             if g.power <= 0.0:
@@ -331,7 +237,7 @@ class LightTable:
         """(index, its weight, the total, u reused) of a choice proportional to *weights* by u: float32 sums
         (u itself has 24 bits: float64 sums would not make the frequencies closer to the weights).  The
         weight and the total are returned as float64."""
-        total = _sum(weights)
+        total = weight_sum(weights)
         target = mi.Float(u) * total
         index: Any = mi.UInt32(0)
         before, chosen, acc = mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)
@@ -349,7 +255,7 @@ class LightTable:
     @staticmethod
     def _share(weights: list[Any], index: Any) -> Any:
         """weights[index] / sum(weights), summed as :meth:`_pick` sums them (0 if the sum is 0; float64)."""
-        total, mine = mi.Float64(_sum(weights)), mi.Float64(0.0)
+        total, mine = mi.Float64(weight_sum(weights)), mi.Float64(0.0)
         for i, w in enumerate(weights):
             if w is not None:
                 mine = dr.select(index == i, mi.Float64(w), mine)
@@ -357,7 +263,7 @@ class LightTable:
 
     def _choose(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any, Any]:
         """(row, its probability at p, u reused, the first level's total at p) for the point p
-        (mi.Vector3f) and u (mi.Float64).  The total is what :meth:`pdf_direction` needs at p again."""
+        (mi.Vector3f) and u (mi.Float64)."""
         if self.mode == "power":
             row, reused, pmf = self._power.sample_reuse_pmf(mi.Float(u), active)  # type: ignore[arg-type]
             return row, mi.Float64(pmf), mi.Float64(reused), mi.Float64(0.0)
@@ -408,7 +314,7 @@ class LightTable:
         """The first level's total at p, as :meth:`_choose` sums it."""
         if self.mode == "power":
             return mi.Float64(0.0)
-        return mi.Float64(_sum(self._group_weights(p, n)))
+        return mi.Float64(weight_sum(self._group_weights(p, n)))
 
     def _first_level_weight(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
         """The first level's weight at p of the group (exact: the triangle) that holds *row*, from gathered
@@ -426,8 +332,8 @@ class LightTable:
         radius2 = dr.gather(mi.Float, self._g_radius2, g, active)
         power = dr.gather(mi.Float, self._g_power, g, active)
         spread = dr.gather(mi.Float, self._g_spread, g, active)
-        with_axis = _importance(p, centre, radius, radius2, axis, spread, power, n)
-        without = _importance(p, centre, radius, radius2, None, spread, power, n)
+        with_axis = importance(p, centre, radius, radius2, axis, spread, power, n)
+        without = importance(p, centre, radius, radius2, None, spread, power, n)
         value = dr.select(dr.gather(mi.Bool, self._g_has_axis, g, active), with_axis, without)
         return dr.select(power > 0.0, value, 0.0)
 
@@ -446,47 +352,44 @@ class LightTable:
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
     def sample_direction(
-        self, scene: Any, si: Any, sample: Any, active: Any, cosine: Any = None, cosine_only: bool = False
-    ) -> tuple[Any, Any, Any, Any]:
-        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, total,
-        ours), with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
-        tested.  *total* (float64, every lane) is the selection's normaliser at si.p: pass it to
-        :meth:`pdf_direction` for a hit seen from si (the next vertex's emission), which then need not
-        evaluate every triangle at si.p again.  *ours*: the lanes whose sample is the table's.
+        self, scene: Any, si: Any, sample: Any, active: Any, *, table: Any = None, cos: Any = None, only: bool = False
+    ) -> tuple[Any, Any, Any]:
+        """Like ``scene.sample_emitter_direction(si, sample, True, active)``: (ds, radiance / pdf, ours),
+        with ``ds.d``, ``ds.pdf`` (solid angle, selection included) and ``ds.delta`` set; visibility
+        tested.  *ours*: the lanes whose sample is the table's.  *table*: the lanes where the table
+        samples (None: every lane); elsewhere Mitsuba's own emitter sampling, with the operations of
+        ``scene.sample_emitter_direction`` (so its density there is ``scene.pdf_emitter_direction``'s).
 
-        *cosine* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
+        *cos* (``emitter_sampling='projected'``): the lanes (Lambertian vertices) where the table's
         triangle is chosen by its projected solid angle about the shading normal (on the side of si.wi)
         x radiance and the direction drawn by projected solid angle
         (:func:`symsphere.mitsuba._projected.square_to_projected_triangle`); their density is then not the
         one :meth:`pdf_direction` gives, so the caller weights their BSDF hits on the table's emitters 0
-        (light sampling alone).  *cosine_only*: every lane is such a lane (the solid-angle technique is
+        (light sampling alone).  *only*: every lane is such a lane (the solid-angle technique is
         not traced)."""
+        cosine, cosine_only = cos, only
         u = mi.Float(sample.x)
         ds = dr.zeros(mi.DirectionSample3f)
         weight = dr.zeros(mi.Spectrum)
-        ours = active & (u < self.p_table)
-        if self._other is not None:  # Mitsuba's own emitters: chosen by their Mitsuba probabilities
-            other = active & ~ours
-            u_other: Any = dr.clip((u - self.p_table) / self.p_other, 0.0, 1.0 - 2.0**-24)
-            index, u_other, _ = self._other.sample_reuse_pmf(u_other, other)
-            emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, other)
-            ds_o, w_o = emitter.sample_direction(si, mi.Point2f(u_other, sample.y), other)
-            other &= ds_o.pdf != 0.0
-            selection = self.p_other * self._other.eval_pmf_normalized(index, other)
-            ds_o.pdf = dr.select(other, ds_o.pdf * selection, 0.0)
-            w_o = dr.select(other, w_o / selection, 0.0)
-            ds = dr.select(other, ds_o, ds)
-            weight = dr.select(other, w_o, weight)
-        total = mi.Float64(0.0)
+        lanes = active if table is None else active & table
+        ours = lanes & (u < self.p_table)
+        mitsuba = None if table is None else active & ~table
+        other = lanes & ~ours if self._other is not None else None
+        own = mitsuba if other is None else (other if mitsuba is None else other | mitsuba)
+        if own is not None:
+            # one emitter's own sampling: outside the table's lanes any emitter, chosen as Mitsuba chooses
+            # (scene.sample_emitter_direction); in them one of the emitters outside the table, by their
+            # Mitsuba probabilities.  A branch: a packet of lanes with none of these skips it
+            ds, weight = branch(own, lambda: self._sample_own(scene, si, sample, u, own, other, mitsuba))
         if self.count:
-            ds_table, value, total = self._sample_table(
-                scene, si, u / self.p_table, sample.y, ours, cosine, cosine_only
+            ds_table, value = branch(
+                ours, lambda: self._sample_table(scene, si, u / self.p_table, sample.y, ours, cosine, cosine_only)
             )
             # the whole sample (point, normal, uv, emitter), so that the emitter can be evaluated at it
             # again (a differential mode re-attaches the radiance's derivative that way)
             ds = dr.select(ours, ds_table, ds)
             weight = dr.select(ours, value, weight)
-        # one shadow ray for both kinds of sample, as Mitsuba tests its own (a ray to the sampled point,
+        # one shadow ray for every kind of sample, as Mitsuba tests its own (a ray to the sampled point,
         # shortened; a coplanar surface, as the Cornell box's ceiling around its light, does not occlude).
         # An occluded sample has density 0: a differential mode re-attaches the emitter's derivative
         # wherever the density is not 0
@@ -494,15 +397,44 @@ class LightTable:
         visible = tested & ~scene.ray_test(si.spawn_ray_to(ds.p), tested)
         ds.pdf = dr.select(visible, ds.pdf, 0.0)
         weight = dr.select(visible, weight, 0.0)
-        return ds, weight, total, ours
+        return ds, weight, ours
+
+    def _sample_own(self, scene: Any, si: Any, sample: Any, u: Any, own: Any, other: Any, mitsuba: Any) -> Any:
+        """(ds, radiance / pdf) at the lanes *own*: :meth:`sample_direction`'s emitters that sample
+        themselves (*other*: those outside the table, at the table's lanes; *mitsuba*: any, elsewhere)."""
+        index: Any = mi.UInt32(0)
+        u_x: Any = u
+        selection: Any = mi.Float(1.0)
+        inverse: Any = mi.Float(1.0)
+        if other is not None:
+            distribution: Any = self._other  # not None where there are emitters outside the table
+            u_other: Any = dr.clip((u - self.p_table) / self.p_other, 0.0, 1.0 - 2.0**-24)
+            index, u_x, _ = distribution.sample_reuse_pmf(u_other, other)
+            selection = self.p_other * distribution.eval_pmf_normalized(index, other)
+            inverse = dr.rcp(selection)
+        if mitsuba is not None and len(scene.emitters()) > 1:
+            index_m, inverse_m, u_m = scene.sample_emitter(u, mitsuba)
+            index = dr.select(mitsuba, index_m, index)
+            u_x = dr.select(mitsuba, u_m, u_x)
+            selection = dr.select(mitsuba, scene.pdf_emitter(index_m, mitsuba), selection)
+            inverse = dr.select(mitsuba, inverse_m, inverse)
+        elif mitsuba is not None:  # Mitsuba's single emitter samples itself without a choice
+            u_x = dr.select(mitsuba, u, u_x)
+            selection, inverse = dr.select(mitsuba, 1.0, selection), dr.select(mitsuba, 1.0, inverse)
+        emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, own)
+        ds: Any
+        weight: Any
+        ds, weight = emitter.sample_direction(si, mi.Point2f(u_x, sample.y), own)
+        own = own & (ds.pdf != 0.0)
+        ds.pdf = dr.select(own, ds.pdf * selection, 0.0)
+        return ds, dr.select(own, weight * inverse, 0.0)
 
     def _sample_table(
         self, scene: Any, si: Any, u: Any, v: Any, active: Any, cosine: Any, cosine_only: bool
-    ) -> tuple[Any, Any, Any]:
+    ) -> tuple[Any, Any]:
         p = mi.Vector3f(si.p)
-        total = mi.Float64(0.0)
         if not cosine_only:  # by solid angle
-            row, probability, u_map, total = self._choose(p, mi.Float64(u), active, mi.Vector3f(si.n))
+            row, probability, u_map, _ = self._choose(p, mi.Float64(u), active, mi.Vector3f(si.n))
             ok = active & (probability > 0.0)
             a, b, c, n = self._vertices(row, ok)
             direction, omega = square_to_spherical_triangle((mi.Float(u_map), mi.Float(v)), a - p, b - p, c - p)
@@ -532,46 +464,56 @@ class LightTable:
                 a, b, c, n = (dr.select(mine, x_c, x) for x_c, x in ((a_c, a), (b_c, b), (c_c, c), (n_c, n)))
         active = ok
         # The point q where d meets the triangle's plane (shadow-tested by the caller), and the emitter
-        # evaluated there (texture coordinates interpolated).
+        # evaluated there (texture coordinates interpolated, where a radiance is not one value).
         cos_n = dr.dot(d, n)
         t_plane = dr.dot(a - p, n) / dr.select(cos_n != 0.0, cos_n, 1.0)
         q = p + t_plane * d
-        n2 = dr.squared_norm(n)
-        n2 = dr.select(n2 > 0.0, n2, 1.0)
-        lb = dr.dot(dr.cross(q - a, c - a), n) / n2
-        lc = dr.dot(dr.cross(b - a, q - a), n) / n2
-        uv = [dr.gather(mi.Float, col, row, active) for col in self._uv]
         ds: Any = dr.zeros(mi.DirectionSample3f)
         ds.p = mi.Point3f(q)
         ds.n = mi.Normal3f(dr.normalize(n))
-        ds.uv = mi.Point2f(
-            uv[0] + lb * (uv[2] - uv[0]) + lc * (uv[4] - uv[0]), uv[1] + lb * (uv[3] - uv[1]) + lc * (uv[5] - uv[1])
-        )
+        if self._rgb is None:
+            n2 = dr.squared_norm(n)
+            n2 = dr.select(n2 > 0.0, n2, 1.0)
+            lb = dr.dot(dr.cross(q - a, c - a), n) / n2
+            lc = dr.dot(dr.cross(b - a, q - a), n) / n2
+            uv = [dr.gather(mi.Float, col, row, active) for col in self._uv]
+            ds.uv = mi.Point2f(
+                uv[0] + lb * (uv[2] - uv[0]) + lc * (uv[4] - uv[0]),
+                uv[1] + lb * (uv[3] - uv[1]) + lc * (uv[5] - uv[1]),
+            )
         ds.d = d
         ds.dist = t_plane
         ds.emitter = dr.gather(
             mi.EmitterPtr, scene.emitters_dr(), dr.gather(mi.UInt32, self._emitter, row, active), active
         )
         active &= t_plane > 0.0
-        radiance: Any = ds.emitter.eval_direction(si, ds, active)
+        if self._rgb is None:
+            radiance: Any = ds.emitter.eval_direction(si, ds, active)
+        else:  # the area emitter's eval_direction: its value on the front side (cos_n < 0), else 0
+            lit = active & (cos_n < 0.0)
+            radiance = mi.Spectrum(*(dr.gather(mi.Float, col, row, lit) for col in self._rgb))
+            radiance = dr.select(lit, radiance, 0.0)
         value = dr.select(active & (pdf > 0.0), radiance / dr.select(pdf > 0.0, pdf, 1.0), 0.0)
         ds.pdf = dr.select(active, pdf, 0.0)
         ds.delta = mi.Bool(False)
-        return ds, value, total
+        return ds, value
 
     # --- the density of a hit (MIS) ----------------------------------------------------------------
 
     def holds(self, si: Any, active: Any) -> Any:
         """The lanes whose *si* lies on one of the table's emitters."""
-        ident = _registry_ids(si.shape)
+        ident = registry_ids(si.shape)
         valid = active & si.is_valid() & (ident < dr.width(self._first))
         return valid & (dr.gather(mi.UInt32, self._first, ident, valid) != _NONE)
 
-    def pdf_direction(self, scene: Any, prev_si: Any, si: Any, ds: Any, active: Any, total: Any = None) -> Any:
-        """Like ``scene.pdf_emitter_direction(prev_si, ds, active)`` for the emitter hit at *si*; *total*:
-        :meth:`sample_direction`'s at prev_si (None: evaluated here)."""
+    def pdf_direction(self, scene: Any, prev_si: Any, si: Any, ds: Any, active: Any) -> Any:
+        """The density (solid angle) with which :meth:`sample_direction` (at its table's lanes, by solid
+        angle) samples the emitter hit at *si* from *prev_si*: ``sample_direction``'s other half, as
+        ``scene.pdf_emitter_direction`` is Mitsuba's.  ``symsphere_path`` needs it at no hit (the table
+        samples only at diffuse vertices, whose BSDF hits on the table's emitters count 0); the tests
+        check the sampling against it."""
         # Mitsuba's density for its own emitters (none when every emitter it may choose is in the table)
-        ident = _registry_ids(si.shape)
+        ident = registry_ids(si.shape)
         valid = active & si.is_valid() & (ident < dr.width(self._first))
         first = dr.gather(mi.UInt32, self._first, ident, valid)
         ours = valid & (first != _NONE)
@@ -584,8 +526,7 @@ class LightTable:
         # the map's own solid angle (the same operations on the same float32 values as in sampling)
         omega = unit_spherical_triangle_solid_angle(dr.normalize(a - p), dr.normalize(b - p), dr.normalize(c - p))
         front = (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
-        if total is None:
-            total = self._total(mi.Vector3f(prev_si.p), mi.Vector3f(prev_si.n))
+        total = self._total(mi.Vector3f(prev_si.p), mi.Vector3f(prev_si.n))
         probability = self._probability(mi.Vector3f(prev_si.p), row, ours, total, mi.Vector3f(prev_si.n))
         pdf = dr.select(front, probability / dr.select(omega > 0.0, omega, 1.0), 0.0)
         return dr.select(ours, mi.Float(pdf) * self.p_table, mitsuba_pdf)

@@ -1,0 +1,171 @@
+"""The rows of ``symsphere_path``'s light table (:mod:`._lights`): the emitter triangles of a scene's
+``rectangle`` and mesh area emitters, their radiance, their spatial order and groups (the first level of
+the choice above :data:`._lights.EXACT_MAX` triangles), and a branch that carries a direction sample."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+__all__ = ["branch", "importance", "scalar_radiance", "registry_ids", "shape_id", "spatial_order", "triangles",
+           "uniform_rgb", "weight_sum", "Group"]  # fmt: skip
+
+
+def registry_ids(pointers: Any) -> Any:
+    """The Dr.Jit registry ids (UInt32) of an array of Mitsuba object pointers."""
+    return dr.reinterpret_array(mi.UInt32, pointers)
+
+
+def shape_id(shape: Any) -> int:
+    return int(registry_ids(mi.ShapePtr(shape))[0])
+
+
+def scalar_radiance(emitter: Any) -> float:
+    """A scalar radiance of an area emitter: the mean of its RGB value (of the texture's mean), else 1."""
+    params = mi.traverse(emitter)
+    for key in ("radiance.value", "radiance.data"):
+        if key in params:
+            value = np.asarray(params[key], dtype=np.float64)
+            if value.size and np.all(np.isfinite(value)):
+                return float(np.mean(np.maximum(value, 0.0)))
+    return 1.0
+
+
+def uniform_rgb(emitter: Any) -> np.ndarray | None:
+    """The radiance of an area emitter whose radiance is one RGB value, in an RGB variant (what its
+    ``eval_direction`` returns on its front side); None otherwise (a texture, a spectrum)."""
+    params = mi.traverse(emitter)
+    if not mi.is_rgb or "radiance.value" not in params or "radiance.data" in params:
+        return None
+    value = np.asarray(params["radiance.value"], dtype=np.float32).ravel()
+    return value if value.size == 3 else None
+
+
+def triangles(shape: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """The triangles (n, 3, 3) of a rectangle or mesh, in the orientation of its emitting side, and their
+    vertices' texture coordinates (n, 3, 2); None for other shapes."""
+    name = shape.class_name()
+    if name == "Rectangle":
+        m = np.asarray(mi.traverse(shape)["to_world"].matrix, dtype=np.float64).reshape(4, 4)
+        local = ((-1, -1), (1, -1), (1, 1), (-1, 1))
+        corners = [(m @ np.array([x, y, 0.0, 1.0]))[:3] for x, y in local]
+        # Mitsuba's rectangle: uv = ((x + 1) / 2, (y + 1) / 2); the first triangle is uv.y <= uv.x
+        uv = [((x + 1) / 2, (y + 1) / 2) for x, y in local]
+        tris = np.array([[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]])
+        uvs = np.array([[uv[0], uv[1], uv[2]], [uv[0], uv[2], uv[3]]], dtype=np.float64)
+    elif shape.is_mesh():
+        vertices = np.asarray(shape.vertex_positions_buffer(), dtype=np.float64).reshape(-1, 3)
+        faces = np.asarray(shape.faces_buffer(), dtype=np.int64).reshape(-1, 3)
+        tris = vertices[faces]
+        texcoords = np.asarray(shape.vertex_texcoords_buffer(), dtype=np.float64)
+        uvs = texcoords.reshape(-1, 2)[faces] if texcoords.size else np.zeros((len(faces), 3, 2))
+    else:
+        return None
+    if shape.has_flipped_normals():
+        tris, uvs = tris[:, [0, 2, 1]], uvs[:, [0, 2, 1]]
+    return tris, uvs
+
+
+def spatial_order(tris: np.ndarray) -> np.ndarray:
+    """An order of the triangles by the axis their normal is closest to (and its sign), then along a
+    Morton curve of their centroids: runs of it are compact, similarly oriented groups."""
+    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    axis = np.argmax(np.abs(normal), axis=1)
+    facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
+    centroid = tris.mean(axis=1)
+    lo, hi = centroid.min(axis=0), centroid.max(axis=0)
+    cells = ((centroid - lo) / np.where(hi > lo, hi - lo, 1.0) * 1023).astype(np.int64)
+    code = np.zeros(len(tris), dtype=np.int64)
+    for bit in range(10):
+        for k in range(3):
+            code |= ((cells[:, k] >> bit) & 1) << (3 * bit + k)
+    return np.lexsort((code, facing))
+
+
+class Group:
+    """A run of rows [start, stop) and the constants of its importance at a point p:
+    ``power cos cos_r / max(d^2, r^2)``, d = |p - centre|, r the radius of its bounding sphere about the
+    centre, cos = the cosine between the mean normal and p - centre plus r / d plus s, the largest
+    distance between a member's unit normal and the mean one (and 1e-5 for float32's rounding), clipped to
+    [0, 1]; 1 when the normals spread over more than 60 degrees; cos_r (given a receiver normal n at p)
+    ``(|(p - centre).n| + r) / max(d, r)`` clipped to [0, 1], a bound of the receiver's unsigned cosine
+    towards any point of the sphere, 0 for no group that could light p.  It is 0 only where no member faces p:
+    for x in a member with normal n_t, (p - x).n_t <= (p - centre).axis + d |n_t - axis| + r.  (Light
+    sampling alone at diffuse vertices needs this: a triangle never chosen there would be lost.)"""
+
+    def __init__(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray, start: int, stop: int):
+        self.start, self.stop = start, stop
+        weights = area[start:stop] * lum[start:stop]
+        self.power = float(weights.sum())
+        centroid = tris[start:stop].mean(axis=1)
+        self.centre = centroid.mean(axis=0)
+        self.radius = float(np.max(np.linalg.norm(tris[start:stop] - self.centre, axis=2)))
+        unit = normal[start:stop] / np.maximum(np.linalg.norm(normal[start:stop], axis=1, keepdims=True), 1e-300)
+        mean = (unit * area[start:stop, None]).sum(axis=0)
+        mean /= max(float(np.linalg.norm(mean)), 1e-300)
+        self.axis = mean if np.all(unit @ mean > 0.5) else None
+        self.spread = float(np.max(np.linalg.norm(unit - mean, axis=1))) + 1e-5
+
+    def importance(self, p: Any, n: Any = None) -> Any:
+        axis = None if self.axis is None else mi.ScalarVector3f(*self.axis)
+        centre = mi.ScalarVector3f(*self.centre)
+        return importance(p, centre, self.radius, self.radius**2, axis, self.spread, self.power, n)
+
+
+def importance(
+    p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, spread: Any, power: Any, n: Any = None
+) -> Any:
+    """A group's importance at p (see :class:`Group`), from constants or from gathered values alike:
+    the same float32 operations in the same order, so that both give the same bits."""
+    e = p - centre
+    d2 = dr.squared_norm(e)
+    value = power / dr.maximum(d2, radius2)
+    if axis is None and n is None:
+        return value
+    d = dr.sqrt(d2)
+    if axis is not None:
+        value *= dr.clip((dr.dot(e, axis) + radius + spread * d) / dr.maximum(d, radius), 0.0, 1.0)
+    if n is not None:  # the receiver's cosine, unsigned: |(x - p).n| <= |(centre - p).n| + r
+        value *= dr.clip((dr.abs(dr.dot(e, n)) + radius) / dr.maximum(d, radius), 0.0, 1.0)
+    return value
+
+
+def weight_sum(weights: list[Any]) -> Any:
+    """The sum of the weights (None: left out) in float32, in order: :meth:`._lights.LightTable._pick`'s total."""
+    total = mi.Float(0.0)
+    for w in weights:
+        if w is not None:
+            total += w
+    return total
+
+
+_FIELDS = ("p", "n", "uv", "time", "pdf", "delta", "d", "dist", "emitter")
+
+
+def branch(cond: Any, sample: Any) -> tuple[Any, Any]:
+    """``sample()`` -> (DirectionSample3f, weight) in a Dr.Jit branch taken by the lanes *cond* (a packet
+    of lanes with none skips it), zeros elsewhere.  The sample crosses the branch field by field, and
+    ``delta`` as a number: (Dr.Jit 1.5's LLVM backend emitted a mask defined inside the branch where a
+    structure's boolean field was selected after it: "Instruction does not dominate all uses")."""
+
+    def taken() -> tuple[Any, ...]:
+        ds, weight = sample()
+        fields = [getattr(ds, f) for f in _FIELDS]
+        fields[5] = dr.select(ds.delta, mi.Float(1.0), mi.Float(0.0))
+        return (*fields, weight)
+
+    def skipped() -> tuple[Any, ...]:
+        ds = dr.zeros(mi.DirectionSample3f)
+        fields = [getattr(ds, f) for f in _FIELDS]
+        fields[5] = mi.Float(0.0)
+        return (*fields, dr.zeros(mi.Spectrum))
+
+    out = dr.if_stmt(args=(), cond=cond, true_fn=taken, false_fn=skipped)
+    ds = dr.zeros(mi.DirectionSample3f)
+    for f, value in zip(_FIELDS, out[:-1], strict=True):
+        setattr(ds, f, value)
+    ds.delta = out[5] != 0.0
+    return ds, out[-1]
