@@ -170,7 +170,7 @@ or scipy.stats.qmc.QMCEngine, optional
 
     >>> result = integrate(lambda w: np.exp(w[:, 0]), rtol=1e-9, method="auto", rng=4)
     >>> result.method, result.converged, result.n_evaluations
-    ('lebedev', True, 8992)
+    ('lebedev', True, 3136)
     >>> bool(abs(result.integral - exact) <= 1e-9 * exact), result.history[0]["reason"][:5]
     (True, 'pilot')
     """
