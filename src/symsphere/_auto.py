@@ -83,7 +83,7 @@ tolerance or less, from the spread measured at that rule (never extrapolated: a 
 to rounding would answer with an interval of rounding noise around a rounding bias of a few ulps).
 Such a rule is exact to rounding or converging fast, its estimates over rotations nearly normal
 (resampled; the small folded rules, skewed, are nowhere near so far inside)."""
-EXPLORE = 0.25
+EXPLORE = 0.125
 SELF_EXPLORE = True
 """The leader explores its own ladder too (benchmarks/bench_integrate_auto.py runs a family alone both ways)."""
 JUMP = 4 * ANSWER_FACTOR
