@@ -10,8 +10,8 @@ are folded) it runs ``integrate(f, rtol=..., method='auto', rng=seed, n_max=N_MA
   answering stages a run took (a first answering stage that misses the tolerance is followed by a
   larger fresh one, and only the last is returned).
 
-Then, for the rules and sizes that answer most often, the coverage of one stage at a fixed size with 8
-and with 128 randomisations, as in an answering stage (``integrate(f, n=R * size, replicates=R,
+Then, for the rules and sizes that answer most often, the coverage of one stage at a fixed size with 8,
+32 and 128 randomisations, as in a pilot stage and the two kinds of answering stage (``integrate(f, n=R * size, replicates=R,
 method=family)``, the same seeds): what the rule's own t-interval does before any choice or stopping rule.
 
 A calibrated 95 % interval covers in Binomial(runs, 0.95) of the runs: 950 of 1000 with a standard
@@ -20,7 +20,8 @@ deviation of 6.9.  Counts, not times: the machine's load does not change them.
     python benchmarks/bench_auto_coverage.py [--runs 1000] [--only exp,cap] [--json PATH]
 
 ``--tails`` instead estimates P(|error| > 5 standard errors) of one stage of R randomisations of the
-small folded rules (TAILS) by resampling: 40 000 rotations of the rule (symsphere._families), then
+small folded rules and of the rules that answer with 32 randomisations on these integrands (TAILS) by
+resampling: 40 000 rotations of the rule (symsphere._families), then
 200 000 draws of R of them with replacement, the error against the population's mean.
 
     python benchmarks/bench_auto_coverage.py --tails
@@ -47,8 +48,15 @@ from symsphere.integrands import INTEGRANDS
 RTOL = {"exp": 1e-2, "phong": 1e-2, "cap": 5e-2, "exp_hemisphere": 1e-2, "cosine": 1e-2}
 """A run costs at most some 10^4 evaluations (the discontinuous cap's, at a looser tolerance, some 10^4)."""
 N_MAX = 48 * 2**14
-TAILS = (("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26))
-FIXED = (("exp", "lebedev", 6), ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26), ("cap", "lebedev", 50))
+TAILS = (
+    ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26), ("exp", "lebedev", 6), ("exp", "lebedev", 14),
+    ("phong", "lebedev", 110),
+)  # fmt: skip
+FIXED = (
+    ("exp", "lebedev", 6), ("exp", "lebedev", 14), ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26),
+    ("cap", "lebedev", 50), ("phong", "lebedev", 110),
+)  # fmt: skip
+FIXED_REPLICATES = (8, 32, 128)
 
 
 def measure(name: str, runs: int) -> dict:
@@ -109,7 +117,7 @@ def tails(name: str, method: str, size: int) -> None:
     rule = Rotated(method, f, f.domain, np.array([0.0, 0.0, 1.0]), np.random.SeedSequence(5), 2, 2)
     population = np.array([rule._rule(r, size)[0] for r in haar_rotations(40_000, np.random.SeedSequence(7))])
     rng = np.random.default_rng(1)
-    for replicates in (8, 64, 128):
+    for replicates in (8, 32, 64, 128):
         beyond = 0
         for _ in range(20):
             draws = population[rng.integers(0, len(population), size=(10_000, replicates))]
@@ -143,15 +151,13 @@ def main() -> None:
             f"{row['largest_error_in_standard_errors']:.2f} | {families} | {stages} |",
             flush=True,
         )
-    print(
-        "\n| integrand: rule | 8 replicates: covers | largest error / SE | 128 replicates: covers | largest error / SE |"
-    )
-    print("|---|---:|---:|---:|---:|")
+    print("\n| integrand: rule | " + " | ".join(f"{r}: covers | largest error / SE" for r in FIXED_REPLICATES) + " |")
+    print("|---|" + "---:|---:|" * len(FIXED_REPLICATES))
     fixed_rows = []
     for name, method, size in FIXED:
         if name not in names:
             continue
-        pair = [fixed(name, method, size, replicates, args.runs) for replicates in (8, 128)]
+        pair = [fixed(name, method, size, replicates, args.runs) for replicates in FIXED_REPLICATES]
         fixed_rows += pair
         cells = " | ".join(f"{r['covered']} of {r['runs']} | {r['largest_error_in_standard_errors']:.2f}" for r in pair)
         print(f"| `{name}`: {method} {size} | {cells} |", flush=True)

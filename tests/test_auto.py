@@ -101,10 +101,12 @@ def test_the_auto_band_is_the_binomial_one():
 @pytest.mark.parametrize("name", COVERAGE_INTEGRANDS)
 def test_auto_intervals_cover_at_their_level_and_no_run_is_5_standard_errors_off(name):
     # integrate(method='auto') to a tolerance, 150 seeds per integrand, against the closed form.  The interval
-    # returned is the Student-t interval (127 degrees of freedom) of a fresh answering stage at the stated 95%:
-    # its count of covering runs must lie in the binomial band above.  No run may be more than 5 standard
-    # errors off: |t_127| > 5 has probability 2e-6 per run (1.5e-5 by resampling the skewed estimates of the
-    # folded 26-point Lebedev rule on `cosine`, 0.2% for 150 such runs).  Seeds 0-999: docs/results/integration.md.
+    # returned is the Student-t interval (127 or, far inside the tolerance, 31 degrees of freedom) of a fresh
+    # answering stage at the stated 95%: its count of covering runs must lie in the binomial band above.  No run
+    # may be more than 5 standard errors off: |t_127| > 5 has probability 2e-6 per run (1.5e-5 by resampling the
+    # skewed estimates of the folded 26-point Lebedev rule on `cosine`, 0.2% for 150 such runs), |t_31| > 5 2e-5
+    # (resampled: 5e-5 for the 14-point rule on `exp`, which answers so, 0.75% for 150 such runs).  Seeds 0-999:
+    # docs/results/integration.md.
     f = INTEGRANDS[name]
     covered, worst = 0, 0.0
     for seed in range(AUTO_RUNS):
@@ -129,11 +131,41 @@ def test_auto_takes_lebedev_on_a_polynomial_and_says_why():
     assert result.converged and result.method == "lebedev"
     assert abs(result.integral - f.exact) <= 1e-9 * f.exact
     assert result.history and result.history[0]["reason"].startswith("pilot")
-    # the answer is a fresh stage of the chosen family, whose size was fixed before its values were seen, with
-    # 16 times the pilot's replicates
+    # the answer is a fresh stage of the chosen family, whose size was fixed before its values were seen; exact to
+    # rounding, it is predicted far inside the tolerance: 4 times the pilot's replicates, not 16
     assert result.history[-1]["reason"].startswith("answer") and result.history[-1]["method"] == "lebedev"
-    assert result.n_units == 128 and result.history[0]["replicates"] == 8
+    assert result.n_units == 32 and result.history[0]["replicates"] == 8
     assert result.n_evaluations == sum(h["evaluations"] for h in result.history)
+
+
+def _pilot(method, sizes):
+    """Two pilot stages of *method* on exp (8 rotations each) and the half-widths predicted for a fresh stage of
+    each size with 32 and 128 rotations: t quantile x the spread of one rotation / sqrt(rotations)."""
+    family = auto.Rotated(method, exp_dot, "sphere", np.zeros(3), np.random.SeedSequence(3), 8, 128)
+    stages = [family.run_next(), family.run_next()]
+    half = {
+        (size, r): stats.t.ppf(0.975, r - 1) * stage.spread / math.sqrt(r)
+        for size, stage in zip(sizes, stages, strict=True)
+        for r in (32, 128)
+    }
+    return family, half
+
+
+def test_an_answer_far_inside_the_tolerance_has_fewer_randomisations():
+    # _jump on two pilot stages, against the sizes and t quantiles worked out here: 128 rotations where the
+    # predicted half-width is near the tolerance (AIM = 0.75 of it); 32 (cost 32 x size) where it is 1/100 of the
+    # tolerance or less, and cheaper.
+    fibonacci, half = _pilot("fibonacci", (16, 32))
+    near = auto._jump(fibonacci, half[32, 128] / 0.75 * 1.01, 0.95, 10**9, 0)
+    assert (near.k, near.replicates, near.cost, near.meets) == (1, 0, 128 * 32, True)
+    lebedev, half = _pilot("lebedev", (6, 14))
+    assert half[6, 32] > 100 * half[14, 32]  # exp: the 14-point rule is far better than the 6
+    far = auto._jump(lebedev, half[14, 32] / 0.01 * 1.01, 0.95, 10**9, 0)
+    assert (far.k, far.replicates, far.cost, far.meets) == (1, 32, 32 * 14, True)
+    far_small = auto._jump(lebedev, half[6, 32] / 0.01 * 1.01, 0.95, 10**9, 0)
+    assert (far_small.k, far_small.replicates, far_small.cost, far_small.meets) == (0, 32, 32 * 6, True)
+    # an answer costs more than every one before it (floor): the next cheaper candidate, here the 14-point rule
+    assert auto._jump(lebedev, half[6, 32] / 0.01 * 1.01, 0.95, 10**9, 32 * 6).cost > 32 * 6
 
 
 def test_auto_explores_the_other_families_before_a_large_fresh_stage():

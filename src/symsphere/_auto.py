@@ -6,24 +6,29 @@ The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibo
 
 - *pilot* stages (``replicates`` randomisations, default 8) that never answer: every family climbs its
   own ladder (the scheme's stages nested, the rotated rules' fresh), the one whose total after its next
-  stage is smallest first (Lebedev's counted at half); once the families have stages to extrapolate
-  from, the family predicted to be most efficient grows, and the others *explore* while their totals
-  stay below EXPLORE of the next answering stage (a Lebedev rule's sudden convergence once its order
-  passes f's bandwidth is invisible to a prediction from small stages);
+  stage is smallest first (Lebedev's counted at half).  They grow so, balanced, until an answering
+  stage is predicted to meet the tolerance: no family grows alone on a prediction from small stages
+  (a Lebedev rule's sudden convergence once its order passes f's bandwidth, Fibonacci's on a sharp
+  lobe, are invisible to it); before an answering stage every family, its own too, *explores* while
+  its total stays below EXPLORE of it;
 - *answering* stages: ANSWER_FACTOR times as many randomisations (default 128), all drawn afresh --
   new rotations or new base points, nothing reused -- at the size predicted (from the stages before:
   the spread of one randomisation extrapolated along the family's ladder) to meet the tolerance with
-  the fewest evaluations, once one is predicted within JUMP times everything spent before.  Its
-  Student-t interval (``answer_replicates - 1`` degrees of freedom) at ``confidence_level`` is returned
-  if its half-width meets the tolerance; if not, its spread joins the predictions, and the next
-  answering stage, again fresh, costs more than every one before it.
+  the fewest evaluations, once one is predicted within JUMP times everything spent before; or
+  FEW_FACTOR times as many (default 32) where a rule already measured is *far* inside the tolerance
+  (FAR of it: a rule exact to rounding, or converging fast), if cheaper.  Its Student-t interval (replicates - 1
+  degrees of freedom) at ``confidence_level`` is returned if its half-width meets the tolerance; if
+  not, its spread joins the predictions, and the next answering stage, again fresh, costs more than
+  every one before it.
 
 This is Stein's two-stage procedure: the answer's size is fixed before its values are seen, so its
 interval covers at the stated level, conditioned only on its own half-width meeting the tolerance --
 which, at a size predicted to meet it, is nearly always so (measured: docs/results/integration.md).
 128 randomisations make the t-interval's tails light even for the skewed estimates of a small folded
-rule (Student's t with 127 degrees of freedom exceeds 5 with probability 2e-6, with 7, 1.6e-3).  ``n_max`` bounds the evaluations of all stages of
-all families, which is what ``n_evaluations`` counts.  ``result.history`` lists every stage: family,
+rule (Student's t with 127 degrees of freedom exceeds 5 with probability 2e-6, with 7, 1.6e-3); 32
+suffice where the estimates are nearly normal (|t_31| > 5: 2e-5), which the rules far inside the
+tolerance were on the measured integrands (resampled: docs/results/integration.md).  ``n_max`` bounds
+the evaluations of all stages of all families, which is what ``n_evaluations`` counts.  ``result.history`` lists every stage: family,
 evaluations, estimate, standard error, half-width, tolerance, level, and why it ran.
 """
 
@@ -70,7 +75,17 @@ ANSWER_FACTOR = 16
 AIM = 0.75
 """An answering stage is sized for a predicted half-width of AIM x the tolerance: so that it meets the
 tolerance nearly always, and the condition that it does hardly selects its spread."""
-EXPLORE = 0.25
+FEW_FACTOR = 4
+"""An answering stage far inside the tolerance has this many times the pilot's randomisations (4 x 8 = 32)."""
+FAR = 0.01
+"""... far inside: its predicted half-width with FEW_FACTOR x the pilot's randomisations is FAR x the
+tolerance or less, from the spread measured at that rule (never extrapolated: a rule predicted exact
+to rounding would answer with an interval of rounding noise around a rounding bias of a few ulps).
+Such a rule is exact to rounding or converging fast, its estimates over rotations nearly normal
+(resampled; the small folded rules, skewed, are nowhere near so far inside)."""
+EXPLORE = 0.125
+SELF_EXPLORE = True
+"""The leader explores its own ladder too (benchmarks/bench_integrate_auto.py runs a family alone both ways)."""
 JUMP = 4 * ANSWER_FACTOR
 """An answering stage costs at most this multiple of every evaluation before it: a prediction from small
 stages may be far off (the totals then grow geometrically); 4 for that, times its more replicates."""
@@ -90,6 +105,7 @@ class Jump:
     cost: int = 0
     half_width: float = math.inf
     meets: bool = False
+    replicates: int = 0  # 0: the family's answer_replicates
 
 
 def integrate_rules(request: Request) -> IntegrationResult:
@@ -229,12 +245,14 @@ def _jump(family: Family, tolerance: float, level: float, budget: int, floor: in
             root = np.sqrt([known[-2][0], known[-1][0]])
             spectral = SPECTRAL_MARGIN * float((y[-2] - y[-1]) / (root[1] - root[0]))
     copies_from = LEBEDEV_SIZES[-1] if family.name == "lebedev" else math.inf
-    found = Jump()
+    few = FEW_FACTOR * family.replicates if family.answer_replicates > FEW_FACTOR * family.replicates else 0
+    found, quick = Jump(), Jump()
     for k in range(64):
         size, cost = family.ladder(k)
         if cost <= floor or (size < largest and size not in seen):
             continue
-        if cost > budget:
+        few_cost = family.ladder(k, few)[1] if few else cost
+        if few_cost > budget:
             break
         rule = min(size, copies_from)
         if size in seen:
@@ -247,11 +265,15 @@ def _jump(family: Family, tolerance: float, level: float, budget: int, floor: in
             predicted = spread * (rule / largest) ** slope
         if size not in seen and size > rule:
             predicted *= (size / max(rule, largest)) ** -0.5
-        half_width = t_quantile(family.answer_units(size), level) * predicted / math.sqrt(family.answer_replicates)
-        found = Jump(k, cost, half_width, half_width <= AIM * tolerance)
-        if found.meets:
+        if few and not quick.meets and few_cost > floor and rule <= largest:
+            half_width = t_quantile(family.answer_units(size, few), level) * predicted / math.sqrt(few)
+            quick = Jump(k, few_cost, half_width, half_width <= FAR * tolerance, few)
+        if cost <= budget and not found.meets:
+            half_width = t_quantile(family.answer_units(size), level) * predicted / math.sqrt(family.answer_replicates)
+            found = Jump(k, cost, half_width, half_width <= AIM * tolerance)
+        if found.meets and (quick.meets or few_cost >= found.cost):
             break
-    return found
+    return quick if quick.meets and (not found.meets or quick.cost < found.cost) else found
 
 
 def _run(
@@ -289,7 +311,7 @@ def _run(
 
     def answer(family: Family, jump: Jump, reason: str) -> IntegrationResult:
         nonlocal floor
-        stage = family.fresh(jump.k)
+        stage = family.fresh(jump.k, jump.replicates)
         family.chosen.append(stage)
         floor = jump.cost
         return look(family, stage, True, reason)
@@ -311,7 +333,8 @@ def _run(
             }
         said = ", ".join(f"{name} {j.cost if j.meets else 'none'}" for name, j in jumps.items())
         meeting = [fam for fam in families if fam.name in jumps and jumps[fam.name].meets]
-        # else the one whose largest affordable answering stage has the smallest half-width per evaluation
+        # else (for the last answer at n_max) the one whose largest affordable answering stage has the smallest
+        # half-width per evaluation
         growing = [fam for fam in families if jumps.get(fam.name, Jump()).k >= 0]
         leader = (
             min(meeting, key=lambda fam: jumps[fam.name].cost)
@@ -320,21 +343,25 @@ def _run(
             if growing
             else None
         )
-        # before an answering stage (not while the leader grows) the others continue their own ladders
+        # before an answering stage every family continues its own ladder, the leader too (a cheap measurement)
         horizon = EXPLORE * jumps[leader.name].cost if leader is not None and meeting else 0
-        explore = [fam for fam in affordable if fam is not leader and fam.spent + fam.sizes()[0][1] <= horizon]
+        explore = [
+            fam
+            for fam in affordable
+            if (fam is not leader or SELF_EXPLORE) and fam.spent + fam.sizes()[0][1] <= horizon
+        ]
         if explore:
             reason = f"exploring: its total stays below {EXPLORE} of the leader's answering stage; predicted: {said}"
             result = look(min(explore, key=_balanced), min(explore, key=_balanced).run_next(), False, reason)
         elif meeting and leader is not None:
             reason = f"answer: a fresh stage predicted to meet the tolerance with the fewest evaluations: {said}"
             result = answer(leader, jumps[leader.name], reason)
-        elif leader is not None and leader in affordable:
-            reason = f"growing: no answering stage is predicted to meet the tolerance within {JUMP} x the total; {said}"
-            result = look(leader, leader.run_next(), False, reason)
         elif affordable:
+            # no answering stage predicted to meet the tolerance: every family grows, balanced (no one grows alone:
+            # a decay that sets in late -- Lebedev past f's bandwidth, Fibonacci on a sharp lobe -- is not predicted)
             choice = min(affordable, key=_balanced)
-            result = look(choice, choice.run_next(), False, "pilot: the smallest total after the stage")
+            reason = f"pilot: the smallest total after the stage; none predicted to meet the tolerance within {JUMP} x the total; {said}"
+            result = look(choice, choice.run_next(), False, reason)
         elif leader is not None:
             result = answer(leader, jumps[leader.name], "answer: the largest affordable fresh stage (n_max)")
         else:

@@ -89,17 +89,18 @@ class Family:
     def run_next(self) -> Stage:
         raise NotImplementedError
 
-    def ladder(self, k: int) -> tuple[int, int]:
-        """(size, evaluations) of stage k run afresh, with :attr:`answer_replicates`."""
+    def ladder(self, k: int, replicates: int = 0) -> tuple[int, int]:
+        """(size, evaluations) of stage k run afresh, with *replicates* (0: :attr:`answer_replicates`)."""
         raise NotImplementedError
 
-    def fresh(self, k: int) -> Stage:
-        """Stage k from randomisations of its own (:attr:`answer_replicates`), independent of every stage before."""
+    def fresh(self, k: int, replicates: int = 0) -> Stage:
+        """Stage k from *replicates* randomisations of its own (0: :attr:`answer_replicates`), independent of
+        every stage before."""
         raise NotImplementedError
 
-    def answer_units(self, size: int) -> int:
+    def answer_units(self, size: int, replicates: int = 0) -> int:
         """The independent units (the degrees of freedom + 1) of a fresh stage of *size*."""
-        return self.answer_replicates
+        return replicates or self.answer_replicates
 
 
 class Rotated(Family):
@@ -143,15 +144,15 @@ class Rotated(Family):
     def run_next(self) -> Stage:
         return self.run_stage(len(self.stages))
 
-    def ladder(self, k: int) -> tuple[int, int]:
+    def ladder(self, k: int, replicates: int = 0) -> tuple[int, int]:
         """(size, evaluations) of stage k run afresh: every copy drawn."""
         size, copies = self.shape(k)
-        return size * copies, self.answer_replicates * size * copies
+        return size * copies, (replicates or self.answer_replicates) * size * copies
 
-    def fresh(self, k: int) -> Stage:
+    def fresh(self, k: int, replicates: int = 0) -> Stage:
         """Stage k from rotations of its own (a child of this family's seed), nothing reused."""
         domain, normal = ("sphere", np.zeros(3)) if self.normal is None else ("hemisphere", self.normal)
-        answer = self.answer_replicates
+        answer = replicates or self.answer_replicates
         other = Rotated(self.name, self.f, domain, normal, self.seed.spawn(1)[0], answer, answer)
         stage = other.run_stage(k)
         self.varies = self.varies or other.varies
@@ -257,22 +258,27 @@ class Scheme(Family):
         self.points_name = self.largest.points_name
         self.kept: dict[tuple[int, int], Any] = {}
 
-    def ladder(self, k: int) -> tuple[int, int]:
+    def ladder(self, k: int, replicates: int = 0) -> tuple[int, int]:
         """(size, evaluations) of stage k (counted from the first stage of 1 or 16 orbits) run afresh."""
         orbits = self.base << k
         if orbits > self.largest.orbits_per_replicate:
             return self.count * orbits, 2**62  # beyond the plan for n_max: never affordable
-        return self.count * orbits, self.count * self.answer_replicates * orbits
+        return self.count * orbits, self.count * self._answering(replicates) * orbits
 
-    def fresh(self, k: int) -> Stage:
+    def _answering(self, replicates: int) -> int:
+        """Random points have one replicate (orbits as units): *replicates* does not apply."""
+        return 1 if self.answer_replicates == 1 else replicates or self.answer_replicates
+
+    def fresh(self, k: int, replicates: int = 0) -> Stage:
         """Stage k from base points of their own (a child of this family's seed), nothing reused."""
         f, domain, points, normal, seed, n_max, answer = self.args
+        answer = self._answering(replicates)
         other = Scheme(f, domain, points, normal, seed.spawn(1)[0], answer, n_max, answer, first=self.base << k)
         return other.run_next()
 
-    def answer_units(self, size: int) -> int:
+    def answer_units(self, size: int, replicates: int = 0) -> int:
         """Random points: the orbits of the stage; else its replicates."""
-        return size // self.count if self.answer_replicates == 1 else self.answer_replicates
+        return size // self.count if self.answer_replicates == 1 else self._answering(replicates)
 
     def sizes(self) -> list[tuple[int, int]]:
         out = []

@@ -115,7 +115,7 @@ class IntegrationResult:
         run, in order: ``method`` (the family), ``size`` (points per replicate), ``replicates``,
         ``evaluations`` (new),
         ``total_evaluations``, ``integral``, ``standard_error``, ``half_width``, ``tolerance``, ``level``
-        and ``reason`` (why this family ran this stage: the pilot, growing, exploring, or an answer,
+        and ``reason`` (why this family ran this stage: the pilot, exploring, or an answer,
         with the predicted costs of all families).  Empty otherwise.
 
     Examples
