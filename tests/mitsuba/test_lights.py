@@ -24,6 +24,9 @@ SCENES = ("cornell", "textured", "mesh_light")
 # the Cornell box, some in the textured scene and the mesh-light scene)
 UNBIASED_CASES = [(name, 6, "solid_angle") for name in SCENES] + [("cornell", 2, "solid_angle")]
 UNBIASED_CASES += [("cornell", 2, "projected"), ("textured", 6, "projected"), ("mesh_light", 3, "projected")]
+# where the map switches inside the image between Arvo's and sampling by area (a tiny table far from or near
+# p; a disk's triangles small or not as seen from p): test_area_sampling_switches_inside_these_images
+UNBIASED_CASES += [("near_rect", 3, "solid_angle"), ("near_disk", 3, "solid_angle")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
 FURNACE_TESTS = 6
 BLOCK = 4
@@ -78,10 +81,21 @@ def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
 
 
 def _scene(mi, name, tmp_path, bare=False):
-    if name != "mesh_light":
+    if name not in ("mesh_light", "near_rect", "near_disk"):
         return mi.load_dict(scene_dict(mi, name, SIZE))
     scene = scene_dict(mi, "textured", SIZE)
     del scene["light"], scene["sky"]
+    if name == "near_rect":  # one rectangle (a tiny table) 0.5 above the floor, facing it
+        del scene["ball"], scene["glass"]
+        T = mi.ScalarTransform4f
+        scene["light"] = {"type": "rectangle", "to_world": T().translate([0, 0.5, 0]).rotate([1, 0, 0], 90).scale(0.6),
+                          "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}}}  # fmt: skip
+        return mi.load_dict(scene)
+    if name == "near_disk":  # a 24-triangle disk 0.4 above the floor
+        del scene["ball"], scene["glass"]
+        scene["light"] = {"type": "obj", "filename": str(_disk_obj(tmp_path / "disk24.obj", 24, radius=0.8, height=0.4)),
+                          "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}}}  # fmt: skip
+        return mi.load_dict(scene)
     if bare:  # the lights and the floor only: nothing between a point above the floor and the lights
         del scene["ball"], scene["glass"], scene["wall"]
     scene["light"] = {
@@ -116,7 +130,7 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
 
     from symsphere._testing import mitsuba_lights as lights
 
-    for name in SCENES:
+    for name in (*SCENES, "near_rect", "near_disk"):  # the latter two: both maps (by area, Arvo's)
         scene = _scene(mi, name, tmp_path)
         table = lights.LightTable(scene)
         rng = np.random.default_rng(5)
@@ -264,22 +278,30 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         np.testing.assert_allclose(again.numpy()[lit], chosen_p.numpy()[lit], rtol=1e-6, err_msg=name)
 
 
+# (scene, point): the mesh-light scene (two emitters, one chosen in two levels, one exactly; most
+# triangles sampled by area there), near_rect near its light (Arvo's map) and far (by power and area),
+# near_disk where some of its triangles are sampled by area and some by Arvo's map
+DENSITY_CASES = [("mesh_light", (0.1, 0.3, -0.2)), ("near_rect", (0.2, 0.1, 0.1)), ("near_rect", (1.8, 0.1, 1.2)),
+                 ("near_disk", (1.4, 0.1, 0.6))]  # fmt: skip
+
+
 @pytest.mark.statistical
-def test_the_density_integrates_to_one(llvm, tmp_path):
-    """The density of the table's directions over the sphere, by Monte Carlo with numpy's uniform directions
-    (the mesh-light scene: two emitters, one chosen by power, one exactly), is 1 at a point below them."""
+@pytest.mark.parametrize(("scene_name", "point"), DENSITY_CASES)
+def test_the_density_integrates_to_one(llvm, tmp_path, scene_name, point):
+    """The density of the table's directions over the sphere, by Monte Carlo with numpy's uniform directions,
+    is 1 at a point below the lights (z-test, Sidak over the DENSITY_CASES)."""
     mi = llvm
     import drjit as dr
 
     from symsphere._testing import mitsuba_lights as lights
 
-    scene = _scene(mi, "mesh_light", tmp_path, bare=True)
+    scene = _scene(mi, scene_name, tmp_path, bare=True)
     table = lights.LightTable(scene)
     n = 400_000
     g = np.random.default_rng(6).standard_normal((n, 3))
     d = g / np.linalg.norm(g, axis=1, keepdims=True)
     prev = dr.zeros(mi.SurfaceInteraction3f, n)
-    prev.p = mi.Point3f(0.1, 0.3, -0.2)
+    prev.p = mi.Point3f(*point)
     prev.n = mi.Normal3f(0, 1, 0)
     hit = scene.ray_intersect(mi.Ray3f(prev.p, mi.Vector3f(d[:, 0], d[:, 1], d[:, 2])))
     ds = mi.DirectionSample3f(scene, si=hit, ref=prev)
@@ -287,7 +309,7 @@ def test_the_density_integrates_to_one(llvm, tmp_path):
     pdf = np.where(on_light, table.pdf_direction(scene, prev, hit, ds, mi.Bool(True)).numpy(), 0.0)
     values = 4 * np.pi * pdf
     z = (values.mean() - 1.0) / (values.std(ddof=1) / np.sqrt(n))
-    assert abs(z) < stats.norm.isf(ALPHA / 2), (values.mean(), z)
+    assert abs(z) < stats.norm.isf(_sidak(ALPHA, len(DENSITY_CASES)) / 2), (values.mean(), z)
 
 
 def _renders(mi, scene, integrator):
@@ -347,16 +369,16 @@ def test_emitting_box_furnace(llvm, tmp_path, per_side, mirror, sampling):
     assert abs(z) < stats.norm.isf(_sidak(ALPHA, FURNACE_TESTS) / 2), (values.mean(), z)
 
 
-def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path):
-    """A mesh light with zero-area triangles and one seen edge-on: finite images, the same mean as Mitsuba's."""
+@pytest.mark.parametrize("faces", ["f 1 3 2\nf 1 4 3\nf 1 1 2\nf 1 5 3\n", "f 1 3 2\nf 1 5 3\n"])
+def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path, faces):
+    """A mesh light with zero-area triangles and one seen edge-on: finite images, the same mean as Mitsuba's.
+    Two faces down, a repeated vertex, a collinear one; or a face and a collinear one (a tiny table, chosen
+    from by power and sampled by area far from it)."""
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
     path = tmp_path / "bad.obj"
-    path.write_text(
-        "v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\nv 0 1.5 0\n"
-        "f 1 3 2\nf 1 4 3\nf 1 1 2\nf 1 5 3\n"  # two faces down, a repeated vertex, a collinear one
-    )
+    path.write_text("v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\nv 0 1.5 0\n" + faces)
     scene = scene_dict(mi, "textured", SIZE)
     del scene["light"], scene["sky"]
     scene["light"] = {
@@ -370,6 +392,35 @@ def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path):
     )
     image = np.array(mi.render(scene, integrator=integrator, spp=16, seed=1))
     assert np.all(np.isfinite(image)) and image.mean() > 0
+
+
+def _area_fraction(mi, scene, table, lights):
+    """The fraction of the primary hits (a 32 x 32 grid of camera rays) where the table samples by area:
+    the criteria restated in numpy (a tiny table's bounding sphere; else each triangle's, averaged)."""
+    sensor = scene.sensors()[0]
+    xs, ys = np.meshgrid((np.arange(32) + 0.5) / 32, (np.arange(32) + 0.5) / 32)
+    ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f(xs.ravel(), ys.ravel()), mi.Point2f(0.5, 0.5))
+    si = scene.ray_intersect(ray)
+    p = np.asarray(si.p.numpy()).reshape(-1, 3)[si.is_valid().numpy()]
+    tris = table.tris
+    if table.count <= lights.TINY_MAX:
+        centre = tris.reshape(-1, 3).mean(axis=0)
+        radius = np.linalg.norm(tris - centre, axis=2).max()
+        return float(np.mean(radius < lights.TINY_BELOW * np.linalg.norm(p - centre, axis=1)))
+    centre = tris.mean(axis=1)
+    radius = np.linalg.norm(tris - centre[:, None], axis=2).max(axis=1)
+    return float(np.mean(radius < lights.AREA_BELOW * np.linalg.norm(p[:, None] - centre, axis=2)))
+
+
+def test_area_sampling_switches_inside_these_images(llvm, tmp_path):
+    """The block tests' near_rect and near_disk scenes use both maps, each in at least a tenth of the image."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    for name in ("near_rect", "near_disk"):
+        scene = _scene(mi, name, tmp_path)
+        fraction = _area_fraction(mi, scene, lights.LightTable(scene), lights)
+        assert 0.1 < fraction < 0.9, (name, fraction)
 
 
 def test_drjit_spherical_triangle_equals_numpy(llvm):

@@ -10,8 +10,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["branch", "importance", "scalar_radiance", "registry_ids", "shape_id", "spatial_order", "triangles",
-           "uniform_rgb", "weight_sum", "Group"]  # fmt: skip
+__all__ = ["area_direction", "branch", "importance", "pick", "scalar_radiance", "share", "registry_ids", "shape_id", "small_sphere",
+           "small_triangle", "spatial_order", "triangles", "uniform_rgb", "weight_sum", "Group"]  # fmt: skip
 
 
 def registry_ids(pointers: Any) -> Any:
@@ -133,13 +133,68 @@ def importance(
     return value
 
 
+def small_sphere(p: Any, centre: Any, radius: float, tau: float) -> Any:
+    """The lanes where the sphere (centre, radius) is small as seen from p: radius < tau |p - centre|."""
+    return radius * radius < (tau * tau) * dr.squared_norm(p - centre)
+
+
+def small_triangle(a: Any, b: Any, c: Any, tau: float) -> Any:
+    """The lanes where the triangle a, b, c (vectors from p) is small as seen from p: its bounding radius
+    about its centroid below tau times the centroid's distance."""
+    centre = (a + b + c) * (1.0 / 3.0)
+    r2 = dr.maximum(dr.maximum(dr.squared_norm(a - centre), dr.squared_norm(b - centre)), dr.squared_norm(c - centre))
+    return r2 < (tau * tau) * dr.squared_norm(centre)
+
+
+def area_direction(a: Any, b: Any, c: Any, n: Any, u: Any, v: Any) -> tuple[Any, Any]:
+    """(unit direction, 1 / its solid-angle density) of a point uniform in the area of the triangle a, b, c
+    (vectors from p; n its unnormalised normal): Mitsuba's ``square_to_uniform_triangle`` (barycentrics
+    ``(1 - sqrt(1 - u), sqrt(1 - u) v)``), density ``d^2 / (A |cos|)`` = ``2 d^3 / |a.n|`` (A = |n| / 2,
+    |cos| = |a.n| / (|n| d)).  0 (density infinite: never used) where p lies in the triangle's plane."""
+    t = dr.safe_sqrt(1.0 - u)
+    q = a + (1.0 - t) * (b - a) + (t * v) * (c - a)
+    dist = dr.norm(q)
+    positive = dist > 0.0
+    extent = dr.select(positive, dr.abs(dr.dot(a, n)) / dr.select(positive, 2.0 * dist * dist * dist, 1.0), 0.0)
+    return q / dr.select(positive, dist, 1.0), extent
+
+
 def weight_sum(weights: list[Any]) -> Any:
-    """The sum of the weights (None: left out) in float32, in order: :meth:`._lights.LightTable._pick`'s total."""
+    """The sum of the weights (None: left out) in float32, in order: :func:`pick`'s total."""
     total = mi.Float(0.0)
     for w in weights:
         if w is not None:
             total += w
     return total
+
+
+def pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any, Any]:
+    """(index, its weight, the total, u reused) of a choice proportional to *weights* by u: float32 sums
+    (u itself has 24 bits: float64 sums would not make the frequencies closer to the weights).  The
+    weight and the total are returned as float64."""
+    total = weight_sum(weights)
+    target = mi.Float(u) * total
+    index: Any = mi.UInt32(0)
+    before, chosen, acc = mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)
+    for i, w in enumerate(weights):
+        if w is None:
+            continue
+        take = (acc <= target) & (w > 0.0)
+        index = dr.select(take, i, index)
+        before = dr.select(take, acc, before)
+        chosen = dr.select(take, w, chosen)
+        acc += w
+    reused = dr.clip((target - before) / dr.select(chosen > 0.0, chosen, 1.0), 0.0, 1.0)
+    return index, mi.Float64(chosen), mi.Float64(total), mi.Float64(reused)
+
+
+def share(weights: list[Any], index: Any) -> Any:
+    """weights[index] / sum(weights), summed as :func:`pick` sums them (0 if the sum is 0; float64)."""
+    total, mine = mi.Float64(weight_sum(weights)), mi.Float64(0.0)
+    for i, w in enumerate(weights):
+        if w is not None:
+            mine = dr.select(index == i, mi.Float64(w), mine)
+    return dr.select(total > 0.0, mine / dr.select(total > 0.0, total, 1.0), 0.0)
 
 
 _FIELDS = ("p", "n", "uv", "time", "pdf", "delta", "d", "dist", "emitter")
