@@ -10,7 +10,10 @@ The base revision is checked out into a temporary git worktree.  Two worker proc
 script's rows, one with the base's ``src`` first on ``PYTHONPATH`` and one with this checkout's, each
 with its own numba cache (a temporary directory: the first call of each row compiles, untimed).  The
 workers take turns row by row: in every round each row runs once in each, the order of the two
-alternating, and only one process runs at a time, so both see the same machine.  Reported per row:
+alternating, and only one process runs at a time, so both see the same machine.  Both workers run
+OpenBLAS with one thread (unless ``OPENBLAS_NUM_THREADS`` is set): its threads, busy-waiting after
+5d0170b's numpy products about a normal, took the cores from this checkout's next call (measured: its
+rows about a normal 1.3-1.8x slower than with one BLAS thread, the base's the same).  Reported per row:
 the median over the rounds of each revision and the speed ratio base / new (above 1: this checkout is
 faster); for the sampling rows also each one's fraction of the memory write limit, and the ceiling:
 the base's time over the write limit's, the highest speed-up over the base that writing the bytes
@@ -171,6 +174,9 @@ class Worker:
         # the write limit's prange starts numba's OpenMP threads, maybe before symsphere does: make them wait
         # passively as symsphere would (spinning, they hold the cores the samplers' threads need)
         env.setdefault("OMP_WAIT_POLICY", "passive")
+        # OpenBLAS's threads busy-wait after a product (5d0170b's numpy products about a normal) and took
+        # the cores from the other worker's next call: its rows about a normal 1.3-1.8x slower, measured
+        env.setdefault("OPENBLAS_NUM_THREADS", "1")
         if args.threads:  # one thread: the kernels' own speed, less sensitive to a loaded machine
             env["NUMBA_NUM_THREADS"] = str(args.threads)
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--n", str(args.n)]
