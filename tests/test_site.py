@@ -209,11 +209,14 @@ def test_search_box_answers_in_chromium(browser):
     )
     assert form is not None and "search" in form
     driver.get(urllib.parse.urljoin(base + "index.html", form) + "?q=orbit")
+    # Sphinx lists the matches one by one and then writes "Search finished, ..." into the summary: wait for
+    # that, not for the first match (the page sought may come later in the list)
     results = _wait(
         driver,
         lambda d: d.execute_script(
-            "const r = document.querySelectorAll('#search-results li, ul.search li');"
-            "return r.length > 0 ? Array.from(r).map(li => li.textContent) : false"
+            "const s = document.querySelector('.search-summary');"
+            "if (!s || !s.textContent.startsWith('Search finished')) return false;"
+            "return Array.from(document.querySelectorAll('#search-results li, ul.search li')).map(li => li.textContent)"
         ),
         timeout=60,
     )
