@@ -417,9 +417,8 @@ class _PathMethods:
             else:
                 em_pdf = scene.pdf_emitter_direction(prev_si, ds, ~prev_bsdf_delta)
                 mis_bsdf = _mis_weight(prev_bsdf_pdf, em_pdf)
-            if dr.hint(only_table, mode="scalar"):
-                mis_bsdf = dr.select(prev_alone, 0.0, mis_bsdf)
-            elif dr.hint(lights is not None and lights.covers_all, mode="scalar"):  # every emitter is the table's
+            # with every emitter the table's, a hit after a diffuse vertex is always on one of them
+            if dr.hint(only_table or (lights is not None and lights.covers_all), mode="scalar"):
                 mis_bsdf = dr.select(prev_alone, 0.0, mis_bsdf)
             elif dr.hint(lights is not None, mode="scalar"):
                 mis_bsdf = dr.select(prev_alone & lights.holds(si, prev_alone), 0.0, mis_bsdf)

@@ -108,7 +108,6 @@ class LightTable:
 
     def __init__(self, scene: Any, projected: bool = False) -> None:
         self.projected = projected  # cosine-weighted sampling where sample_direction is given the lanes
-        self.area_below, self.tiny_below = AREA_BELOW, TINY_BELOW
         emitters = scene.emitters()
         pmf = [float(scene.pdf_emitter(mi.UInt32(i))[0]) for i in range(len(emitters))]
         rows: list[np.ndarray] = []
@@ -511,20 +510,18 @@ class LightTable:
 
     def _far(self, p: Any) -> Any:
         """The lanes where a tiny table's bounding sphere is small as seen from p (radius below
-        :data:`TINY_BELOW` times its centre's distance; None: not a tiny table, or never)."""
-        if self._tiny is None or self.tiny_below <= 0.0:
+        :data:`TINY_BELOW` times its centre's distance; None: not a tiny table)."""
+        if self._tiny is None:
             return None
-        return small_sphere(p, *self._tiny, self.tiny_below)
+        return small_sphere(p, *self._tiny, TINY_BELOW)
 
     def _tiny_weights(self) -> list[Any]:
         return [None if w is None else mi.Float(w) for w in self._tiny_power]
 
     def _small(self, a: Any, b: Any, c: Any, far: Any = None) -> Any:
         """The lanes sampled by area: *far*, or the triangle (vertices relative to p) small as seen from p
-        (:func:`._light_rows.small_triangle` with :data:`AREA_BELOW`); None: no lane."""
-        if self.area_below <= 0.0:
-            return far
-        small = small_triangle(a, b, c, self.area_below)
+        (:func:`._light_rows.small_triangle` with :data:`AREA_BELOW`)."""
+        small = small_triangle(a, b, c, AREA_BELOW)
         return small if far is None else small | far
 
     def _direction(self, a: Any, b: Any, c: Any, n: Any, uv: Any, active: Any, far: Any = None) -> tuple[Any, Any]:
@@ -538,8 +535,6 @@ class LightTable:
             return dr.normalize(direction), omega
 
         small = self._small(a, b, c, far)
-        if small is None:
-            return arvo()
         by_area = area_direction(a, b, c, n, *uv)
         return dr.if_stmt(args=(), cond=active & ~small, true_fn=arvo, false_fn=lambda: by_area)
 
@@ -577,12 +572,11 @@ class LightTable:
         far = self._far(p)
         if far is not None:
             probability = dr.select(far, share(self._tiny_weights(), row), probability)
-        small = self._small(a - p, b - p, c - p, far)
-        if small is not None:  # sampled by area there: d^2 / (A |cos|) = 2 d^3 / |(a - p).n|
-            dist = dr.norm(mi.Vector3f(si.p) - p)
-            height = dr.abs(dr.dot(a - p, n))
-            by_area = mi.Float64(2.0 * dist * dist * dist / dr.select(height > 0.0, height, 1.0))
-            pdf = dr.select(small, dr.select(front & (height > 0.0), probability * by_area, 0.0), pdf)
+        small = self._small(a - p, b - p, c - p, far)  # sampled by area there: d^2 / (A |cos|) = 2 d^3 / |(a - p).n|
+        dist = dr.norm(mi.Vector3f(si.p) - p)
+        height = dr.abs(dr.dot(a - p, n))
+        by_area = mi.Float64(2.0 * dist * dist * dist / dr.select(height > 0.0, height, 1.0))
+        pdf = dr.select(small, dr.select(front & (height > 0.0), probability * by_area, 0.0), pdf)
         return dr.select(ours, mi.Float(pdf) * self.p_table, mitsuba_pdf)
 
 
