@@ -27,6 +27,8 @@ UNBIASED_CASES += [("cornell", 2, "projected"), ("textured", 6, "projected"), ("
 # where the map switches inside the image between Arvo's and sampling by area (a tiny table far from or near
 # p; a disk's triangles small or not as seen from p): test_area_sampling_switches_inside_these_images
 UNBIASED_CASES += [("near_rect", 3, "solid_angle"), ("near_disk", 3, "solid_angle")]
+# a light of 320 triangles: a tree with a level between its top and its leaves (42 leaves > TREE_TOP)
+UNBIASED_CASES += [("tree_light", 3, "solid_angle")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
 FURNACE_TESTS = 6
 BLOCK = 4
@@ -81,7 +83,7 @@ def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
 
 
 def _scene(mi, name, tmp_path, bare=False):
-    if name not in ("mesh_light", "near_rect", "near_disk"):
+    if name not in ("mesh_light", "tree_light", "near_rect", "near_disk"):
         return mi.load_dict(scene_dict(mi, name, SIZE))
     scene = scene_dict(mi, "textured", SIZE)
     del scene["light"], scene["sky"]
@@ -98,9 +100,10 @@ def _scene(mi, name, tmp_path, bare=False):
         return mi.load_dict(scene)
     if bare:  # the lights and the floor only: nothing between a point above the floor and the lights
         del scene["ball"], scene["glass"], scene["wall"]
+    segments = 320 if name == "tree_light" else 80  # > EXACT_MAX: a tree (leaves under its top; 320: a level between)
     scene["light"] = {
         "type": "obj",
-        "filename": str(_disk_obj(tmp_path / "disk.obj", 80)),  # 80 > EXACT_MAX: two levels
+        "filename": str(_disk_obj(tmp_path / "disk.obj", segments)),
         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [6, 6, 5]}},
     }
     scene["panel"] = {
@@ -130,7 +133,7 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
 
     from symsphere._testing import mitsuba_lights as lights
 
-    for name in (*SCENES, "near_rect", "near_disk"):  # the latter two: both maps (by area, Arvo's)
+    for name in (*SCENES, "near_rect", "near_disk", "tree_light"):  # near_*: both maps (by area, Arvo's)
         scene = _scene(mi, name, tmp_path)
         table = lights.LightTable(scene)
         rng = np.random.default_rng(5)
@@ -203,8 +206,8 @@ def _sphere_obj(path, rings=10, segments=16):
 
 
 def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
-    """Light sampling alone at diffuse vertices counts a triangle only through its choice: in two levels
-    (320 triangles of a sphere facing outward, groups of 3 whose normals differ), every triangle that a
+    """Light sampling alone at diffuse vertices counts a triangle only through its choice: in a tree
+    (320 triangles of a sphere facing outward, chosen through the tree: nodes whose normals differ), every triangle that a
     point outside sees from its front (by more than float32's rounding: some of them at grazing angles near
     the silhouette, from afar) has a choice probability > 0, with and without a receiver's normal (random:
     its cosine weights the choice, but is 0 for no triangle that could light the point)."""
@@ -218,7 +221,7 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1, 1, 1]}}},
     })  # fmt: skip
     table = lights.LightTable(scene)
-    assert table.mode == "groups"
+    assert table.mode == "tree"
     rng = np.random.default_rng(14)
     g = rng.standard_normal((300, 3))
     points = g / np.linalg.norm(g, axis=1, keepdims=True) * rng.uniform(1.5, 6.0, (300, 1))
@@ -228,29 +231,30 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
     tris, normal = table.tris[row], table.normal[row]
     unit = normal / np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
     height = np.einsum("ij,ij->i", p - tris[:, 0], unit)
-    facing = (height > 1e-4) & (table.lum[row] > 0)
+    # the pole's triangles have areas of 1e-17: their normals are rounding noise, their light nothing
+    area = 0.5 * np.linalg.norm(normal, axis=1)
+    facing = (height > 1e-4) & (table.lum[row] > 0) & (area > 1e-12)
     point = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
     g = np.repeat(rng.standard_normal((len(points), 3)), table.count, axis=0)
     normal = mi.Vector3f(*(mi.Float(g[:, k] / np.linalg.norm(g, axis=1)) for k in range(3)))
     assert facing.sum() > 1000
     for receiver in (None, normal):  # without and with the receiver's cosine in the weights
-        total = table._total(point, receiver)
-        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), total, receiver).numpy()
+        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), receiver).numpy()
         assert np.all(probability[facing] > 0), np.flatnonzero(facing & (probability <= 0))[:5]
 
 
 def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
     """Brute force: at random points with random receiver normals, the probabilities with which the table
-    chooses each of its triangles (the exact choice of the Cornell box's 2, the two levels of the
-    mesh-light scene's 92) sum to 1 wherever a triangle faces the point, and a sampled row's probability is
-    the one computed for that row."""
+    chooses each of its triangles (the exact choice of the Cornell box's 2, the tree of the mesh-light
+    scene's 92: leaves under its top, and of the tree-light scene's 332: a level between) sum to 1
+    wherever a triangle faces the point, and a sampled row's probability is the one computed for it."""
     mi = llvm
     import drjit as dr
 
     from symsphere._testing import mitsuba_lights as lights
 
     rng = np.random.default_rng(21)
-    for name, mode in (("cornell", "exact"), ("mesh_light", "groups")):
+    for name, mode in (("cornell", "exact"), ("mesh_light", "tree"), ("tree_light", "tree")):
         table = lights.LightTable(_scene(mi, name, tmp_path))
         assert table.mode == mode
         m = 64
@@ -261,8 +265,7 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         pp, nn, row = np.repeat(p, table.count, axis=0), np.repeat(n, table.count, axis=0), np.tile(rows, m)
         point = mi.Vector3f(*(mi.Float(pp[:, k]) for k in range(3)))
         normal = mi.Vector3f(*(mi.Float(nn[:, k]) for k in range(3)))
-        total = table._total(point, normal)
-        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), total, normal).numpy()
+        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), normal).numpy()
         sums = probability.reshape(m, table.count).sum(axis=1)
         assert np.all(probability >= 0.0)
         assert np.sum(sums > 0) > m // 2, name
@@ -270,19 +273,19 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         # the sampled row's probability is the computed one
         point1 = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
         normal1 = mi.Vector3f(*(mi.Float(n[:, k]) for k in range(3)))
-        chosen, chosen_p, _, total1 = table._choose(point1, mi.Float64(rng.random(m)), mi.Bool(True), normal1)
-        again = table._probability(point1, chosen, mi.Bool(True), total1, normal1)
+        chosen, chosen_p, _ = table._choose(point1, mi.Float64(rng.random(m)), mi.Bool(True), normal1)
+        again = table._probability(point1, chosen, mi.Bool(True), normal1)
         dr.eval(chosen_p, again)
         lit = chosen_p.numpy() > 0
         assert lit.sum() > m // 2, name
         np.testing.assert_allclose(again.numpy()[lit], chosen_p.numpy()[lit], rtol=1e-6, err_msg=name)
 
 
-# (scene, point): the mesh-light scene (two emitters, one chosen in two levels, one exactly; most
+# (scene, point): the mesh-light scene (two emitters, one chosen through the tree, one exactly; most
 # triangles sampled by area there), near_rect near its light (Arvo's map) and far (by power and area),
 # near_disk where some of its triangles are sampled by area and some by Arvo's map
 DENSITY_CASES = [("mesh_light", (0.1, 0.3, -0.2)), ("near_rect", (0.2, 0.1, 0.1)), ("near_rect", (1.8, 0.1, 1.2)),
-                 ("near_disk", (1.4, 0.1, 0.6))]  # fmt: skip
+                 ("near_disk", (1.4, 0.1, 0.6)), ("tree_light", (0.3, 0.2, 0.4))]  # fmt: skip
 
 
 @pytest.mark.statistical
@@ -334,7 +337,7 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, sampl
     assert np.min(result.pvalue) > _sidak(ALPHA, UNBIASED_TESTS), (np.min(result.pvalue), ours.mean(0), ref.mean(0))
 
 
-# 12 triangles (exact choice), 108 (groups), 4332 (by power); and 12 with a perfect mirror ball inside,
+# 12 triangles (exact choice), 108 (a tree: leaves under its top), 4332 (a tree, two levels between); and 12 with a perfect mirror ball inside,
 # which leaves the radiance at 2 but makes the scene not all diffuse (Mitsuba's sampling and MIS at the
 # ball's vertices, with no smooth part: its BSDF hits count in full)
 # projected: by projected solid angle at every vertex (12 triangles, exact choice), or at the diffuse ones

@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 __all__ = ["area_direction", "branch", "importance", "pick", "scalar_radiance", "share", "registry_ids", "shape_id", "small_sphere",
-           "small_triangle", "spatial_order", "triangles", "uniform_rgb", "weight_sum", "Group"]  # fmt: skip
+           "small_triangle", "spatial_order", "tree_spans", "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
 
 
 def registry_ids(pointers: Any) -> Any:
@@ -85,16 +85,23 @@ def spatial_order(tris: np.ndarray) -> np.ndarray:
     return np.lexsort((code, facing))
 
 
+REACH = 0.1
+"""The receiver's cosine bound of a group takes ``REACH r`` for r (see :class:`Group`)."""
+
+
 class Group:
-    """A run of rows [start, stop) and the constants of its importance at a point p:
-    ``power cos cos_r / max(d^2, r^2)``, d = |p - centre|, r the radius of its bounding sphere about the
-    centre, cos = the cosine between the mean normal and p - centre plus r / d plus s, the largest
-    distance between a member's unit normal and the mean one (and 1e-5 for float32's rounding), clipped to
-    [0, 1]; 1 when the normals spread over more than 60 degrees; cos_r (given a receiver normal n at p)
-    ``(|(p - centre).n| + r) / max(d, r)`` clipped to [0, 1], a bound of the receiver's unsigned cosine
-    towards any point of the sphere, 0 for no group that could light p.  It is 0 only where no member faces p:
-    for x in a member with normal n_t, (p - x).n_t <= (p - centre).axis + d |n_t - axis| + r.  (Light
-    sampling alone at diffuse vertices needs this: a triangle never chosen there would be lost.)"""
+    """A run of rows [start, stop) (a node of the choice, :func:`tree_spans`) and the constants of its
+    importance at a point p: ``power cos cos_r / max(d, r)^2``, d = |p - centre|, r the radius of its
+    bounding sphere about the centre; cos = ``((p - centre).axis + h + s d) / max(d, r)`` clipped to [0, 1]
+    (axis the mean normal; s the largest distance between a member's unit normal and it, plus 1e-5 for
+    float32's rounding; h the largest ``(centre - a_t).n_t`` over the members t, a_t a vertex and n_t the
+    unit normal: 0 for a flat group, where r, before, made the bound loose near the light's plane), 1 when
+    the normals spread over more than 60 degrees (axis 0, s = 1, h = r); cos_r (given a receiver normal
+    n at p) ``(|(p - centre).n| + REACH r) / max(d, r)`` clipped to [0, 1], an estimate of the receiver's
+    cosine (r itself, a bound, weighed the far groups near p's horizon too much).  It is 0 only where no
+    member faces p: for x in a member t, (p - x).n_t = (p - centre).n_t + (centre - a_t).n_t <=
+    (p - centre).axis + d s + h.  (Light sampling alone at diffuse vertices needs this: a triangle never
+    chosen there would be lost.)"""
 
     def __init__(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray, start: int, stop: int):
         self.start, self.stop = start, stop
@@ -107,30 +114,68 @@ class Group:
         mean = (unit * area[start:stop, None]).sum(axis=0)
         mean /= max(float(np.linalg.norm(mean)), 1e-300)
         self.axis = mean if np.all(unit @ mean > 0.5) else None
-        self.spread = float(np.max(np.linalg.norm(unit - mean, axis=1))) + 1e-5
+        spread = float(np.max(np.linalg.norm(unit - mean, axis=1))) + 1e-5
+        # float32's rounding of p - centre and of the vertices: 1e-5 of the group's scale
+        slack = 1e-5 * (self.radius + float(np.linalg.norm(self.centre)))
+        offset = float(np.max(np.einsum("ij,ij->i", self.centre - tris[start:stop, 0], unit))) + slack
+        axis = np.zeros(3) if self.axis is None else self.axis
+        spread, offset = (1.0, self.radius) if self.axis is None else (spread, offset)
+        # the importance's constants, in this order (a Level gathers the same)
+        self.fields = (*self.centre, self.radius, *axis, spread, offset, self.power, REACH * self.radius)
 
-    def importance(self, p: Any, n: Any = None) -> Any:
-        axis = None if self.axis is None else mi.ScalarVector3f(*self.axis)
-        centre = mi.ScalarVector3f(*self.centre)
-        return importance(p, centre, self.radius, self.radius**2, axis, self.spread, self.power, n)
+    def importance(self, p: Any, n: Any = None, soft: float = 0.0) -> Any:
+        return importance(p, [mi.Float(x) for x in self.fields], n, soft)
 
 
-def importance(
-    p: Any, centre: Any, radius: Any, radius2: Any, axis: Any, spread: Any, power: Any, n: Any = None
-) -> Any:
-    """A group's importance at p (see :class:`Group`), from constants or from gathered values alike:
-    the same float32 operations in the same order, so that both give the same bits."""
-    e = p - centre
+def importance(p: Any, fields: list[Any], n: Any = None, soft: float = 0.0) -> Any:
+    """A group's importance at p (see :class:`Group`) from its fields, float32 literals or gathered values
+    alike: the same operations, so that both give the same bits.  *soft* > 0: ``max(d, r)`` becomes
+    ``sqrt(d^2 + soft r^2)`` (the tree's nodes: :data:`._lights.TREE_SOFT`)."""
+    cx, cy, cz, radius, ax, ay, az, spread, offset, power, reach = fields
+    e = p - mi.Vector3f(cx, cy, cz)
     d2 = dr.squared_norm(e)
-    value = power / dr.maximum(d2, radius2)
-    if axis is None and n is None:
-        return value
-    d = dr.sqrt(d2)
-    if axis is not None:
-        value *= dr.clip((dr.dot(e, axis) + radius + spread * d) / dr.maximum(d, radius), 0.0, 1.0)
-    if n is not None:  # the receiver's cosine, unsigned: |(x - p).n| <= |(centre - p).n| + r
-        value *= dr.clip((dr.abs(dr.dot(e, n)) + radius) / dr.maximum(d, radius), 0.0, 1.0)
-    return value
+    if soft:
+        q = d2 + soft * (radius * radius)
+        inv = dr.rsqrt(q)
+        d = q * inv  # >= |p - centre|: the bound below holds
+    else:
+        d = dr.sqrt(d2)
+        inv = dr.rcp(dr.maximum(d, radius))
+    value = power * inv * inv
+    value *= dr.clip((dr.dot(e, mi.Vector3f(ax, ay, az)) + offset + spread * d) * inv, 0.0, 1.0)
+    if n is not None:  # the receiver's cosine, unsigned
+        value *= dr.clip((dr.abs(dr.dot(e, n)) + reach) * inv, 0.0, 1.0)
+    return dr.select(power > 0.0, value, 0.0)
+
+
+def tree_spans(count: int, exact_max: int, leaf: int, fanout: int, top: int) -> list[int]:
+    """The rows per node at each level of the choice, top first: [1] (every triangle weighed) up to
+    *exact_max* rows; beyond, leaves of *leaf* rows under levels of *fanout* children each, until at most
+    *top* nodes remain at the top."""
+    if count <= exact_max:
+        return [1]
+    spans = [leaf]
+    while -(-count // spans[0]) > top:
+        spans.insert(0, spans[0] * fanout)
+    return spans
+
+
+class Level:
+    """The groups of one level (runs of the same span) as arrays of their fields: their importances at p
+    from gathered values."""
+
+    def __init__(self, groups: list[Group], soft: float) -> None:
+        self.count, self.soft = len(groups), soft
+        self.fields = [mi.Float(np.array([g.fields[k] for g in groups], dtype=np.float32)) for k in range(11)]
+
+    def weight(self, p: Any, node: Any, active: Any, n: Any = None) -> Any:
+        """The importance at p of the group *node* (0 where not *active*)."""
+        w = importance(p, [dr.gather(mi.Float, col, node, active) for col in self.fields], n, self.soft)
+        return dr.select(active, w, 0.0)
+
+    def weights(self, p: Any, first: Any, fanout: int, active: Any, n: Any = None) -> list[Any]:
+        """The importances at p of the groups [first, first + fanout) (0 past the last one)."""
+        return [self.weight(p, first + k, active & (first + k < self.count), n) for k in range(fanout)]
 
 
 def small_sphere(p: Any, centre: Any, radius: float, tau: float) -> Any:
