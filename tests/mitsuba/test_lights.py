@@ -372,11 +372,17 @@ def test_emitting_box_furnace(llvm, tmp_path, per_side, mirror, sampling):
     assert abs(z) < stats.norm.isf(_sidak(ALPHA, FURNACE_TESTS) / 2), (values.mean(), z)
 
 
-@pytest.mark.parametrize("faces", ["f 1 3 2\nf 1 4 3\nf 1 1 2\nf 1 5 3\n", "f 1 3 2\nf 1 5 3\n"])
+DEGENERATE = "f 1 1 2\nf 1 5 3\n"  # a repeated vertex, a collinear one
+
+
+DEGENERATE_FACES = ["f 1 3 2\nf 1 4 3\n" + DEGENERATE, "f 1 3 2\nf 1 5 3\n", "f 1 3 2\nf 1 4 3\n" + DEGENERATE * 40]
+
+
+@pytest.mark.parametrize("faces", DEGENERATE_FACES, ids=["exact", "tiny", "tree"])
 def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path, faces):
     """A mesh light with zero-area triangles and one seen edge-on: finite images, the same mean as Mitsuba's.
-    Two faces down, a repeated vertex, a collinear one; or a face and a collinear one (a tiny table, chosen
-    from by power and sampled by area far from it)."""
+    Two faces down, a repeated vertex, a collinear one; a face and a collinear one (a tiny table, chosen
+    from by power and sampled by area far from it); two faces among 80 degenerate ones (the tree)."""
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
@@ -390,6 +396,9 @@ def test_degenerate_emitter_triangles_contribute_nothing(llvm, tmp_path, faces):
         "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [5, 5, 5]}},
     }
     scene = mi.load_dict(scene)
+    from symsphere._testing import mitsuba_lights as lights
+
+    assert lights.LightTable(scene).count == faces.count("f")
     integrator = mi.load_dict(
         {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", "max_depth": 2}
     )

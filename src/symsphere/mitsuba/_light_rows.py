@@ -91,16 +91,17 @@ REACH = 0.1
 
 class Group:
     """A run of rows [start, stop) (a node of the choice, :func:`tree_spans`) and the constants of its
-    importance at a point p: ``power cos cos_r / max(d, r)^2``, d = |p - centre|, r the radius of its
-    bounding sphere about the centre; cos = ``((p - centre).axis + h + s d) / max(d, r)`` clipped to [0, 1]
+    importance at a point p: ``power cos cos_r / D^2``, D = ``sqrt(d^2 + k r^2)`` (k: :data:`._lights.TREE_SOFT`;
+    ``max(d, r)`` gave the near runs too little), d = |p - centre|, r the radius of its bounding sphere about
+    the centre; cos = ``((p - centre).axis + h + s D) / D`` clipped to [0, 1]
     (axis the mean normal; s the largest distance between a member's unit normal and it, plus 1e-5 for
     float32's rounding; h the largest ``(centre - a_t).n_t`` over the members t, a_t a vertex and n_t the
     unit normal: 0 for a flat group, where r, before, made the bound loose near the light's plane), 1 when
     the normals spread over more than 60 degrees (axis 0, s = 1, h = r); cos_r (given a receiver normal
-    n at p) ``(|(p - centre).n| + REACH r) / max(d, r)`` clipped to [0, 1], an estimate of the receiver's
+    n at p) ``(|(p - centre).n| + REACH r) / D`` clipped to [0, 1], an estimate of the receiver's
     cosine (r itself, a bound, weighed the far groups near p's horizon too much).  It is 0 only where no
     member faces p: for x in a member t, (p - x).n_t = (p - centre).n_t + (centre - a_t).n_t <=
-    (p - centre).axis + d s + h.  (Light sampling alone at diffuse vertices needs this: a triangle never
+    (p - centre).axis + d s + h, and D >= d.  (Light sampling alone at diffuse vertices needs this: a triangle never
     chosen there would be lost.)"""
 
     def __init__(self, tris: np.ndarray, normal: np.ndarray, area: np.ndarray, lum: np.ndarray, start: int, stop: int):
@@ -123,24 +124,19 @@ class Group:
         # the importance's constants, in this order (a Level gathers the same)
         self.fields = (*self.centre, self.radius, *axis, spread, offset, self.power, REACH * self.radius)
 
-    def importance(self, p: Any, n: Any = None, soft: float = 0.0) -> Any:
-        return importance(p, [mi.Float(x) for x in self.fields], n, soft)
+    def importance(self, p: Any, soft: float, n: Any = None) -> Any:
+        return importance(p, [mi.Float(x) for x in self.fields], soft, n)
 
 
-def importance(p: Any, fields: list[Any], n: Any = None, soft: float = 0.0) -> Any:
-    """A group's importance at p (see :class:`Group`) from its fields, float32 literals or gathered values
-    alike: the same operations, so that both give the same bits.  *soft* > 0: ``max(d, r)`` becomes
-    ``sqrt(d^2 + soft r^2)`` (the tree's nodes: :data:`._lights.TREE_SOFT`)."""
+def importance(p: Any, fields: list[Any], soft: float, n: Any = None) -> Any:
+    """A group's importance at p (see :class:`Group`, *soft* its k) from its fields, float32 literals or
+    gathered values alike: the same operations, so that both give the same bits."""
     cx, cy, cz, radius, ax, ay, az, spread, offset, power, reach = fields
     e = p - mi.Vector3f(cx, cy, cz)
     d2 = dr.squared_norm(e)
-    if soft:
-        q = d2 + soft * (radius * radius)
-        inv = dr.rsqrt(q)
-        d = q * inv  # >= |p - centre|: the bound below holds
-    else:
-        d = dr.sqrt(d2)
-        inv = dr.rcp(dr.maximum(d, radius))
+    q = d2 + soft * (radius * radius)
+    inv = dr.rsqrt(q)
+    d = q * inv  # >= |p - centre|: the bound below holds
     value = power * inv * inv
     value *= dr.clip((dr.dot(e, mi.Vector3f(ax, ay, az)) + offset + spread * d) * inv, 0.0, 1.0)
     if n is not None:  # the receiver's cosine, unsigned
@@ -170,7 +166,7 @@ class Level:
 
     def weight(self, p: Any, node: Any, active: Any, n: Any = None) -> Any:
         """The importance at p of the group *node* (0 where not *active*)."""
-        w = importance(p, [dr.gather(mi.Float, col, node, active) for col in self.fields], n, self.soft)
+        w = importance(p, [dr.gather(mi.Float, col, node, active) for col in self.fields], self.soft, n)
         return dr.select(active, w, 0.0)
 
     def weights(self, p: Any, first: Any, fanout: int, active: Any, n: Any = None) -> list[Any]:

@@ -90,7 +90,7 @@ TREE_LEAF, FANOUT, TREE_TOP = 8, 4, 40
 """Above EXACT_MAX: a tree over the spatial order, leaves of TREE_LEAF triangles under levels of FANOUT
 nodes, at most TREE_TOP nodes at the top."""
 TREE_SOFT = 0.1
-"""The tree's nodes are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` instead of ``max(d, r)``."""
+"""The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 AREA_BELOW = 0.3
 """A chosen triangle whose bounding radius (about its centroid) is below this times the centroid's distance
 from p is sampled by area, not by Arvo's map (0: never).  Measured: 0.6 lost 20 % under the disk."""
@@ -191,10 +191,9 @@ class LightTable:
             return [Group(tris, normal, area, lum, k, min(k + span, self.count)) for k in range(0, self.count, span)]
 
         self.groups = groups = runs(self.spans[0])
-        self.soft = TREE_SOFT if self.mode == "tree" else 0.0
-        self._levels = [Level(runs(span), self.soft) for span in self.spans[1:]]  # gathered: the nodes below the top
+        self._levels = [Level(runs(span), TREE_SOFT) for span in self.spans[1:]]  # gathered: the nodes below the top
         self._fanouts = [a // b for a, b in zip(self.spans, self.spans[1:], strict=False)]
-        self._top = Level(groups, self.soft)  # the top level gathered: the density of a chosen row
+        self._top = Level(groups, TREE_SOFT)  # the top level gathered: the density of a chosen row
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
 
@@ -239,7 +238,7 @@ class LightTable:
                     self._weight(p, a, b, c, mi.ScalarVector3f(*self.normal[g.start]), float(self.lum[g.start]), n)
                 )
             else:
-                weights.append(g.importance(p, n, self.soft))
+                weights.append(g.importance(p, TREE_SOFT, n))
         return weights
 
     def _member_weights(self, p: Any, start: Any, active: Any, receiver: Any = None) -> list[Any]:
