@@ -85,7 +85,7 @@ EMITTER_SAMPLINGS = ("area", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
 EXACT_MAX = 64
 """Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
-a group of triangles is chosen, then a triangle of it."""
+a triangle is chosen through a tree (TREE_LEAF, FANOUT, TREE_TOP)."""
 TREE_LEAF, FANOUT, TREE_TOP = 8, 4, 40
 """Above EXACT_MAX: a tree over the spatial order, leaves of TREE_LEAF triangles under levels of FANOUT
 nodes, at most TREE_TOP nodes at the top."""
