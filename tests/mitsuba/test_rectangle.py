@@ -329,7 +329,7 @@ def test_no_nan_or_inf_on_a_million_adversarial_samples(llvm, f64):
     """10^6 samples, each lane its own rectangle (_adversarial), 10 % of the points on the square's corners
     and edges: every direction finite and unit, every S in [0, 2 pi], every pdf finite and 1/S at the
     map's own direction where S > 0 (so the direction hits the rectangle), every inverse in [0, 1]^2.
-    About 0.3 s per dtype; the 10^8 scan is benchmarks-style (docs/results/light-sampling.md)."""
+    1.3-4.5 s per dtype; benchmarks/scan_spherical_rectangle_drjit.py repeats it for 10^8 samples."""
     mi = llvm
     import symsphere.mitsuba as sm
 
