@@ -11,7 +11,7 @@ are folded) it runs ``integrate(f, rtol=..., method='auto', rng=seed, n_max=N_MA
   larger fresh one, and only the last is returned).
 
 Then, for the rules and sizes that answer most often, the coverage of one stage at a fixed size with 8,
-32 and 128 randomisations, as in a pilot stage and the two kinds of answering stage (``integrate(f, n=R * size, replicates=R,
+32, 64 and 128 randomisations, as in a pilot stage and the three kinds of answering stage (``integrate(f, n=R * size, replicates=R,
 method=family)``, the same seeds): what the rule's own t-interval does before any choice or stopping rule.
 
 A calibrated 95 % interval covers in Binomial(runs, 0.95) of the runs: 950 of 1000 with a standard
@@ -22,7 +22,8 @@ deviation of 6.9.  Counts, not times: the machine's load does not change them.
 ``--tails`` instead estimates P(|error| > 5 standard errors) of one stage of R randomisations of the
 small folded rules and of the rules that answer with 32 randomisations on these integrands (TAILS) by
 resampling: 40 000 rotations of the rule (symsphere._families), then
-200 000 draws of R of them with replacement, the error against the population's mean.
+200 000 draws of R of them with replacement, the error against the population's mean; and the same with
+the variance pooled with 8 more draws (a pilot stage of the same rule, as ``integrate`` pools it).
 
     python benchmarks/bench_auto_coverage.py --tails
 """
@@ -50,13 +51,13 @@ RTOL = {"exp": 1e-2, "phong": 1e-2, "cap": 5e-2, "exp_hemisphere": 1e-2, "cosine
 N_MAX = 48 * 2**14
 TAILS = (
     ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26), ("exp", "lebedev", 6), ("exp", "lebedev", 14),
-    ("phong", "lebedev", 110),
+    ("phong", "lebedev", 110), ("cosine", "lebedev", 50), ("cosine", "lebedev", 110), ("cosine", "fibonacci", 128),
 )  # fmt: skip
 FIXED = (
     ("exp", "lebedev", 6), ("exp", "lebedev", 14), ("exp_hemisphere", "lebedev", 14), ("cosine", "lebedev", 26),
-    ("cap", "lebedev", 50), ("phong", "lebedev", 110),
+    ("cap", "lebedev", 50), ("phong", "lebedev", 110), ("cosine", "lebedev", 110),
 )  # fmt: skip
-FIXED_REPLICATES = (8, 32, 128)
+FIXED_REPLICATES = (8, 32, 64, 128)
 
 
 def measure(name: str, runs: int) -> dict:
@@ -118,12 +119,20 @@ def tails(name: str, method: str, size: int) -> None:
     population = np.array([rule._rule(r, size)[0] for r in haar_rotations(40_000, np.random.SeedSequence(7))])
     rng = np.random.default_rng(1)
     for replicates in (8, 32, 64, 128):
-        beyond = 0
+        beyond = pooled = 0
         for _ in range(20):
-            draws = population[rng.integers(0, len(population), size=(10_000, replicates))]
-            se = draws.std(axis=1, ddof=1) / np.sqrt(replicates)
-            beyond += int(np.sum(np.abs(draws.mean(axis=1) - population.mean()) > 5 * se))
-        print(f"{name}: {method} {size}, {replicates} randomisations: P(> 5 SE) {beyond / 200_000:.2g}", flush=True)
+            draws = population[rng.integers(0, len(population), size=(10_000, replicates + 8))]
+            fresh, pilot = draws[:, :replicates], draws[:, replicates:]
+            error = np.abs(fresh.mean(axis=1) - population.mean())
+            beyond += int(np.sum(error > 5 * fresh.std(axis=1, ddof=1) / np.sqrt(replicates)))
+            # the variance pooled with 8 independent pilot randomisations of the same rule (the mean fresh's own)
+            variance = ((replicates - 1) * fresh.var(axis=1, ddof=1) + 7 * pilot.var(axis=1, ddof=1)) / (replicates + 6)
+            pooled += int(np.sum(error > 5 * np.sqrt(variance / replicates)))
+        print(
+            f"{name}: {method} {size}, {replicates} randomisations: P(> 5 SE) {beyond / 200_000:.2g}, "
+            f"variance pooled with a pilot of 8: {pooled / 200_000:.2g}",
+            flush=True,
+        )
 
 
 def main() -> None:

@@ -132,9 +132,11 @@ def test_auto_takes_lebedev_on_a_polynomial_and_says_why():
     assert abs(result.integral - f.exact) <= 1e-9 * f.exact
     assert result.history and result.history[0]["reason"].startswith("pilot")
     # the answer is a fresh stage of the chosen family, whose size was fixed before its values were seen; exact to
-    # rounding, it is predicted far inside the tolerance: 4 times the pilot's replicates, not 16
+    # rounding, it is predicted far inside the tolerance: 4 times the pilot's replicates, not 16; its variance is
+    # pooled with the pilot stage's of the same rule (8 replicates): 32 + 8 - 2 degrees of freedom, n_units 39
     assert result.history[-1]["reason"].startswith("answer") and result.history[-1]["method"] == "lebedev"
-    assert result.n_units == 32 and result.history[0]["replicates"] == 8
+    assert result.history[-1]["replicates"] == 32 and result.history[0]["replicates"] == 8
+    assert result.n_units == 32 + 8 - 1
     assert result.n_evaluations == sum(h["evaluations"] for h in result.history)
 
 
@@ -166,6 +168,53 @@ def test_an_answer_far_inside_the_tolerance_has_fewer_randomisations():
     assert (far_small.k, far_small.replicates, far_small.cost, far_small.meets) == (0, 32, 32 * 6, True)
     # an answer costs more than every one before it (floor): the next cheaper candidate, here the 14-point rule
     assert auto._jump(lebedev, half[6, 32] / 0.01 * 1.01, 0.95, 10**9, 32 * 6).cost > 32 * 6
+
+
+def test_a_stage_far_from_the_reference_predicts_with_the_spread_its_distance_implies():
+    # 8 randomisations, estimate 1e-5 with standard error 1e-6, against a reference 0.0126 +- 1e-4: 126 combined
+    # standard errors apart (DISAGREE = 4), so the spread is sqrt(distance^2 - 1e-4^2) x sqrt(8), not 1e-6 x sqrt(8)
+    stage = auto.Stage(14, 112, np.array([1e-5]), np.array([1e-6]), 8, 8)
+    reference = (np.array([0.0126]), np.array([1e-4]))
+    assert auto._honest_spread(stage, reference) == pytest.approx(math.sqrt((0.0126 - 1e-5) ** 2 - 1e-8) * math.sqrt(8))
+    near = (np.array([1e-5 + 3 * math.hypot(1e-6, 1e-6)]), np.array([1e-6]))  # 3 combined standard errors: kept
+    assert auto._honest_spread(stage, near) == stage.spread == pytest.approx(1e-6 * math.sqrt(8))
+    assert auto._honest_spread(stage, None) == stage.spread
+    # a sharp lobe exp(500 (w . mu - 1)): 8 rotations of the 6- and 14-point rules miss it (seed 1) and measure a
+    # tiny spread, from which an answering stage of a small rule is predicted to meet rtol 1e-3 of the closed form;
+    # against the closed form (as the reference, standard error 1e-5) none is
+    mu = np.array([0.2, -0.5, 0.8]) / np.linalg.norm([0.2, -0.5, 0.8])
+    exact = 2 * np.pi * -np.expm1(-1000) / 500
+    family = auto.Rotated(
+        "lebedev", lambda w: np.exp(500 * (w @ mu - 1)), "sphere", np.zeros(3), np.random.SeedSequence(1), 8, 128
+    )
+    stages = [family.run_next(), family.run_next()]
+    assert all(abs(stage.integral[0] - exact) > 100 * stage.standard_error[0] for stage in stages)
+    blind = auto._jump(family, 1e-3 * exact, 0.95, 10**9, 0)
+    assert blind.meets and blind.cost <= 128 * 14
+    seeing = auto._jump(family, 1e-3 * exact, 0.95, 10**9, 0, (np.array([exact]), np.array([1e-5])))
+    assert not seeing.meets or seeing.cost > 128 * 3890
+
+
+def test_an_answer_pools_its_variance_with_the_pilot_stage_of_its_rule_and_size():
+    # the pooled variance against the sum of squared deviations of both samples about their own means
+    rng = np.random.default_rng(4)
+    fresh_values, pilot_values = rng.normal(1.0, 0.3, 64), rng.normal(1.2, 0.5, 8)
+
+    def stage(values, size):
+        return auto.Stage(size, 0, np.array([values.mean()]), np.array([values.std(ddof=1) / math.sqrt(len(values))]),
+                          len(values), len(values))  # fmt: skip
+
+    family = auto.Rotated("lebedev", exp_dot, "sphere", np.zeros(3), np.random.SeedSequence(0), 8, 128)
+    family.stages = [stage(rng.normal(size=8), 50), stage(pilot_values, 110)]
+    pooled = auto._pooled(family, stage(fresh_values, 110))
+    squares = np.sum((fresh_values - fresh_values.mean()) ** 2) + np.sum((pilot_values - pilot_values.mean()) ** 2)
+    assert pooled.integral[0] == fresh_values.mean()  # the mean is the fresh stage's alone
+    assert pooled.standard_error[0] == pytest.approx(math.sqrt(squares / (64 + 8 - 2) / 64), rel=1e-12)
+    assert (pooled.units, pooled.replicates) == (71, 64)  # Student's t with 70 degrees of freedom
+    alone = stage(fresh_values, 230)  # no pilot stage of that size: unchanged
+    assert auto._pooled(family, alone) is alone
+    orbits = auto.Stage(110, 0, alone.integral, alone.standard_error, 640, 1)  # random points: orbits are the units
+    assert auto._pooled(family, orbits) is orbits
 
 
 def test_auto_explores_the_other_families_before_a_large_fresh_stage():

@@ -14,12 +14,17 @@ The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibo
 - *answering* stages: ANSWER_FACTOR times as many randomisations (default 128), all drawn afresh --
   new rotations or new base points, nothing reused -- at the size predicted (from the stages before:
   the spread of one randomisation extrapolated along the family's ladder) to meet the tolerance with
-  the fewest evaluations, once one is predicted within JUMP times everything spent before; or
+  the fewest evaluations, once one is predicted within JUMP times everything spent before (a stage
+  whose estimate is DISAGREE standard errors or more from the estimate with the most evaluations
+  behind it predicts with the spread its distance implies: a small rule that misses a sharp lobe
+  measures a tiny spread around a wrong mean); or
   FEW_FACTOR times as many (default 32) where a rule already measured is *far* inside the tolerance
-  (FAR of it: a rule exact to rounding, or converging fast), if cheaper.  Its Student-t interval (replicates - 1
-  degrees of freedom) at ``confidence_level`` is returned if its half-width meets the tolerance; if
-  not, its spread joins the predictions, and the next answering stage, again fresh, costs more than
-  every one before it.
+  (FAR of it: a rule exact to rounding, or converging fast), if cheaper.  Its mean is its own; its
+  variance is pooled with a pilot stage's of the same rule and size if one ran (independent draws of
+  the same distribution: the pooled variance is independent of the fresh mean), and its Student-t
+  interval (the pooled degrees of freedom) at ``confidence_level`` is returned if its half-width meets
+  the tolerance; if not, its spread joins the predictions, and the next answering stage, again fresh,
+  costs more than every one before it.
 
 This is Stein's two-stage procedure: the answer's size is fixed before its values are seen, so its
 interval covers at the stated level, conditioned only on its own half-width meeting the tolerance --
@@ -91,6 +96,11 @@ JUMP = 4 * ANSWER_FACTOR
 stages may be far off (the totals then grow geometrically); 4 for that, times its more replicates."""
 SPECTRAL_MARGIN = 0.8
 """A Lebedev rule converging spectrally: the fitted decay per unit of sqrt(size), times this (slower)."""
+DISAGREE = 4.0
+"""A stage whose estimate is more than DISAGREE combined standard errors from the reference (the estimate
+with the most evaluations behind it, of any family) missed part of f -- a small rule that never hits a
+sharp lobe reports a tiny spread around a wrong mean --: its spread is not used below the one its
+distance implies (distance x sqrt(randomisations)) in predicting an answering stage."""
 SHARE = {"lebedev": 2.0}
 """Balanced stages give a family this multiple of the others' total: Lebedev's small rules are cheap, and
 exact on band-limited f once the order passes the degree, which no small stage can predict."""
@@ -219,7 +229,28 @@ def _not_reached(
     return best
 
 
-def _jump(family: Family, tolerance: float, level: float, budget: int, floor: int) -> Jump:
+def _honest_spread(stage: Stage, reference: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None) -> float:
+    """The stage's spread of one randomisation, at least what its distance from *reference* (estimate,
+    standard error; per component of f) implies where that distance is more than DISAGREE combined
+    standard errors."""
+    if reference is None:
+        return stage.spread
+    distance = np.abs(stage.integral - reference[0])
+    apart = distance > DISAGREE * np.hypot(stage.standard_error, reference[1])
+    if not np.any(apart):
+        return stage.spread
+    implied = np.sqrt(distance[apart] ** 2 - reference[1][apart] ** 2) * math.sqrt(stage.replicates)
+    return max(stage.spread, float(np.max(implied)))
+
+
+def _jump(
+    family: Family,
+    tolerance: float,
+    level: float,
+    budget: int,
+    floor: int,
+    reference: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None = None,
+) -> Jump:
     """The smallest answering stage of *family* costing more than *floor* predicted to meet *tolerance*
     within *budget*; else the largest affordable one (``Jump()`` if none is).
 
@@ -231,7 +262,7 @@ def _jump(family: Family, tolerance: float, level: float, budget: int, floor: in
     seen: dict[int, tuple[int, float]] = {}  # size -> (randomisations behind it, spread of one)
     for stage in (*family.stages, *family.chosen):
         if stage.size not in seen or stage.replicates >= seen[stage.size][0]:
-            seen[stage.size] = (stage.replicates, stage.spread)
+            seen[stage.size] = (stage.replicates, _honest_spread(stage, reference))
     largest = max(seen)
     spread = seen[largest][1]
     slope, spectral = -0.5, 0.0
@@ -276,6 +307,23 @@ def _jump(family: Family, tolerance: float, level: float, budget: int, floor: in
     return quick if quick.meets and (not found.meets or quick.cost < found.cost) else found
 
 
+def _pooled(family: Family, fresh: Stage) -> Stage:
+    """*fresh* with its variance pooled with a pilot stage's of the same rule and size, if there is one.
+
+    The mean stays fresh's own (the pilot chose the rule: its mean must not answer).  The pilot's
+    randomisations are independent draws of the same distribution as fresh's, so the pooled variance is
+    independent of fresh's mean and Student's t applies with the pooled degrees of freedom under
+    normality; on skewed estimates the pilot's share also weakens the dependence of the variance on
+    the mean that makes the t-interval's tails heavy (resampled: docs/results/integration.md)."""
+    pilot = [s for s in family.stages if s.size == fresh.size and s.units == s.replicates]
+    if not pilot or fresh.units != fresh.replicates:  # random points: orbits are the units, not replicates
+        return fresh
+    other = pilot[0]
+    r, q = fresh.replicates, other.replicates
+    variance = ((r - 1) * fresh.standard_error**2 * r + (q - 1) * other.standard_error**2 * q) / (r + q - 2)
+    return dataclasses.replace(fresh, standard_error=np.sqrt(variance / r), units=r + q - 1)
+
+
 def _run(
     families: Sequence[Family], domain: str, confidence_level: float, atol: float, rtol: float, n_max: int
 ) -> IntegrationResult:
@@ -311,7 +359,7 @@ def _run(
 
     def answer(family: Family, jump: Jump, reason: str) -> IntegrationResult:
         nonlocal floor
-        stage = family.fresh(jump.k, jump.replicates)
+        stage = _pooled(family, family.fresh(jump.k, jump.replicates))
         family.chosen.append(stage)
         floor = jump.cost
         return look(family, stage, True, reason)
@@ -326,8 +374,9 @@ def _run(
             best = max(latest.values(), key=lambda pair: pair[1])[0]
             tolerance = float(np.min(np.maximum(atol, rtol * np.abs(best.integral))))
             cap = min(budget, max(JUMP * spent, 1))
+            reference = (np.atleast_1d(np.asarray(best.integral)), np.atleast_1d(np.asarray(best.standard_error)))
             jumps = {
-                fam.name: _jump(fam, tolerance, confidence_level, cap, floor)
+                fam.name: _jump(fam, tolerance, confidence_level, cap, floor, reference)
                 for fam in families
                 if len(fam.stages) + len(fam.chosen) >= PILOT_STAGES
             }
