@@ -62,6 +62,7 @@ from ._light_rows import (
     Level,
     area_direction,
     branch,
+    column,
     pick,
     registry_ids,
     scalar_radiance,
@@ -154,27 +155,27 @@ class LightTable:
         area = 0.5 * np.linalg.norm(normal, axis=1)
         lum = np.where(area > 0.0, lum, 0.0)  # a degenerate triangle is never chosen
         self.tris, self.normal, self.lum = tris, normal, lum
-        self._columns32 = [mi.Float(np.ascontiguousarray(tris[:, k, j])) for k in range(3) for j in range(3)]
-        self._normal32 = [mi.Float(np.ascontiguousarray(normal[:, j])) for j in range(3)]
-        self._lum32 = mi.Float(lum)
+        self._columns32 = [column(tris[:, k, j]) for k in range(3) for j in range(3)]
+        self._normal32 = [column(normal[:, j]) for j in range(3)]
+        self._lum32 = column(lum)
         centroid = tris.mean(axis=1)
-        self._centroid = [mi.Float(np.ascontiguousarray(centroid[:, j])) for j in range(3)]
+        self._centroid = [column(centroid[:, j]) for j in range(3)]
         moment = normal * (0.5 * lum)[:, None]  # unit normal x area x radiance
-        self._moment = [mi.Float(np.ascontiguousarray(moment[:, j])) for j in range(3)]
-        self._tri_radius = mi.Float(np.max(np.linalg.norm(tris - centroid[:, None], axis=2), axis=1))
+        self._moment = [column(moment[:, j]) for j in range(3)]
+        self._tri_radius = column(np.max(np.linalg.norm(tris - centroid[:, None], axis=2), axis=1))
         # every table emitter's radiance one RGB value: gathered, instead of a call of the emitter per sample
         self._rgb = None
         if all(rgb is not None for rgb in rgb_rows):
             rgb = np.asarray(rgb_rows, dtype=np.float32)[order]
-            self._rgb = [mi.Float(np.ascontiguousarray(rgb[:, j])) for j in range(3)]
-        self._uv = [mi.Float(np.ascontiguousarray(uvs[:, k, j])) for k in range(3) for j in range(2)]
-        self._emitter = mi.UInt32(emitter_of)
-        self._row_of = mi.UInt32(row_of)
+            self._rgb = [column(rgb[:, j]) for j in range(3)]
+        self._uv = [column(uvs[:, k, j]) for k in range(3) for j in range(2)]
+        self._emitter = column(emitter_of, mi.UInt32)
+        self._row_of = column(row_of, mi.UInt32)
         size = max(shape_rows) + 1
         first, rect = np.full(size, _NONE, dtype=np.uint32), np.zeros(size, dtype=np.uint32)
         for ident, (row, is_rect) in shape_rows.items():
             first[ident], rect[ident] = row, int(is_rect)
-        self._first, self._rect = mi.UInt32(first), mi.UInt32(rect)
+        self._first, self._rect = column(first, mi.UInt32), column(rect, mi.UInt32)
         # the levels: one triangle each up to EXACT_MAX, else runs of the spatial order (tree_spans)
         self.spans = tree_spans(self.count, EXACT_MAX, TREE_LEAF, FANOUT, TREE_TOP)
         self.group_size = self.spans[-1]  # the rows of a leaf (of the last level)
