@@ -515,11 +515,12 @@ def part_bounds(m, parts=0):
     return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
-# Non-temporal stores (symsphere._vector_stores.stream_rows) write a touched output ~2x faster than
-# plain ones, which read each line first, but a fresh one (np.empty: pages the kernel must first clear
-# on the first write, through the cache) ~1.7x slower, and an output small enough to stay in the cache
-# is better left there for whoever reads it next: docs/results/write-limit.md has the measurements.
-STREAM_BYTES = 8 * 2**20
+# Non-temporal stores (symsphere._vector_stores.stream_rows) write a touched output up to ~2x faster
+# than plain ones, which read each line first (measured down to 0.6 MB), but a fresh one (np.empty:
+# pages the operating system clears at the first write, through the cache) ~1.4-1.7x slower; and an
+# output that fits in a core's cache (2 MiB of L2 on the Intel host) is better left there for whoever
+# reads it next, so only twice that and more.  docs/results/write-limit.md has the measurements.
+STREAM_BYTES = 4 * 2**20
 """Outputs of at least this many bytes whose pages are already in memory are written non-temporally."""
 stream_override: bool | None = None
 """True/False: every output written non-temporally / with plain stores (for benchmarks); None: the rule."""
