@@ -10,10 +10,10 @@ threads and the clock is ``time.process_time()``, the CPU time of all the proces
 threads cost together, stalls included (e.g. on a cache line both write), still blind to waiting for a
 core; numpy's ``fill`` stays on one thread.  The base revision's ``src/symsphere`` is
 copied out of git under another package name (``symsphere_base``) and imported beside this checkout's;
-the rows (numpy's ``fill`` of the same buffer, ``sample_sphere``, ``sample_hemisphere`` and
-``sample_hemisphere`` about (1, 1, 1), all ``out=``, n = 48 * 2**16, float64 and float32) take turns in
-every round.  Printed: the median and the minimum in ms, and the fraction of ``fill`` (its minimum over
-the row's minimum).
+the rows (numpy's ``fill`` of a buffer, ``sample_sphere``, ``sample_hemisphere`` and
+``sample_hemisphere`` about (1, 1, 1), all ``out=``, each into a buffer of its own, n = 48 * 2**16, float64
+and float32; with ``--fresh`` also each with fresh output) take turns in every round.  Printed: the
+median and the minimum in ms, and the fraction of ``fill`` (its minimum over the row's minimum).
 
     python benchmarks/kernel_cpu.py --stores --rounds 11 [--threads 2] [--n 196608]
 
@@ -49,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--base", default="HEAD", help="git revision to compare against (default: HEAD)")
     parser.add_argument("--rounds", type=int, default=25, help="interleaved rounds (default: 25)")
     parser.add_argument("--threads", type=int, default=1, help="numba threads of the kernels (default: 1)")
+    parser.add_argument("--fresh", action="store_true", help="also the rows with fresh output (np.empty)")
     parser.add_argument("--stores", action="store_true", help="this checkout's plain against streamed stores")
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     args = parser.parse_args(argv)
@@ -64,11 +65,11 @@ def main(argv: list[str] | None = None) -> int:
         (Path(folder) / "src" / "symsphere").rename(Path(folder) / "symsphere_base")
         sys.path.insert(0, folder)
         sys.path.insert(0, str(ROOT / "src"))
-        _run(args.base, args.rounds, args.threads)
+        _run(args.base, args.rounds, args.threads, args.fresh)
     return 0
 
 
-def _run(base: str, rounds: int, threads: int) -> None:
+def _run(base: str, rounds: int, threads: int, fresh: bool) -> None:
     import numpy as np
     import symsphere_base  # type: ignore[import-not-found]  # the copy made above
     from numba import set_num_threads
@@ -89,9 +90,13 @@ def _run(base: str, rounds: int, threads: int) -> None:
                 ("normal=(1,1,1)", {"normal": (1.0, 1.0, 1.0)}),
             ):
                 call = package.sample_sphere if label == "sample_sphere" else package.sample_hemisphere
-                rows[f"{label}, out= ({name}), {tag}"] = lambda c=call, d=dtype, b=buffer, e=extra: c(
+                # each row its own buffer: plain stores leave it in the cache, non-temporal ones do not
+                out = np.full((N, 3), 0.5, dtype)
+                rows[f"{label}, out= ({name}), {tag}"] = lambda c=call, d=dtype, b=out, e=extra: c(
                     N, rng=1, dtype=d, out=b, **e
                 )
+                if fresh:
+                    rows[f"{label}, fresh ({name}), {tag}"] = partial(call, N, rng=1, dtype=dtype, **extra)
     for run in rows.values():
         run()
     times: dict[str, list[float]] = {key: [] for key in rows}
