@@ -15,6 +15,7 @@ only, the partial ones plain, as a memset does), for outputs the kernels write t
 
 from __future__ import annotations
 
+import platform
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -26,6 +27,7 @@ from numba.extending import intrinsic
 from .symmetry import SIGNS, SOURCES, orbit_size
 
 _item_pointer = cast(Callable[..., Any], cgutils.get_item_pointer)  # numba: untyped
+_function = cast(Callable[..., Any], cgutils.get_or_insert_function)  # numba: untyped
 
 __all__ = [
     "orbit_mask",
@@ -225,10 +227,14 @@ stream_rows: Any = intrinsic(_stream_rows)  # Any: the intrinsic's call signatur
 
 
 def _store_fence(typingctx: Any) -> Any:
-    """Order the non-temporal stores before it before every later store and load (``mfence``): the
-    kernel's caller, on another thread, then sees the copied rows."""
+    """Order the non-temporal stores before it before every later store and load: the kernel's caller,
+    on another thread, then sees the copied rows.  On x86 an ``sfence`` (what the stores' weak order
+    asks for: LLVM makes a sequentially consistent fence a locked ``or`` there), then that fence."""
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        if platform.machine().lower() in ("x86_64", "amd64"):
+            sfence = _function(builder.module, ir.FunctionType(ir.VoidType(), []), "llvm.x86.sse.sfence")
+            builder.call(sfence, [])
         builder.fence("seq_cst")
         return context.get_dummy_value()
 
