@@ -10,10 +10,22 @@ threads and the clock is ``time.process_time()``, the CPU time of all the proces
 threads cost together, stalls included (e.g. on a cache line both write), still blind to waiting for a
 core; numpy's ``fill`` stays on one thread.  The base revision's ``src/symsphere`` is
 copied out of git under another package name (``symsphere_base``) and imported beside this checkout's;
-the rows (numpy's ``fill`` of the same buffer, ``sample_sphere``, ``sample_hemisphere`` and
-``sample_hemisphere`` about (1, 1, 1), all ``out=``, n = 48 * 2**16, float64 and float32) take turns in
-every round.  Printed: the median and the minimum in ms, and the fraction of ``fill`` (its minimum over
-the row's minimum).
+the rows (numpy's ``fill`` of a buffer, ``sample_sphere``, ``sample_hemisphere`` and
+``sample_hemisphere`` about (1, 1, 1), all ``out=``, each into a buffer of its own, n = 48 * 2**16, float64
+and float32; with ``--fresh`` also each with fresh output) take turns in every round.  Printed: the
+median and the minimum in ms, and the fraction of ``fill`` (its minimum over the row's minimum).
+
+    python benchmarks/kernel_cpu.py --stores --rounds 11 [--threads 2] [--n 196608]
+
+With ``--stores`` (no base): this checkout's rows, ``out=`` and fresh, each with the kernels' plain
+stores (``_kernels.stream_override = False``), with their rule (``None``: non-temporal stores for an
+``out=`` of at least ``_kernels.STREAM_BYTES`` whose pages are in memory) and with non-temporal stores
+forced (``True``); beside them the non-temporal fill of the write limit (``out=``) and
+the plain one (fresh), benchmarks/_write_limit.py.  Each ``out=`` row writes a buffer of its own, and
+each round times a row's second call in a row: the host's cache keeps what plain stores wrote (its L3 is
+reported as 480 MiB) and not what non-temporal ones did, so a row after another would be timed with the
+other's cache.  With ``--threads 2`` the clock is the wall clock
+(``time.perf_counter``), as two threads' CPU time says nothing about their waits for memory.
 """
 
 from __future__ import annotations
@@ -24,6 +36,8 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,7 +49,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--base", default="HEAD", help="git revision to compare against (default: HEAD)")
     parser.add_argument("--rounds", type=int, default=25, help="interleaved rounds (default: 25)")
     parser.add_argument("--threads", type=int, default=1, help="numba threads of the kernels (default: 1)")
+    parser.add_argument("--fresh", action="store_true", help="also the rows with fresh output (np.empty)")
+    parser.add_argument("--stores", action="store_true", help="this checkout's plain against streamed stores")
+    parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     args = parser.parse_args(argv)
+    if args.stores:
+        sys.path.insert(0, str(ROOT / "src"))
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        _stores(args.rounds, args.threads, args.n)
+        return 0
     with tempfile.TemporaryDirectory() as folder:
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.base, "src/symsphere"], check=True,
                                  capture_output=True).stdout  # fmt: skip
@@ -43,11 +65,11 @@ def main(argv: list[str] | None = None) -> int:
         (Path(folder) / "src" / "symsphere").rename(Path(folder) / "symsphere_base")
         sys.path.insert(0, folder)
         sys.path.insert(0, str(ROOT / "src"))
-        _run(args.base, args.rounds, args.threads)
+        _run(args.base, args.rounds, args.threads, args.fresh)
     return 0
 
 
-def _run(base: str, rounds: int, threads: int) -> None:
+def _run(base: str, rounds: int, threads: int, fresh: bool) -> None:
     import numpy as np
     import symsphere_base  # type: ignore[import-not-found]  # the copy made above
     from numba import set_num_threads
@@ -68,9 +90,13 @@ def _run(base: str, rounds: int, threads: int) -> None:
                 ("normal=(1,1,1)", {"normal": (1.0, 1.0, 1.0)}),
             ):
                 call = package.sample_sphere if label == "sample_sphere" else package.sample_hemisphere
-                rows[f"{label}, out= ({name}), {tag}"] = lambda c=call, d=dtype, b=buffer, e=extra: c(
+                # each row its own buffer: plain stores leave it in the cache, non-temporal ones do not
+                out = np.full((N, 3), 0.5, dtype)
+                rows[f"{label}, out= ({name}), {tag}"] = lambda c=call, d=dtype, b=out, e=extra: c(
                     N, rng=1, dtype=d, out=b, **e
                 )
+                if fresh:
+                    rows[f"{label}, fresh ({name}), {tag}"] = partial(call, N, rng=1, dtype=dtype, **extra)
     for run in rows.values():
         run()
     times: dict[str, list[float]] = {key: [] for key in rows}
@@ -86,6 +112,59 @@ def _run(base: str, rounds: int, threads: int) -> None:
         fill = min(times[f"fill ({'float64' if 'float64' in key else 'float32'})"])
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}"
               f"  of fill {fill / min(times[key]):.2f}")  # fmt: skip
+
+
+def _stores(rounds: int, threads: int, n: int) -> None:
+    import os
+
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")  # the fills' prange threads, as symsphere starts them
+    import numpy as np
+    from _write_limit import fills  # type: ignore[import-not-found]  # benchmarks/ is on sys.path
+    from numba import set_num_threads
+
+    import symsphere
+    from symsphere._testing import kernels
+
+    set_num_threads(threads)
+    clock = time.thread_time if threads == 1 else time.perf_counter
+    rows: dict[str, tuple[bool | None, Callable[[], object]]] = {}
+    for dtype in (np.float64, np.float32):
+        name = np.dtype(dtype).name
+        limit = fills(n, dtype)
+        rows[f"write limit, out= ({name})"] = (None, limit["numba prange, non-temporal", "out="])
+        rows[f"write limit, fresh ({name})"] = (None, limit["numba prange", "fresh"])
+        for label, call, extra in (
+            ("sample_sphere", symsphere.sample_sphere, {}),
+            ("sample_hemisphere", symsphere.sample_hemisphere, {}),
+            ("normal=(1,1,1)", symsphere.sample_hemisphere, {"normal": (1.0, 1.0, 1.0)}),
+        ):
+            for kind in ("out=", "fresh"):
+                for stores, override in (("plain", False), ("rule", None), ("streamed", True)):
+                    out = None if kind == "fresh" else np.full((n, 3), 0.5, dtype)  # each row its own buffer
+                    rows[f"{label}, {kind} ({name}), {stores}"] = (
+                        override,
+                        partial(call, n, rng=1, dtype=dtype, out=out, **extra),
+                    )
+
+    def run(key: str) -> None:
+        kernels.stream_override, call = rows[key]
+        call()
+
+    for key in rows:
+        run(key)
+    times: dict[str, list[float]] = {key: [] for key in rows}
+    keys = list(rows)
+    for r in range(rounds):
+        for key in keys[r % len(keys) :] + keys[: r % len(keys)]:
+            for _ in range(2):  # the call timed follows one of its own (the cache as the row leaves it)
+                start = clock()
+                run(key)
+            times[key].append(clock() - start)
+    kernels.stream_override = None
+    what = "one thread, thread CPU ms" if threads == 1 else f"{threads} threads, wall ms"
+    print(f"kernel_cpu.py --stores: {what} over {rounds} interleaved rounds, n = {n}")
+    for key in keys:
+        print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}")
 
 
 if __name__ == "__main__":

@@ -223,3 +223,70 @@ def test_vector_stores_write_their_row_of_the_tables_and_nothing_else(dtype, cou
     _write_orbit(rows, 1, p[0], p[1], p[2], weights)
     assert np.array_equal(rows[1], expected.astype(dtype))
     assert np.isnan(rows[0]).all() and np.isnan(rows[2]).all()
+
+
+_stream_rows, _store_fence = kernels.stream_rows, kernels.store_fence
+
+
+@njit
+def _copy_streamed(stage, start, rows, first, count):  # pragma: no cover - compiled by numba
+    _stream_rows(stage, start, rows, first, count)
+    _store_fence()
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("columns", [72, 144])
+def test_stream_rows_copies_the_rows_and_nothing_else(dtype, columns):
+    # Rows copied to destinations at every alignment to the element within a 64-byte line (the whole
+    # lines with non-temporal stores, the partial ones with plain), including none and one row: the
+    # values exactly, and the rows around them untouched.
+    size = np.dtype(dtype).itemsize
+    stage = np.random.default_rng(5).random((8, columns)).astype(dtype)
+    raw = np.empty(12 * columns * size + 64, np.uint8)
+    for shift in range(0, 64, size):
+        rows = raw[shift : shift + 12 * columns * size].view(dtype).reshape(12, columns)
+        for start, first, count in [(0, 0, 8), (3, 5, 4), (7, 11, 1), (2, 4, 0), (0, 3, -1)]:
+            rows[:] = np.nan
+            _copy_streamed(stage, start, rows, first, count)
+            copied = max(count, 0)
+            assert np.array_equal(rows[first : first + copied], stage[start : start + copied])
+            assert np.isnan(np.delete(rows, np.s_[first : first + copied], axis=0)).all()
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
+def test_streamed_kernels_write_the_same_rows(dtype, count, normal, monkeypatch):
+    # The kernels that stage each batch of orbits and copy it out non-temporally write bit for bit the
+    # rows of the plain stores: whole and cut orbits, several parts, outputs at several alignments.
+    basis = None if normal is None else frame(np.array(normal) / np.linalg.norm(normal))
+    uv = BasePoints("random", 9, total=301).take(0, 301)
+    n = 300 * count + count // 3
+    size = np.dtype(dtype).itemsize
+    raw = np.empty(n * 3 * size + 64, np.uint8)
+    results = {}
+    for streamed in (False, True):
+        monkeypatch.setattr(kernels, "stream_override", streamed)
+        for shift in (0, 16, 3 * size):
+            out = raw[shift : shift + n * 3 * size].view(dtype).reshape(n, 3)
+            out[:] = np.nan
+            kernels.fill_orbits(uv, "equal_area", count, basis, out, parts=3, offset=5, above=normal is not None)
+            results[streamed, shift] = out.copy()
+    for shift in (0, 16, 3 * size):
+        assert np.array_equal(results[True, shift], results[False, shift])
+        assert np.array_equal(results[False, shift], results[False, 0])
+
+
+def test_outputs_are_streamed_only_when_large_and_already_in_memory(monkeypatch):
+    # The rule: non-temporal stores for an output of at least STREAM_BYTES whose pages are mapped (a
+    # buffer written before); plain ones for a fresh np.empty (its pages are cleared by the kernel on
+    # the first write), for a small output, and whatever the rule when overridden.
+    rows = kernels.STREAM_BYTES // 24 + 1
+    fresh = np.empty((rows, 3))
+    assert not kernels._streams(fresh)
+    fresh.fill(0.5)
+    assert kernels._streams(fresh)
+    assert not kernels._streams(np.ones((rows // 4, 3)))
+    monkeypatch.setattr(kernels, "stream_override", False)
+    assert not kernels._streams(fresh)
+    monkeypatch.setattr(kernels, "stream_override", True)
+    assert kernels._streams(np.empty((10, 3)))

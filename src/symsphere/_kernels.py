@@ -23,7 +23,9 @@ the measurements.
 
 from __future__ import annotations
 
+import ctypes
 import functools
+import mmap
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, cast
@@ -37,7 +39,13 @@ from ._numba_cache import invalidate_if_changed
 from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
-from ._vector_stores import store_hemisphere_orbit, store_rotated_hemisphere, store_sphere_orbit
+from ._vector_stores import (
+    store_fence,
+    store_hemisphere_orbit,
+    store_rotated_hemisphere,
+    store_sphere_orbit,
+    stream_rows,
+)
 from .symmetry import SIGNS, SOURCES, orbit_size
 from .warps._triangle import METHODS, triangle_warp  # the module itself: the kernels inline only its formulas
 
@@ -209,18 +217,16 @@ def _copy_members(scratch, tail, offset):
             tail[i, l] = scratch[0, 3 * k + l]
 
 
-@register_jitable
 def _rotated_weights(basis, count):
     """W (3, 3 count) with image k of p = p @ M_k @ basis = p @ W[:, 3k:3k+3].
 
     M_k moves coordinate SOURCES[k, l] to place l with sign SIGNS[k, l], so row
-    SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.
+    SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.  Built with numpy
+    at each call about a normal (in Python, a loop over the 216 weights took ~0.15 ms a call).
     """
     weights = np.zeros((3, 3 * count))
-    for k in range(count):
-        for l in range(3):
-            for j in range(3):
-                weights[_SOURCES[k, l], 3 * k + j] = _SIGNS[k, l] * basis[l, j]
+    images = np.arange(count)[:, None, None]
+    weights[_SOURCES[:count, :, None], 3 * images + np.arange(3)] = _SIGNS[:count, :, None] * basis[None, :, :]
     return weights
 
 
@@ -244,7 +250,7 @@ _GIVEN, _RANDOM = 0, 1
 
 
 @functools.cache
-def _fill_kernel(source: int, code: int, kind: int) -> Any:
+def _fill_kernel(source: int, code: int, kind: int, streamed: bool = False) -> Any:
     """The serial kernel of one case: base points given (*source* = _GIVEN) or drawn (_RANDOM), map
     *code*, store *kind*.  It fills points ``lo ... hi - 1`` of the call (one part).
 
@@ -261,6 +267,12 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
     u then v per point; the next batch's points are drawn between the current batch's orbit
     stores, so that the generator's dependent chain of 128-bit multiplications overlaps the
     stores instead of following them.
+
+    *streamed* (a closure cell too): each batch's orbits are stored into a stage of two batches (in
+    L1) and copied out non-temporally (:func:`~symsphere._vector_stores.stream_rows`) while the next
+    batch is computed, one batch late, so that the copy's loads find the stage's stores written
+    (a load that spans two stores still in the store buffer waits for both); the same values, written
+    without reading the output's lines first (:func:`_streams` says when).
     """
 
     @njit(**_OPTIONS)
@@ -276,6 +288,11 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             v[j] = 0.5
         base = np.empty((3, _BATCH))
         scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)  # the cut orbit, stored whole
+        stage = np.empty((2 * _BATCH if streamed else 0, rows.shape[1]), dtype=tail.dtype)
+        target = stage if streamed else rows  # once: a reference taken per orbit costs a call (NRT_incref)
+        half = 0
+        pending = 0
+        pending_first = 0
         if source == _RANDOM:
             for j in range(min(_BATCH, hi - lo)):
                 u[j] = pcg64_random(points)
@@ -289,17 +306,21 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
             _map_batch(u, v, code, base)  # inlined in numba's IR: the other maps pruned
             upcoming = min(_BATCH, hi - stop)
             for j in range(min(stop, whole) - first):
+                at = half * _BATCH + j if streamed else first + j
                 if kind == _SPHERE:
-                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
+                    store_sphere_orbit(base[0, j], base[1, j], base[2, j], target, at)
                 elif kind == _HEMISPHERE:
-                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], rows, first + j)
+                    store_hemisphere_orbit(base[0, j], base[1, j], base[2, j], target, at)
                 else:
-                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], rows, first + j, weights)
+                    store_rotated_hemisphere(base[0, j], base[1, j], base[2, j], target, at, weights)
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
-                        _keep_above(rows, first + j, normal)
+                        _keep_above(target, at, normal)
                 if source == _RANDOM and j < upcoming:
                     u[j] = pcg64_random(points)
                     v[j] = pcg64_random(points)
+            if streamed:  # the batch before this one: its stores have left the store buffer
+                stream_rows(stage, (1 - half) * _BATCH, rows, pending_first, pending)
+                half, pending, pending_first = 1 - half, min(stop, whole) - first, first
             if stop > whole:  # the last point (of the last part), its orbit cut: stored whole, then copied
                 j = whole - first
                 if kind == _SPHERE:
@@ -311,6 +332,9 @@ def _fill_kernel(source: int, code: int, kind: int) -> Any:
                     if normal.shape[0] and min(base[0, j], base[1, j], base[2, j]) < _NEAR_PLANE:
                         _keep_above(scratch, 0, normal)
                 _copy_members(scratch, tail, offset)
+        if streamed:
+            stream_rows(stage, (1 - half) * _BATCH, rows, pending_first, pending)
+            store_fence()
 
     return fill
 
@@ -333,7 +357,17 @@ def _run(source, method, count, basis, out, m, parts, part_input, offset, above)
     _prepare_kernels()
     kind, weights = _store_kind(count, basis)
     normal = np.ascontiguousarray(basis[2], dtype=np.float64) if above and kind == _HEMISPHERE_ROTATED else _NO_NORMAL
-    _launch(_fill_kernel(source, METHOD_CODES[method], kind), weights, normal, count, out, m, parts, part_input, offset)
+    _launch(
+        _fill_kernel(source, METHOD_CODES[method], kind, _streams(out)),
+        weights,
+        normal,
+        count,
+        out,
+        m,
+        parts,
+        part_input,
+        offset,
+    )
 
 
 def _launch(kernel, weights, normal, count, out, m, parts, part_input, offset):
@@ -392,14 +426,14 @@ def fill(plan: Plan, start: int, stop: int, out: FloatArray, offset: int = 0, pa
     if source.kind == "random":
         assert source.seed_words is not None  # random sources always have the stream's seed
         part_input = RandomPoints(source.seed_words, start, stop - start).part_input
-        kernel = _fill_kernel(_RANDOM, METHOD_CODES[plan.method], plan.kind)
+        kernel = _fill_kernel(_RANDOM, METHOD_CODES[plan.method], plan.kind, _streams(out))
     else:
         uv = np.ascontiguousarray(source.take(start, stop), dtype=np.float64)
 
         def part_input(lo: int) -> npt.NDArray[Any]:
             return uv
 
-        kernel = _fill_kernel(_GIVEN, METHOD_CODES[plan.method], plan.kind)
+        kernel = _fill_kernel(_GIVEN, METHOD_CODES[plan.method], plan.kind, _streams(out))
     _launch(kernel, plan.weights, plan.normal, plan.count, out, stop - start, parts, part_input, offset)
     return out
 
@@ -479,6 +513,40 @@ def part_bounds(m, parts=0):
     _prepare_kernels()
     count = part_count(m, parts or get_num_threads())
     return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
+
+
+# Non-temporal stores (symsphere._vector_stores.stream_rows) write a touched output up to ~2x faster
+# than plain ones, which read each line first (measured down to 0.6 MB), but a fresh one (np.empty:
+# pages the operating system clears at the first write, through the cache) ~1.4-1.7x slower; and an
+# output that fits in a core's cache (2 MiB of L2 on the Intel host) is better left there for whoever
+# reads it next, so only twice that and more.  docs/results/write-limit.md has the measurements.
+STREAM_BYTES = 4 * 2**20
+"""Outputs of at least this many bytes whose pages are already in memory are written non-temporally."""
+stream_override: bool | None = None
+"""True/False: every output written non-temporally / with plain stores (for benchmarks); None: the rule."""
+_PAGE = mmap.PAGESIZE
+_mincore: Any
+try:  # POSIX: which pages of a range are in memory
+    _mincore = ctypes.CDLL(None).mincore
+    _mincore.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_char_p]
+except (AttributeError, OSError, TypeError):  # pragma: no cover - e.g. Windows: plain stores only
+    _mincore = None
+
+
+def _streams(out):
+    """Whether the kernel writes *out* with non-temporal stores: large, and its pages already in memory
+    (a buffer written before, as ``out=`` usually is).  Its middle and last pages tell: np.empty's
+    pages, and a new memmap's, are mapped when first written (a new memmap's last page when made)."""
+    if stream_override is not None:
+        return stream_override
+    if out.nbytes < STREAM_BYTES or _mincore is None:
+        return False
+    resident = ctypes.create_string_buffer(1)
+    for at in (out.nbytes // 2, out.nbytes - 1):
+        address = out.ctypes.data + at
+        if _mincore(ctypes.c_void_p(address - address % _PAGE), _PAGE, resident) != 0 or not resident.raw[0] & 1:
+            return False  # not yet written (or memory mincore does not know): plain stores
+    return True
 
 
 _NO_WEIGHTS = np.zeros((3, 0))

@@ -8,10 +8,14 @@ tables give, bit for bit: :func:`orbit_mask` reads the tables of :mod:`symsphere
 rotated store sums ``(x w0 + y w1) + z w2`` without fused multiply-adds, as the kernels always have
 (tests/test_public_outputs.py pins the rows).
 tests/test_kernels.py compares every image with the tables and with the numpy path.
+
+:func:`stream_rows` copies stored orbits out of a stage with non-temporal stores (whole 64-byte lines
+only, the partial ones plain, as a memset does), for outputs the kernels write that way.
 """
 
 from __future__ import annotations
 
+import platform
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -23,8 +27,16 @@ from numba.extending import intrinsic
 from .symmetry import SIGNS, SOURCES, orbit_size
 
 _item_pointer = cast(Callable[..., Any], cgutils.get_item_pointer)  # numba: untyped
+_function = cast(Callable[..., Any], cgutils.get_or_insert_function)  # numba: untyped
 
-__all__ = ["orbit_mask", "store_hemisphere_orbit", "store_rotated_hemisphere", "store_sphere_orbit"]
+__all__ = [
+    "orbit_mask",
+    "store_fence",
+    "store_hemisphere_orbit",
+    "store_rotated_hemisphere",
+    "store_sphere_orbit",
+    "stream_rows",
+]
 
 
 def _int32(value: int | list[int]) -> Any:
@@ -147,3 +159,86 @@ def _rotated_store(count: int) -> Any:
 
 
 store_rotated_hemisphere = _rotated_store(orbit_size("hemisphere"))
+
+
+LINE = 64  # bytes: a cache line, and a non-temporal store's size and alignment
+
+
+def _stream_rows(typingctx: Any, stage: Any, start: Any, rows: Any, first: Any, count: Any) -> Any:
+    """``rows[first : first + count] = stage[start : start + count]``, the whole 64-byte lines of the destination with
+    non-temporal stores and its partial first and last lines with plain ones (as a memset does).
+
+    A plain store reads its line from memory before writing it; a non-temporal one writes whole
+    lines to memory without reading them (and without keeping them in the cache), but only at 64-byte
+    boundaries, where numpy's large arrays start 16 bytes into a line: so the kernels store a batch of
+    orbits into *stage* (in L1) and copy it out here.  The values are copied, not changed.  Call
+    :func:`store_fence` after the last copy.  An output not aligned to its element size is copied with
+    plain stores only.
+    """
+    arrays = (stage, rows)
+    if not all(isinstance(a, types.Array) and a.ndim == 2 and a.layout == "C" for a in arrays):
+        return None
+    if stage.dtype != rows.dtype:
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        stage_type, rows_type = signature.args[0], signature.args[2]
+        element = context.get_value_type(rows_type.dtype)
+        size = context.get_abi_sizeof(element)
+        width = LINE // size
+        intp = context.get_value_type(types.intp)
+        source = _row_pointer(context, builder, stage_type, args[0], args[1], signature.args[1])
+        target = _row_pointer(context, builder, rows_type, args[2], args[3], signature.args[3])
+        columns = builder.extract_value(context.make_array(rows_type)(context, builder, args[2]).shape, 1)
+        rows_count = context.cast(builder, args[4], signature.args[4], types.intp)
+        total = builder.mul(builder.select(builder.icmp_signed(">", rows_count, ir.Constant(intp, 0)), rows_count,
+                                           ir.Constant(intp, 0)), columns)  # fmt: skip
+        address = builder.ptrtoint(target, intp)
+        head = builder.lshr(builder.and_(builder.neg(address), ir.Constant(intp, LINE - 1)),
+                            ir.Constant(intp, size.bit_length() - 1))  # fmt: skip
+        misaligned = builder.icmp_unsigned(
+            "!=", builder.and_(address, ir.Constant(intp, size - 1)), ir.Constant(intp, 0)
+        )
+        head = builder.select(builder.or_(misaligned, builder.icmp_unsigned(">", head, total)), total, head)
+        lines = builder.udiv(builder.sub(total, head), ir.Constant(intp, width))
+        body_end = builder.add(head, builder.mul(lines, ir.Constant(intp, width)))
+        vector = ir.VectorType(element, width)
+        nontemporal = builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)])
+
+        def copy_one(at: Any) -> None:
+            value = builder.load(builder.gep(source, [at]), align=size)
+            builder.store(value, builder.gep(target, [at]), align=size)
+
+        with cgutils.for_range(builder, head) as loop:
+            copy_one(loop.index)
+        with cgutils.for_range(builder, lines) as loop:
+            at = builder.add(head, builder.mul(loop.index, ir.Constant(intp, width)))
+            value = builder.load(builder.bitcast(builder.gep(source, [at]), vector.as_pointer()), align=size)
+            store = builder.store(value, builder.bitcast(builder.gep(target, [at]), vector.as_pointer()), align=LINE)
+            store.set_metadata("nontemporal", nontemporal)
+        with cgutils.for_range(builder, builder.sub(total, body_end)) as loop:
+            copy_one(builder.add(body_end, loop.index))
+        return context.get_dummy_value()
+
+    return types.void(stage, start, rows, first, count), codegen
+
+
+stream_rows: Any = intrinsic(_stream_rows)  # Any: the intrinsic's call signature is not the function's
+
+
+def _store_fence(typingctx: Any) -> Any:
+    """Order the non-temporal stores before it before every later store and load: the kernel's caller,
+    on another thread, then sees the copied rows.  On x86 an ``sfence`` (what the stores' weak order
+    asks for: LLVM makes a sequentially consistent fence a locked ``or`` there), then that fence."""
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        if platform.machine().lower() in ("x86_64", "amd64"):
+            sfence = _function(builder.module, ir.FunctionType(ir.VoidType(), []), "llvm.x86.sse.sfence")
+            builder.call(sfence, [])
+        builder.fence("seq_cst")
+        return context.get_dummy_value()
+
+    return types.void(), codegen
+
+
+store_fence: Any = intrinsic(_store_fence)
