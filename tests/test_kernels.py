@@ -1,5 +1,7 @@
 """The numba kernels against the numpy reference path; streaming; the specialised kernels."""
 
+import mmap
+
 import numpy as np
 import pytest
 from numba import njit
@@ -278,10 +280,12 @@ def test_streamed_kernels_write_the_same_rows(dtype, count, normal, monkeypatch)
 
 def test_outputs_are_streamed_only_when_large_and_already_in_memory(monkeypatch):
     # The rule: non-temporal stores for an output of at least STREAM_BYTES whose pages are mapped (a
-    # buffer written before); plain ones for a fresh np.empty (its pages are cleared by the kernel on
-    # the first write), for a small output, and whatever the rule when overridden.
+    # buffer written before); plain ones for new memory (its pages are cleared by the kernel on the
+    # first write), for a small output, and whatever the rule when overridden.  New memory from an
+    # anonymous mapping: np.empty may be served from memory this process freed before (glibc raises
+    # its mmap threshold after a free), whose pages are mapped, and streaming them is right.
     rows = kernels.STREAM_BYTES // 24 + 1
-    fresh = np.empty((rows, 3))
+    fresh = np.frombuffer(mmap.mmap(-1, rows * 24), dtype=np.float64).reshape(rows, 3)
     assert not kernels._streams(fresh)
     fresh.fill(0.5)
     assert kernels._streams(fresh)
