@@ -27,30 +27,16 @@ def _generator():
     spec = importlib.util.spec_from_file_location("_test_rectangle", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module._adversarial
+    return module.adversarial_samples
 
 
 def scan(mi, sm, f64, batches, samples, seed):
-    adversarial = _generator()
-    vector, real, point = (mi.Vector3d, mi.Float64, mi.Point2d) if f64 else (mi.Vector3f, mi.Float, mi.Point2f)
-    dtype = np.float64 if f64 else np.float32
+    adversarial_samples = _generator()
     keys = ("samples", "degenerate", "nonfinite", "nonunit", "bad_solid_angle", "bad_pdf", "missed", "pdf_not_1_over_S")
     counts = dict.fromkeys(keys + ("bad_inverse",), 0)
     for batch in range(batches):
         rng = np.random.default_rng((seed, int(f64), batch))
-        corner, edge1, edge2 = adversarial(samples, rng)
-        uv = rng.random((samples, 2))
-        edge = rng.random(samples) < 0.05
-        uv[edge] = rng.choice([0.0, 1.0], size=(edge.sum(), 2))
-        edge = rng.random(samples) < 0.05
-        uv[edge, 0] = rng.choice([0.0, 1.0], size=edge.sum())
-        r = [vector(*(real(a[:, i].astype(dtype)) for i in range(3))) for a in (corner, edge1, edge2)]
-        d = sm.square_to_spherical_rectangle(point(real(uv[:, 0].astype(dtype)), real(uv[:, 1].astype(dtype))), *r)
-        s = sm.spherical_rectangle_solid_angle(*r).numpy().astype(np.float64)
-        pdf = sm.square_to_spherical_rectangle_pdf(d, *r).numpy().astype(np.float64)
-        back = sm.spherical_rectangle_to_square(d, *r)
-        got = np.stack([d.x.numpy(), d.y.numpy(), d.z.numpy()], axis=1).astype(np.float64)
-        back = np.stack([back.x.numpy(), back.y.numpy()], axis=1)
+        got, s, pdf, back = adversarial_samples(mi, sm, f64, samples, rng)
         valid = s > 0
         finite = np.all(np.isfinite(got), axis=1)
         counts["samples"] += samples

@@ -324,17 +324,10 @@ def _adversarial(n, rng):
     return corner, w[:, None] * q, h[:, None] * t
 
 
-@pytest.mark.parametrize("f64", [True, False], ids=["float64", "float32"])
-def test_no_nan_or_inf_on_a_million_adversarial_samples(llvm, f64):
-    """10^6 samples, each lane its own rectangle (_adversarial), 10 % of the points on the square's corners
-    and edges: every direction finite and unit, every S in [0, 2 pi], every pdf finite and 1/S at the
-    map's own direction where S > 0 (so the direction hits the rectangle), every inverse in [0, 1]^2.
-    1.3-4.5 s per dtype; benchmarks/scan_spherical_rectangle_drjit.py repeats it for 10^8 samples."""
-    mi = llvm
-    import symsphere.mitsuba as sm
-
-    rng = np.random.default_rng(17 if f64 else 18)
-    n = 1_000_000
+def adversarial_samples(mi, sm, f64, n, rng):
+    """The maps on n adversarial rectangles (:func:`_adversarial`), 10 % of the points on the square's
+    corners and edges: (directions, S, pdf, inverse) as float64 numpy arrays (also the 10^8 scan's,
+    benchmarks/scan_spherical_rectangle_drjit.py)."""
     corner, edge1, edge2 = _adversarial(n, rng)
     uv = rng.random((n, 2))
     edge = rng.random(n) < 0.05
@@ -349,7 +342,19 @@ def test_no_nan_or_inf_on_a_million_adversarial_samples(llvm, f64):
     pdf = sm.square_to_spherical_rectangle_pdf(d, *r).numpy().astype(np.float64)
     back = sm.spherical_rectangle_to_square(d, *r)
     got = np.stack([d.x.numpy(), d.y.numpy(), d.z.numpy()], axis=1).astype(np.float64)
-    back = np.stack([back.x.numpy(), back.y.numpy()], axis=1)
+    return got, s, pdf, np.stack([back.x.numpy(), back.y.numpy()], axis=1)
+
+
+@pytest.mark.parametrize("f64", [True, False], ids=["float64", "float32"])
+def test_no_nan_or_inf_on_a_million_adversarial_samples(llvm, f64):
+    """10^6 samples, each lane its own rectangle (_adversarial), 10 % of the points on the square's corners
+    and edges: every direction finite and unit, every S in [0, 2 pi], every pdf finite and 1/S at the
+    map's own direction where S > 0 (so the direction hits the rectangle), every inverse in [0, 1]^2.
+    1.3-4.5 s per dtype; benchmarks/scan_spherical_rectangle_drjit.py repeats it for 10^8 samples."""
+    mi = llvm
+    import symsphere.mitsuba as sm
+
+    got, s, pdf, back = adversarial_samples(mi, sm, f64, 1_000_000, np.random.default_rng(17 if f64 else 18))
     assert np.all(np.isfinite(got)) and np.allclose(np.linalg.norm(got, axis=1), 1, atol=1e-5)
     assert np.all((s >= 0) & (s <= float(np.float32(2 * np.pi))))
     valid = s > 0
