@@ -8,6 +8,7 @@ from references import inject_sigint
 from symsphere._testing import validation
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # Python's own handler, whatever the worker's
 def test_a_ctrl_c_while_probing_the_folder_leaves_no_probe(tmp_path, monkeypatch):
     # The SIGINT arrives right after the probe is created (its os.open), before it is removed: it is
     # deferred until the probe is gone (found by test_late_sigint_at_many_times, whose signal at the
