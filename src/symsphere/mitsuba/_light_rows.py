@@ -219,10 +219,10 @@ def weight_sum(weights: list[Any]) -> Any:
     return total
 
 
-def pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any, Any]:
-    """(index, its weight, the total, u reused) of a choice proportional to *weights* by u: float32 sums
-    (u itself has 24 bits: float64 sums would not make the frequencies closer to the weights).  The
-    weight and the total are returned as float64."""
+def pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any]:
+    """(index, its probability, u reused) of a choice proportional to *weights* by u: float32 sums (u
+    itself has 24 bits: float64 sums would not make the frequencies closer to the weights); the
+    probability its weight over the total in float64 (0 where the total is 0)."""
     total = weight_sum(weights)
     target = mi.Float(u) * total
     index: Any = mi.UInt32(0)
@@ -236,7 +236,8 @@ def pick(weights: list[Any], u: Any) -> tuple[Any, Any, Any, Any]:
         chosen = dr.select(take, w, chosen)
         acc += w
     reused = dr.clip((target - before) / dr.select(chosen > 0.0, chosen, 1.0), 0.0, 1.0)
-    return index, mi.Float64(chosen), mi.Float64(total), mi.Float64(reused)
+    mine, whole = mi.Float64(chosen), mi.Float64(total)
+    return index, dr.select(whole > 0.0, mine / dr.select(whole > 0.0, whole, 1.0), 0.0), mi.Float64(reused)
 
 
 def share(weights: list[Any], index: Any) -> Any:

@@ -227,8 +227,8 @@ class LightTable:
         return dr.select(front & (omega > 0.0), value, 0.0)
 
     def _group_weights(self, p: Any, n: Any = None) -> list[Any]:
-        """The first level's weights at p (float32; None for a group that is never chosen): a triangle's
-        exact weight, or a group's estimate ``power cos / max(d^2, r^2)`` (see :class:`Group`)."""
+        """The top level's weights at p (float32; None for a group that is never chosen): a triangle's
+        exact weight, or a group's importance (see :class:`Group`)."""
         weights: list[Any] = []
         for g in self.groups:
             if g.power <= 0.0:
@@ -267,12 +267,11 @@ class LightTable:
     def _descend(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
         """(node of the last level: the row in exact mode, else a leaf; its probability; u reused): a node
         of the top by its weight, then a child of it by its importance, level by level."""
-        node, chosen, total, u = pick(self._group_weights(p, n), u)
-        probability = dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0)
+        node, probability, u = pick(self._group_weights(p, n), u)
         for level, fanout in zip(self._levels, self._fanouts, strict=True):
             first = node * fanout
-            slot, chosen, total, u = pick(level.weights(p, first, fanout, active & (probability > 0.0), n), u)
-            probability *= dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0)
+            slot, fraction, u = pick(level.weights(p, first, fanout, active & (probability > 0.0), n), u)
+            probability *= fraction
             node = first + slot
         return node, probability, u
 
@@ -282,8 +281,8 @@ class LightTable:
         if self.mode == "exact":
             return leaf, probability, u
         start = leaf * self.group_size
-        slot, chosen, total, u = pick(self._member_weights(p, start, active & (probability > 0.0), n), u)
-        probability *= dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0)
+        slot, fraction, u = pick(self._member_weights(p, start, active & (probability > 0.0), n), u)
+        probability *= fraction
         return start + slot, probability, u
 
     def _choose_projected(self, p: Any, normal: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
@@ -300,8 +299,7 @@ class LightTable:
                 front = dr.dot(p - a, mi.ScalarVector3f(*self.normal[row])) > 0.0
                 e = projected_solid_angle(a - p, b - p, c - p, normal)
                 weights.append(dr.select(front, e * float(self.lum[row]), 0.0))
-            index, chosen, total, u = pick(weights, u)
-            return index, dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0), u
+            return pick(weights, u)
         leaf, probability, u = self._descend(p, u, active, n)
         start = leaf * self.group_size
         members = []
@@ -312,8 +310,8 @@ class LightTable:
             lum = dr.gather(mi.Float, self._lum32, row, ok)
             e = projected_solid_angle(a - p, b - p, c - p, normal)
             members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
-        slot, chosen, group_total, u = pick(members, u)
-        probability *= dr.select(group_total > 0.0, chosen / dr.select(group_total > 0.0, group_total, 1.0), 0.0)
+        slot, fraction, u = pick(members, u)
+        probability *= fraction
         return start + slot, probability, u
 
     def _first_level_weight(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
@@ -432,8 +430,7 @@ class LightTable:
             else:
                 # by power: constants, outside the branch (a branch's literal result, as the row of a table
                 # with one triangle of power, failed Dr.Jit 1.5's LLVM backend: "does not dominate all uses")
-                row, chosen, total, u_map = pick(self._tiny_weights(), mi.Float64(u))
-                by_power = (row, dr.select(total > 0.0, chosen / dr.select(total > 0.0, total, 1.0), 0.0), u_map)
+                by_power = pick(self._tiny_weights(), mi.Float64(u))
 
                 def by_weight(*_: Any) -> tuple[Any, Any, Any]:
                     return self._choose(p, mi.Float64(u), active, mi.Vector3f(si.n))
