@@ -279,6 +279,43 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         lit = chosen_p.numpy() > 0
         assert lit.sum() > m // 2, name
         np.testing.assert_allclose(again.numpy()[lit], chosen_p.numpy()[lit], rtol=1e-6, err_msg=name)
+        if mode == "tree":  # both rules below the top: by power where the chosen top run is small, else the levels
+            far = table._top_far(point1, chosen // table.spans[0], mi.Bool(True)).numpy()[lit]
+            assert 0.1 < far.mean() < 0.9, (name, far.mean())
+
+
+@pytest.mark.statistical
+def test_alias_tables_choose_rows_by_their_share(llvm):
+    """A top run small as seen from p chooses its triangle by power through an alias table: the rows'
+    frequencies (Dr.Jit, 400 000 draws over runs of 8, a short last run and a zero weight) against their
+    shares of the run's weight (chi-square, significance 0.01); a row of weight 0 is never drawn."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    weights = np.array([1.0, 5.0, 0.0, 2.0, 0.5, 3.0, 1.0, 7.5, 4.0, 0.0, 1.0, 2.0, 9.0])
+    keep, alias, shares = lights.alias_rows(weights, 8)
+    np.testing.assert_allclose(
+        shares, np.concatenate([weights[:8] / weights[:8].sum(), weights[8:] / weights[8:].sum()])
+    )
+    n, rng = 400_000, np.random.default_rng(8)
+    run = rng.integers(0, 2, n)
+    start, count = run * 8, np.where(run == 0, 8, 5)
+    row, reused = lights.alias_pick(
+        mi.Float(keep.astype(np.float32)),
+        mi.UInt32(alias),
+        mi.UInt32(start),
+        mi.UInt32(count),
+        mi.Float64(rng.random(n)),
+        mi.Bool(True),
+    )
+    row, reused = row.numpy(), reused.numpy()
+    assert np.all((row >= start) & (row < start + count)) and np.all(weights[row] > 0.0)
+    observed = np.bincount(row, minlength=len(weights))
+    expected = shares * np.bincount(run, minlength=2)[np.arange(len(weights)) // 8]
+    used = expected > 0
+    # two runs: one constraint more than chisquare's default (ddof=1)
+    assert stats.chisquare(observed[used], expected[used], ddof=1).pvalue > ALPHA
+    assert 0.0 <= reused.min() and reused.max() <= 1.0 and abs(reused.mean() - 0.5) < 0.01
 
 
 # (scene, point): the mesh-light scene (two emitters, one chosen through the tree, one exactly; most
@@ -550,19 +587,29 @@ def test_a_one_triangle_light_renders_again_from_the_kernel_cache(llvm, tmp_path
     """The table is built at each render: a second render of a one-triangle light compiles no kernel
     (a gather from a one-entry column missed Dr.Jit's kernel cache: 0.30 s per 64 x 64 render)."""
     mi = llvm
-    import drjit as dr
-
-    import symsphere.mitsuba  # noqa: F401
-
     path = tmp_path / "one.obj"
     path.write_text("v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nf 1 3 2\n")
     scene = scene_dict(mi, "textured", 16)
     del scene["light"], scene["sky"]
     emitter = {"type": "area", "radiance": {"type": "rgb", "value": [5, 5, 5]}}
     scene["light"] = {"type": "obj", "filename": str(path), "emitter": emitter}
-    scene = mi.load_dict(scene)
+    _assert_renders_again_from_the_kernel_cache(mi, mi.load_dict(scene), 2)
+
+
+@pytest.mark.parametrize("scene_name", ["tree_light", "textured"])
+def test_the_tree_and_a_tiny_table_render_again_from_the_kernel_cache(llvm, tmp_path, scene_name):
+    """The same with the tree's alias tables (a second render's columns are new arrays) and with a tiny
+    table whose emitter samples itself where it is small."""
+    _assert_renders_again_from_the_kernel_cache(llvm, _scene(llvm, scene_name, tmp_path), 3)
+
+
+def _assert_renders_again_from_the_kernel_cache(mi, scene, max_depth):
+    import drjit as dr
+
+    import symsphere.mitsuba  # noqa: F401
+
     integrator = mi.load_dict(
-        {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", "max_depth": 2}
+        {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle", "max_depth": max_depth}
     )
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:

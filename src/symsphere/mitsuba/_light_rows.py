@@ -10,8 +10,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share", "registry_ids", "shape_id", "small_sphere",
-           "small_triangle", "spatial_order", "tree_spans", "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
+__all__ = ["alias_pick", "alias_rows", "area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share",
+           "registry_ids", "shape_id", "small_sphere", "small_triangle", "spatial_order", "tree_spans", "triangle_weight",
+           "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
 
 
 def registry_ids(pointers: Any) -> Any:
@@ -184,7 +185,23 @@ class Level:
         return [self.weight(p, first + k, active & (first + k < self.count), n) for k in range(fanout)]
 
 
-def small_sphere(p: Any, centre: Any, radius: float, tau: float) -> Any:
+def triangle_weight(p: Any, a: Any, b: Any, c: Any, n: Any, lum: Any, receiver: Any = None) -> Any:
+    """``Omega(p) L_e`` in float32, 0 behind the triangle: a selection weight (its rounding only changes
+    which triangle is chosen how often; the density divides by the map's solid angle)."""
+    front = dr.dot(p - a, n) > 0.0
+    a, b, c = a - p, b - p, c - p
+    la, lb, lc = dr.norm(a), dr.norm(b), dr.norm(c)
+    triple = dr.abs(dr.dot(a, dr.cross(b, c)))
+    den = la * lb * lc + dr.dot(a, b) * lc + dr.dot(a, c) * lb + dr.dot(b, c) * la
+    omega = 2.0 * dr.atan2(triple, den)
+    value = omega * lum
+    if receiver is not None:  # the receiver's unsigned cosine at the vertices (see :mod:`._lights`)
+        cos = dr.abs(dr.dot(a, receiver)) / la + dr.abs(dr.dot(b, receiver)) / lb + dr.abs(dr.dot(c, receiver)) / lc
+        value *= dr.select(dr.squared_norm(receiver) > 0.0, cos, 1.0)
+    return dr.select(front & (omega > 0.0), value, 0.0)
+
+
+def small_sphere(p: Any, centre: Any, radius: Any, tau: float) -> Any:
     """The lanes where the sphere (centre, radius) is small as seen from p: radius < tau |p - centre|."""
     return radius * radius < (tau * tau) * dr.squared_norm(p - centre)
 
@@ -208,6 +225,42 @@ def area_direction(a: Any, b: Any, c: Any, n: Any, u: Any, v: Any) -> tuple[Any,
     positive = dist > 0.0
     extent = dr.select(positive, dr.abs(dr.dot(a, n)) / dr.select(positive, 2.0 * dist * dist * dist, 1.0), 0.0)
     return q / dr.select(positive, dist, 1.0), extent
+
+
+def alias_rows(weights: np.ndarray, span: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Walker's alias tables of the runs [k, k + span) of *weights*: per row the probability of keeping
+    it, its alias (a row of the same run, absolute) and its share of its run's weight (float64).  A row of
+    weight 0 is never kept and never an alias."""
+    count = len(weights)
+    keep, alias, shares = np.ones(count), np.arange(count, dtype=np.uint32), np.zeros(count)
+    for start in range(0, count, span):
+        w = np.asarray(weights[start : start + span], dtype=np.float64)
+        if w.sum() <= 0.0:
+            continue
+        shares[start : start + len(w)] = w / w.sum()
+        scaled = w / w.sum() * len(w)
+        small, large = [i for i in range(len(w)) if scaled[i] < 1.0], [i for i in range(len(w)) if scaled[i] >= 1.0]
+        while small and large:
+            s, big = small.pop(), large.pop()
+            keep[start + s], alias[start + s] = scaled[s], start + big
+            scaled[big] -= 1.0 - scaled[s]
+            (small if scaled[big] < 1.0 else large).append(big)
+        zero = np.flatnonzero(w <= 0.0)  # left over by rounding: never kept
+        keep[start + zero], alias[start + zero] = 0.0, start + int(np.argmax(w))
+    return keep, alias, shares
+
+
+def alias_pick(keep: Any, alias: Any, start: Any, count: Any, u: Any, active: Any) -> tuple[Any, Any]:
+    """(row, u reused) of a row of the run [start, start + count) by its alias table (:func:`alias_rows`;
+    one gather of a kept fraction, one of an alias)."""
+    x = mi.Float(u) * mi.Float(count)
+    slot = dr.minimum(mi.UInt32(x), count - 1)
+    frac = x - mi.Float(slot)
+    q = dr.gather(mi.Float, keep, start + slot, active)
+    kept = frac < q
+    row = dr.select(kept, start + slot, dr.gather(mi.UInt32, alias, start + slot, active & ~kept))
+    reused = dr.select(kept, frac / dr.select(q > 0.0, q, 1.0), (frac - q) / dr.select(q < 1.0, 1.0 - q, 1.0))
+    return row, mi.Float64(dr.clip(reused, 0.0, 1.0))
 
 
 def weight_sum(weights: list[Any]) -> Any:

@@ -7,46 +7,36 @@ triangle of those emitters (a rectangle is two) is a row of a table (:class:`Lig
 shading point p:
 
 1. one triangle is chosen with probability proportional to an estimate of its contribution,
-   ``w_i = Omega_i(p) L_e c_i``: its solid angle seen from p (Van Oosterom & Strackee) times a scalar
-   radiance of its emitter (the mean of its RGB radiance, of the texture's mean for a textured one)
-   times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n
-   the geometric normal at p; unsigned, so 0 only for a triangle in p's tangent plane, which lights p by
-   nothing), 0 when p is behind the triangle (area emitters are one-sided).  The cosine made the
-   choice 3.4x better under the 24-triangle disk 0.2 above the floor (relMSE of direct light).  For up
-   to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled into the kernel, the triangles its
-   constants; float32 weights and sums: u has 24 bits).  Above, through a tree of fixed depth over a
-   spatial order (the axis of the normals, then a Morton curve of the centroids;
-   :func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top (constants of the
-   kernel), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
-   :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its
-   bounds (:class:`Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its
-   triangles faces p), a triangle of the leaf by a proxy of w_i (:meth:`LightTable._member_weights`);
-   the probability is the product of the shares along the way, an unrolled loop of a few gathers per
-   level, so each level costs FANOUT evaluations instead of every triangle's;
-2. a direction is drawn uniformly in the chosen triangle's solid angle with Arvo's map
-   (:func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, in float32 as Mitsuba's own sampling:
-   within 2.5e-6 in direction of the float64 map on a 1.76 sr triangle 0.15 away, see there; in float64
-   it took 15 % of the CPU time of full paths in the Cornell box); but where the triangle is small as seen
-   from p (:data:`AREA_BELOW`) a point uniform in its area, density ``d^2 / (A |cos|)``, and a table of
-   at most :data:`TINY_MAX` triangles (a rectangle) small as seen from p (:data:`TINY_BELOW`) chooses by
-   power and samples by area: nearly the same error there at less cost (the Cornell box: 1.76x -> 1.96x
-   and 0.94x -> 1.03x Mitsuba's efficiency at max_depth 2 and 8; docs/results/light-sampling.md);
+   ``w_i = Omega_i(p) L_e c_i`` (:func:`._light_rows.triangle_weight`): its solid angle seen from p (Van
+   Oosterom & Strackee) times a scalar radiance of its emitter (the mean of its RGB value or texture)
+   times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n the
+   geometric normal at p; unsigned: 0 only for a triangle in p's tangent plane), 0 behind the triangle
+   (area emitters are one-sided); the cosine made the choice 3.4x better under a disk 0.2 above the
+   floor.  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled, the triangles constants of
+   the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed depth over a spatial order
+   (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top (constants), each of
+   :data:`FANOUT` runs of the level below (gathered), down to leaves of :data:`TREE_LEAF` triangles; a run
+   is chosen by an importance ``power cos cos_r / d^2`` of its bounds (:class:`Group`, as pbrt-v4's
+   ``LightBounds::Importance``: 0 only where none of its triangles faces p), a triangle of the leaf by a
+   proxy of w_i (:meth:`LightTable._member_weights`); but where the chosen top run is small as seen from p
+   (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels below;
+2. a direction uniform in the chosen triangle's solid angle (Arvo's map,
+   :func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, in float32 as Mitsuba's own sampling),
+   but where the triangle is small as seen from p (:data:`AREA_BELOW`) a point uniform in its area,
+   density ``d^2 / (A |cos|)``; a table of at most :data:`TINY_MAX` triangles small as seen from p
+   (:data:`TINY_BELOW`) chooses by power and samples by area (for one emitter's triangles: that emitter's
+   own sampling by area, the same density);
 3. the point q where the direction meets the triangle's plane is shadow-tested as Mitsuba tests its
-   own samples (a shortened ray to q), and the emitter's ``eval_direction`` gives the radiance there
-   (texture coordinates interpolated from the triangle's vertices; the one-sided test).
+   own samples, and the emitter's ``eval_direction`` gives the radiance there.
 
-The density of the direction is ``P(i) / Omega_i`` (Omega_i as the map computes it; by area
-``P(i) d^2 / (A |cos|)``;
-:meth:`LightTable.pdf_direction`).  ``symsphere_path`` samples so at diffuse vertices only, where a
-BSDF-sampled ray that hits such an emitter counts 0, so no hit needs this density; at its other vertices
-:meth:`LightTable.sample_direction` (lanes outside *table*) samples every emitter as Mitsuba's
-``scene.sample_emitter_direction`` does.
-
-Every other emitter (sphere, disk, point, spot, directional, environment, constant) keeps Mitsuba's
-own sampling: with probability ``P_other`` (the Mitsuba selection probabilities of those emitters,
-summed) one of them is chosen as Mitsuba would and samples itself (so its density is Mitsuba's); the
-table's triangles share the rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out of
-the table.
+Each of these rules is deterministic in p and gives every triangle facing p a positive probability, so
+the estimate is unbiased.  The density is ``P(i) / Omega_i`` (by area ``P(i) d^2 / (A |cos|)``;
+:meth:`LightTable.pdf_direction`, which no hit needs: ``symsphere_path`` samples so at diffuse vertices
+only, where a BSDF-sampled ray that hits such an emitter counts 0; elsewhere :meth:`sample_direction`
+samples every emitter as ``scene.sample_emitter_direction`` does).  Every other emitter (sphere, disk,
+point, spot, directional, environment, constant) keeps Mitsuba's own sampling: with probability
+``P_other`` (their Mitsuba selection probabilities, summed) one of them is chosen as Mitsuba would; the
+table's triangles share the rest.  Emitters Mitsuba never chooses (``sampling_weight`` 0) stay out.
 """
 
 from __future__ import annotations
@@ -60,6 +50,8 @@ import numpy as np
 from ._light_rows import (
     Group,
     Level,
+    alias_pick,
+    alias_rows,
     area_direction,
     branch,
     column,
@@ -72,6 +64,7 @@ from ._light_rows import (
     small_triangle,
     spatial_order,
     tree_spans,
+    triangle_weight,
     triangles,
     uniform_rgb,
     weight_sum,
@@ -80,7 +73,7 @@ from ._projected import projected_solid_angle, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
 __all__ = ["AREA_BELOW", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX", "TREE_LEAF",
-           "TREE_SOFT", "TREE_TOP", "build"]  # fmt: skip
+           "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "build"]  # fmt: skip
 
 EMITTER_SAMPLINGS = ("area", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
@@ -90,6 +83,9 @@ a triangle is chosen through a tree (TREE_LEAF, FANOUT, TREE_TOP)."""
 TREE_LEAF, FANOUT, TREE_TOP = 8, 4, 40
 """Above EXACT_MAX: a tree over the spatial order, leaves of TREE_LEAF triangles under levels of FANOUT
 nodes, at most TREE_TOP nodes at the top."""
+TOP_BELOW = 0.45
+"""Where the top run chosen at p is small as seen from p (its bounding radius below this times its centre's
+distance), its triangle is chosen by power (an alias table), not through the levels below (0: never)."""
 TREE_SOFT = 0.1
 """The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 AREA_BELOW = 0.3
@@ -183,10 +179,15 @@ class LightTable:
         # a tiny table (as the Cornell box's two triangles): where its bounding sphere is small as seen
         # from p, a triangle is chosen by its power (constants: no weight is evaluated)
         self._tiny = None
+        self._own_emitter: int | None = None
         if self.count <= TINY_MAX:
             centre = tris.reshape(-1, 3).mean(axis=0)
             self._tiny = (mi.ScalarVector3f(*centre), float(np.max(np.linalg.norm(tris - centre, axis=2))))
             self._tiny_power = [float(w) if w > 0.0 else None for w in area * lum]
+            # one emitter's triangles (a rectangle): its power shares are its area shares, so "by power, then
+            # by area" is its own sampling by area, which far lanes call where its radiance needs a call anyway
+            if len(set(emitter_rows)) == 1 and self._rgb is None:
+                self._own_emitter = emitter_rows[0]
 
         def runs(span: int) -> list[Group]:
             return [Group(tris, normal, area, lum, k, min(k + span, self.count)) for k in range(0, self.count, span)]
@@ -195,6 +196,10 @@ class LightTable:
         self._levels = [Level(runs(span), TREE_SOFT) for span in self.spans[1:]]  # gathered: the nodes below the top
         self._fanouts = [a // b for a, b in zip(self.spans, self.spans[1:], strict=False)]
         self._top = Level(groups, TREE_SOFT)  # the top level gathered: the density of a chosen row
+        if self.mode == "tree":  # a top run small as seen from p: its triangle by power (_choose)
+            keep, alias, shares = alias_rows(area * lum, self.spans[0])
+            self._keep, self._alias = column(keep.astype(np.float32)), column(alias, mi.UInt32)
+            self._share = column(shares.astype(np.float32))
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
 
@@ -210,22 +215,6 @@ class LightTable:
             mi.Vector3f(*n),
         )
 
-    @staticmethod
-    def _weight(p: Any, a: Any, b: Any, c: Any, n: Any, lum: Any, receiver: Any = None) -> Any:
-        """``Omega(p) L_e`` in float32, 0 behind the triangle: a selection weight (its rounding only changes
-        which triangle is chosen how often; the density divides by the map's solid angle)."""
-        front = dr.dot(p - a, n) > 0.0
-        a, b, c = a - p, b - p, c - p
-        la, lb, lc = dr.norm(a), dr.norm(b), dr.norm(c)
-        triple = dr.abs(dr.dot(a, dr.cross(b, c)))
-        den = la * lb * lc + dr.dot(a, b) * lc + dr.dot(a, c) * lb + dr.dot(b, c) * la
-        omega = 2.0 * dr.atan2(triple, den)
-        value = omega * lum
-        if receiver is not None:  # the receiver's unsigned cosine at the vertices (see the module docstring)
-            cos = dr.abs(dr.dot(a, receiver)) / la + dr.abs(dr.dot(b, receiver)) / lb + dr.abs(dr.dot(c, receiver)) / lc
-            value *= dr.select(dr.squared_norm(receiver) > 0.0, cos, 1.0)
-        return dr.select(front & (omega > 0.0), value, 0.0)
-
     def _group_weights(self, p: Any, n: Any = None) -> list[Any]:
         """The top level's weights at p (float32; None for a group that is never chosen): a triangle's
         exact weight, or a group's importance (see :class:`Group`)."""
@@ -236,7 +225,7 @@ class LightTable:
             elif g.stop - g.start == 1:
                 a, b, c = (mi.ScalarVector3f(*vertex) for vertex in self.tris[g.start])
                 weights.append(
-                    self._weight(p, a, b, c, mi.ScalarVector3f(*self.normal[g.start]), float(self.lum[g.start]), n)
+                    triangle_weight(p, a, b, c, mi.ScalarVector3f(*self.normal[g.start]), float(self.lum[g.start]), n)
                 )
             else:
                 weights.append(g.importance(p, TREE_SOFT, n))
@@ -264,10 +253,10 @@ class LightTable:
             weights.append(dr.select(ok & (h > 0.0), w, 0.0))
         return weights
 
-    def _descend(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
+    def _descend(self, p: Any, u: Any, active: Any, n: Any = None, top: Any = None) -> tuple[Any, Any, Any]:
         """(node of the last level: the row in exact mode, else a leaf; its probability; u reused): a node
-        of the top by its weight, then a child of it by its importance, level by level."""
-        node, probability, u = pick(self._group_weights(p, n), u)
+        of the top by its weight (*top*: already chosen), then a child of it by its importance, level by level."""
+        node, probability, u = pick(self._group_weights(p, n), u) if top is None else top
         for level, fanout in zip(self._levels, self._fanouts, strict=True):
             first = node * fanout
             slot, fraction, u = pick(level.weights(p, first, fanout, active & (probability > 0.0), n), u)
@@ -275,15 +264,34 @@ class LightTable:
             node = first + slot
         return node, probability, u
 
+    def _top_far(self, p: Any, node: Any, active: Any) -> Any:
+        """The lanes where the top run *node* is small as seen from p (:data:`TOP_BELOW`)."""
+        centre = mi.Vector3f(*(dr.gather(mi.Float, self._top.fields[k], node, active) for k in range(3)))
+        return active & small_sphere(p, centre, dr.gather(mi.Float, self._top.fields[3], node, active), TOP_BELOW)
+
     def _choose(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
-        """(row, its probability at p, u reused) for the point p (mi.Vector3f) and u (mi.Float64)."""
-        leaf, probability, u = self._descend(p, u, active, n)
+        """(row, its probability at p, u reused) for the point p (mi.Vector3f) and u (mi.Float64): a top run
+        by its weight, then, where it is small as seen from p, its triangle by power, else a leaf through
+        the levels below and its triangle by the members' weights (in a branch: a packet of lanes all
+        small skips it)."""
         if self.mode == "exact":
-            return leaf, probability, u
-        start = leaf * self.group_size
-        slot, fraction, u = pick(self._member_weights(p, start, active & (probability > 0.0), n), u)
-        probability *= fraction
-        return start + slot, probability, u
+            return self._descend(p, u, active, n)
+        node, probability, u = pick(self._group_weights(p, n), u)
+        ok = active & (probability > 0.0)
+        far = self._top_far(p, node, ok)
+        span = self.spans[0]
+        row, u_far = alias_pick(
+            self._keep, self._alias, node * span, dr.minimum(span, self.count - node * span), u, far
+        )
+        by_power = (row, probability * mi.Float64(dr.gather(mi.Float, self._share, row, far)), u_far)
+
+        def below(*_: Any) -> tuple[Any, Any, Any]:
+            leaf, leaf_p, u_leaf = self._descend(p, u, ok, n, (node, probability, u))
+            start = leaf * self.group_size
+            slot, fraction, u_leaf = pick(self._member_weights(p, start, ok & (leaf_p > 0.0), n), u_leaf)
+            return start + slot, leaf_p * fraction, u_leaf
+
+        return dr.if_stmt(args=by_power, cond=ok & ~far, true_fn=below, false_fn=lambda *power: power)
 
     def _choose_projected(self, p: Any, normal: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
         """(row, its probability, u reused): as :meth:`_choose`, with each triangle's weight its projected
@@ -322,7 +330,7 @@ class LightTable:
             tn = mi.Vector3f(*(dr.gather(mi.Float, col, row, active) for col in self._normal32))
             lum = dr.gather(mi.Float, self._lum32, row, active)
             a, b, cc = mi.Vector3f(c[0], c[1], c[2]), mi.Vector3f(c[3], c[4], c[5]), mi.Vector3f(c[6], c[7], c[8])
-            return dr.select(lum > 0.0, self._weight(p, a, b, cc, tn, lum, n), 0.0)
+            return dr.select(lum > 0.0, triangle_weight(p, a, b, cc, tn, lum, n), 0.0)
         return self._top.weight(p, row // self.spans[0], active, n)
 
     def _probability(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
@@ -332,12 +340,14 @@ class LightTable:
         probability = dr.select(total > 0.0, mine / dr.select(total > 0.0, total, 1.0), 0.0)
         if self.mode == "exact":
             return probability
+        far = self._top_far(p, row // self.spans[0], active)
+        by_power = probability * mi.Float64(dr.gather(mi.Float, self._share, row, far))
         for level, fanout, span in zip(self._levels, self._fanouts, self.spans[1:], strict=True):
             node = row // span
             first = node // fanout * fanout
             probability *= share(level.weights(p, first, fanout, active, n), node - first)
         start = row // self.group_size * self.group_size
-        return probability * share(self._member_weights(p, start, active, n), row - start)
+        return dr.select(far, by_power, probability * share(self._member_weights(p, start, active, n), row - start))
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
@@ -366,19 +376,27 @@ class LightTable:
         mitsuba = None if table is None else active & ~table
         other = lanes & ~ours if self._other is not None else None
         own = mitsuba if other is None else (other if mitsuba is None else other | mitsuba)
+        # a tiny table of one emitter, far from p: the table's "by power, then by area" is that emitter's own
+        # sampling by area (the same density), so these lanes call it with the others (see _sample_own)
+        far = None
+        if self._own_emitter is not None and not cosine_only:
+            far = ours & self._far(mi.Vector3f(si.p))
+            far = far if cosine is None else far & ~cosine
+            own = far if own is None else own | far
         if own is not None:
             # one emitter's own sampling: outside the table's lanes any emitter, chosen as Mitsuba chooses
             # (scene.sample_emitter_direction); in them one of the emitters outside the table, by their
             # Mitsuba probabilities.  A branch: a packet of lanes with none of these skips it
-            ds, weight = branch(own, lambda: self._sample_own(scene, si, sample, u, own, other, mitsuba))
+            ds, weight = branch(own, lambda: self._sample_own(scene, si, sample, u, own, other, mitsuba, far))
         if self.count:
+            near = ours if far is None else ours & ~far
             ds_table, value = branch(
-                ours, lambda: self._sample_table(scene, si, u / self.p_table, sample.y, ours, cosine, cosine_only)
+                near, lambda: self._sample_table(scene, si, u / self.p_table, sample.y, near, cosine, cosine_only)
             )
             # the whole sample (point, normal, uv, emitter), so that the emitter can be evaluated at it
             # again (a differential mode re-attaches the radiance's derivative that way)
-            ds = dr.select(ours, ds_table, ds)
-            weight = dr.select(ours, value, weight)
+            ds = dr.select(near, ds_table, ds)
+            weight = dr.select(near, value, weight)
         # one shadow ray for every kind of sample, as Mitsuba tests its own (a ray to the sampled point,
         # shortened; a coplanar surface, as the Cornell box's ceiling around its light, does not occlude).
         # An occluded sample has density 0: a differential mode re-attaches the emitter's derivative
@@ -389,9 +407,12 @@ class LightTable:
         weight = dr.select(visible, weight, 0.0)
         return ds, weight, ours
 
-    def _sample_own(self, scene: Any, si: Any, sample: Any, u: Any, own: Any, other: Any, mitsuba: Any) -> Any:
+    def _sample_own(
+        self, scene: Any, si: Any, sample: Any, u: Any, own: Any, other: Any, mitsuba: Any, far: Any = None
+    ) -> Any:
         """(ds, radiance / pdf) at the lanes *own*: :meth:`sample_direction`'s emitters that sample
-        themselves (*other*: those outside the table, at the table's lanes; *mitsuba*: any, elsewhere)."""
+        themselves (*other*: those outside the table, at the table's lanes; *mitsuba*: any, elsewhere;
+        *far*: the table's lanes where its one emitter samples itself by area)."""
         index: Any = mi.UInt32(0)
         u_x: Any = u
         selection: Any = mi.Float(1.0)
@@ -411,6 +432,10 @@ class LightTable:
         elif mitsuba is not None:  # Mitsuba's single emitter samples itself without a choice
             u_x = dr.select(mitsuba, u, u_x)
             selection, inverse = dr.select(mitsuba, 1.0, selection), dr.select(mitsuba, 1.0, inverse)
+        if far is not None:  # the table chosen with p_table, its emitter samples itself (by area)
+            index = dr.select(far, self._own_emitter, index)
+            u_x = dr.select(far, dr.minimum(u / self.p_table, 1.0 - 2.0**-24), u_x)
+            selection, inverse = dr.select(far, self.p_table, selection), dr.select(far, 1.0 / self.p_table, inverse)
         emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, own)
         ds: Any
         weight: Any
@@ -507,14 +532,8 @@ class LightTable:
             return None
         return small_sphere(p, *self._tiny, TINY_BELOW)
 
-    def _tiny_weights(self) -> list[Any]:
+    def _tiny_weights(self) -> list[Any]:  # a tiny table's triangles by power
         return [None if w is None else mi.Float(w) for w in self._tiny_power]
-
-    def _small(self, a: Any, b: Any, c: Any, far: Any = None) -> Any:
-        """The lanes sampled by area: *far*, or the triangle (vertices relative to p) small as seen from p
-        (:func:`._light_rows.small_triangle` with :data:`AREA_BELOW`)."""
-        small = small_triangle(a, b, c, AREA_BELOW)
-        return small if far is None else small | far
 
     def _direction(self, a: Any, b: Any, c: Any, n: Any, uv: Any, active: Any, far: Any = None) -> tuple[Any, Any]:
         """(unit direction, 1 / its solid-angle density) towards the triangle a, b, c (relative to p; n
@@ -526,7 +545,7 @@ class LightTable:
             direction, omega = square_to_spherical_triangle(uv, a, b, c)
             return dr.normalize(direction), omega
 
-        small = self._small(a, b, c, far)
+        small = small_triangle(a, b, c, AREA_BELOW) | (False if far is None else far)
         by_area = area_direction(a, b, c, n, *uv)
         return dr.if_stmt(args=(), cond=active & ~small, true_fn=arvo, false_fn=lambda: by_area)
 
@@ -563,8 +582,8 @@ class LightTable:
         far = self._far(p)
         if far is not None:
             probability = dr.select(far, share(self._tiny_weights(), row), probability)
-        small = self._small(a - p, b - p, c - p, far)  # sampled by area there: d^2 / (A |cos|) = 2 d^3 / |(a - p).n|
-        dist = dr.norm(mi.Vector3f(si.p) - p)
+        small = small_triangle(a - p, b - p, c - p, AREA_BELOW) | (False if far is None else far)  # by area:
+        dist = dr.norm(mi.Vector3f(si.p) - p)  # d^2 / (A |cos|) = 2 d^3 / |(a - p).n|
         height = dr.abs(dr.dot(a - p, n))
         by_area = mi.Float64(2.0 * dist * dist * dist / dr.select(height > 0.0, height, 1.0))
         pdf = dr.select(small, dr.select(front & (height > 0.0), probability * by_area, 0.0), pdf)
