@@ -185,8 +185,8 @@ class LightTable:
             self._tiny = (mi.ScalarVector3f(*centre), float(np.max(np.linalg.norm(tris - centre, axis=2))))
             self._tiny_power = [float(w) if w > 0.0 else None for w in area * lum]
             # one emitter's triangles (a rectangle): its power shares are its area shares, so "by power, then
-            # by area" is its own sampling by area, which far lanes call where its radiance needs a call anyway
-            if len(set(emitter_rows)) == 1 and self._rgb is None:
+            # by area" is its own sampling by area (the same density), which far lanes may call instead
+            if len(set(emitter_rows)) == 1:
                 self._own_emitter = emitter_rows[0]
 
         def runs(span: int) -> list[Group]:
@@ -377,9 +377,10 @@ class LightTable:
         other = lanes & ~ours if self._other is not None else None
         own = mitsuba if other is None else (other if mitsuba is None else other | mitsuba)
         # a tiny table of one emitter, far from p: the table's "by power, then by area" is that emitter's own
-        # sampling by area (the same density), so these lanes call it with the others (see _sample_own)
+        # sampling by area (the same density), so these lanes call it where emitters are called anyway (in
+        # the branch of the others, or for a radiance not one RGB value; with neither the rows are faster)
         far = None
-        if self._own_emitter is not None and not cosine_only:
+        if self._own_emitter is not None and not cosine_only and (own is not None or self._rgb is None):
             far = ours & self._far(mi.Vector3f(si.p))
             far = far if cosine is None else far & ~cosine
             own = far if own is None else own | far
