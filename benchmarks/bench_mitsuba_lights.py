@@ -38,8 +38,11 @@ CASES = [  # (label, integrator dict)
     ("Mitsuba path", {"type": "path"}),
     ("symsphere_path bsdf · area", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "area"}),
     ("symsphere_path bsdf · solid_angle", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"}),
+    ("symsphere_path bsdf · cosine", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "cosine"}),
     ("symsphere_path symmetric_cosine sobol · solid_angle",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
+    ("symsphere_path symmetric_cosine sobol · cosine",
+     {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "cosine"}),
 ]  # fmt: skip
 PROJECTED = [  # --projected: by projected solid angle at Lambertian vertices (float64 inside, a root finder)
     ("symsphere_path bsdf · projected", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "projected"}),
