@@ -41,8 +41,13 @@ CASES = [  # (label, integrator dict)
     ("symsphere_path symmetric_cosine sobol · solid_angle",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
 ]  # fmt: skip
-PROJECTED = [  # --projected: by projected solid angle at Lambertian vertices (float64 inside, a root finder)
+PROJECTED = [  # --projected: by projected solid angle at Lambertian vertices (a root finder; slow with full paths)
     ("symsphere_path bsdf · projected", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "projected"}),
+]  # fmt: skip
+COSINE = [  # after the others (the images' order): near the cosine at Lambertian vertices, at solid_angle's cost
+    ("symsphere_path bsdf · cosine", {"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "cosine"}),
+    ("symsphere_path symmetric_cosine sobol · cosine",
+     {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "cosine"}),
 ]  # fmt: skip
 
 
@@ -67,7 +72,7 @@ def run(args, mi, workdir):
             b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
             ref = 0.5 * (a + b)
             own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
-            specs = CASES + (PROJECTED if args.projected else [])
+            specs = CASES + (PROJECTED if args.projected else []) + COSINE
             cases = [(label, mi.load_dict({**spec, **options})) for label, spec in specs]
             for _, integrator in cases:  # compile
                 _render(mi, scene, integrator, args.spp, 0)

@@ -122,7 +122,7 @@ def test_unknown_emitter_sampling_names_the_parameter_and_the_values(llvm):
         mi.load_dict({"type": "symsphere_path", "emitter_sampling": "solid"})
     last = str(info.value).strip().splitlines()[-1]
     assert last.startswith("ValueError: ") and "'solid' is not a valid emitter_sampling" in last
-    assert "use one of {'area', 'projected', 'solid_angle'}" in last
+    assert "use one of {'area', 'cosine', 'projected', 'solid_angle'}" in last
 
 
 def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path):

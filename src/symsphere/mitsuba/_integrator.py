@@ -24,7 +24,7 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
-With ``emitter_sampling`` ``'solid_angle'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
+With ``emitter_sampling`` ``'solid_angle'``, ``'cosine'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
 differs at diffuse
 vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
 light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters
@@ -382,8 +382,8 @@ class _PathMethods:
         # and whose every emitter is in the table, no BSDF hit needs the light sampling's density, and the
         # ray of a vertex whose next vertex is the last can find nothing that counts: it is not traced.
         only_table = lights is not None and lights.covers_all and all_diffuse(scene)
-        # emitter_sampling='projected': at Lambertian vertices (the shading normal is the BSDF's) the table
-        # samples by projected solid angle; everywhere, when every BSDF is Lambertian
+        # emitter_sampling='projected' (and 'cosine'): at Lambertian vertices (the shading normal is the BSDF's)
+        # the table samples by projected solid angle (or near it); everywhere, when every BSDF is Lambertian
         projected = lights is not None and lights.projected
         lambertian_ids = self._lambertian_table(scene) if projected else None
         cosine_only = projected and only_table and all_lambertian(scene)

@@ -69,13 +69,13 @@ from ._light_rows import (
     uniform_rgb,
     weight_sum,
 )
-from ._projected import projected_solid_angle, square_to_projected_triangle
+from ._projected import cosine_table_sample, projected_solid_angle, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
 __all__ = ["AREA_BELOW", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX", "TREE_LEAF",
            "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "build"]  # fmt: skip
 
-EMITTER_SAMPLINGS = ("area", "projected", "solid_angle")
+EMITTER_SAMPLINGS = ("area", "cosine", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
 EXACT_MAX = 64
 """Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
@@ -100,6 +100,8 @@ _NONE = 0xFFFFFFFF  # no table row: the shape is not one of the table's emitters
 
 class LightTable:
     """The emitter triangles of a scene and their selection (see the module docstring)."""
+
+    head: Any = None  # emitter_sampling='cosine': its choice and direction (_projected.cosine_table_sample)
 
     def __init__(self, scene: Any, projected: bool = False) -> None:
         self.projected = projected  # cosine-weighted sampling where sample_direction is given the lanes
@@ -449,27 +451,16 @@ class LightTable:
         self, scene: Any, si: Any, u: Any, v: Any, active: Any, cosine: Any, cosine_only: bool
     ) -> tuple[Any, Any]:
         p = mi.Vector3f(si.p)
-        if not cosine_only:  # by solid angle (a triangle small as seen from p: by area, see _small)
-            far = self._far(p)
-            if far is None:
-                row, probability, u_map = self._choose(p, mi.Float64(u), active, mi.Vector3f(si.n))
-            else:
-                # by power: constants, outside the branch (a branch's literal result, as the row of a table
-                # with one triangle of power, failed Dr.Jit 1.5's LLVM backend: "does not dominate all uses")
-                by_power = pick(self._tiny_weights(), mi.Float64(u))
-
-                def by_weight(*_: Any) -> tuple[Any, Any, Any]:
-                    return self._choose(p, mi.Float64(u), active, mi.Vector3f(si.n))
-
-                row, probability, u_map = dr.if_stmt(
-                    args=by_power, cond=active & ~far, true_fn=by_weight, false_fn=lambda *power: power
-                )
+        if self.head is not None:  # emitter_sampling='cosine' (symsphere.mitsuba._projected)
+            row, ok, a, b, c, n, pdf, d = self.head(self, si, p, u, v, active, cosine)
+        elif not cosine_only:  # by solid angle (a triangle small as seen from p: by area, see _small)
+            row, probability, u_map, far = self._choose_near(p, u, active, mi.Vector3f(si.n))
             ok = active & (probability > 0.0)
             a, b, c, n = self._vertices(row, ok)
             d, omega = self._direction(a - p, b - p, c - p, n, (mi.Float(u_map), mi.Float(v)), ok, far)
             ok &= (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
             pdf = mi.Float(self.p_table * probability / mi.Float64(dr.select(omega > 0.0, omega, 1.0)))
-        if cosine is not None:  # by projected solid angle
+        if cosine is not None and self.head is None:  # by projected solid angle
             mine = active & cosine
             normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
             row_c, probability_c, u_c = self._choose_projected(p, normal, mi.Float64(u), mine, mi.Vector3f(si.n))
@@ -525,6 +516,22 @@ class LightTable:
         ds.pdf = dr.select(active, pdf, 0.0)
         ds.delta = mi.Bool(False)
         return ds, value
+
+    def _choose_near(self, p: Any, u: Any, active: Any, n: Any) -> tuple[Any, Any, Any, Any]:
+        """(row, probability, u reused, :meth:`_far`'s lanes): :meth:`_choose`, but by power where a tiny
+        table is far from p."""
+        far = self._far(p)
+        if far is None:
+            return (*self._choose(p, mi.Float64(u), active, n), None)
+        # by power: constants, outside the branch (a branch's literal result, as the row of a table with one
+        # triangle of power, failed Dr.Jit 1.5's LLVM backend: "does not dominate all uses")
+        by_power = pick(self._tiny_weights(), mi.Float64(u))
+
+        def by_weight(*_: Any) -> tuple[Any, Any, Any]:
+            return self._choose(p, mi.Float64(u), active, n)
+
+        chosen = dr.if_stmt(args=by_power, cond=active & ~far, true_fn=by_weight, false_fn=lambda *power: power)
+        return (*chosen, far)
 
     def _far(self, p: Any) -> Any:
         """The lanes where a tiny table's bounding sphere is small as seen from p (radius below
@@ -595,5 +602,6 @@ def build(scene: Any, emitter_sampling: str) -> LightTable | None:
     """The light table of *scene* for ``emitter_sampling`` ('area': None, Mitsuba samples its emitters)."""
     if emitter_sampling == "area":
         return None
-    table = LightTable(scene, projected=emitter_sampling == "projected")
+    table = LightTable(scene, projected=emitter_sampling in ("cosine", "projected"))
+    table.head = cosine_table_sample if emitter_sampling == "cosine" else None
     return table if table.count else None

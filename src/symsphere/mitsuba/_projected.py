@@ -35,6 +35,11 @@ Lambert's sum as such lost 1.6e-3.  The CDF's sector differences move a sample a
 projections; Mitsuba's chi^2 test passes in both precisions); the pdf is that of the direction returned, so the estimator's variance
 stays at rounding level.  A triangle whose E is within 1e-6 of the sum of Lambert's terms (float64:
 1e-10) is rounding noise and counts as empty.
+
+``emitter_sampling='cosine'`` (:func:`cosine_table_sample`) takes the light table's cheap choice and
+samples inside the chosen triangle near the cosine: by this map only where the triangle is large as seen
+from the point (:data:`HUGE_ABOVE`), else by Arvo's map warped bilinearly by the cosine at the vertices
+(:func:`square_to_cosine_spherical_triangle`), or by area where small.
 """
 
 from __future__ import annotations
@@ -45,7 +50,11 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["projected_solid_angle", "square_to_projected_triangle", "square_to_projected_triangle_pdf"]
+from ._light_rows import area_direction, small_triangle
+from ._warps import square_to_spherical_triangle
+
+__all__ = ["HUGE_ABOVE", "cosine_table_sample", "projected_solid_angle", "square_to_cosine_spherical_triangle",
+           "square_to_projected_triangle", "square_to_projected_triangle_pdf"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
 _EPS = {False: 2.0**-23, True: 2.0**-52}  # float32, float64 epsilon
@@ -395,3 +404,76 @@ def square_to_projected_triangle_pdf(a: Any, b: Any, c: Any, n: Any, d: Any) -> 
         inside &= m[0] * lx + m[1] * ly + m[2] * lz >= -_PLANE[st.is64]
     length = dr.sqrt(lx * lx + ly * ly + lz * lz)
     return dr.select(inside, lz / _safe(length) / _safe(st.e), 0.0)
+
+
+# --- emitter_sampling='cosine': the light table's choice, then a cosine-aware direction in the triangle ---
+
+HUGE_ABOVE = 1.5
+"""``emitter_sampling='cosine'``: a chosen triangle whose bounding radius (about its centroid) is at least
+this times the centroid's distance is sampled by projected solid angle; a smaller one (down to the light
+table's ``AREA_BELOW``, where it is sampled by area) by Arvo's map warped bilinearly by the cosine."""
+
+
+def _sample_linear(u: Any, a: Any, b: Any) -> Any:
+    """x in [0, 1) with density proportional to (1 - x) a + x b (a, b >= 0, not both 0), by u."""
+    den = a + dr.sqrt(dr.maximum(dr.lerp(a * a, b * b, u), 0.0))
+    return dr.minimum(u * (a + b) / _safe(den), 1.0 - 2.0**-24)
+
+
+def square_to_cosine_spherical_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) -> tuple[Any, Any]:
+    """(d, 1 / density): Arvo's map of a point of the square drawn with the bilinear density whose corners
+    are ``max(n.v, 0.01)`` at the vertices the map sends them to (B, B, A, C), so the density in solid angle
+    is ``bilinear(u) / Omega`` (Hart et al. 2020; pbrt-v4's ``TriangleLight::SampleLi``): cheap (a few
+    operations on top of the map), and near the cosine where it varies little over the triangle.  a, b, c
+    from the shading point (float32), n the unit shading normal; 0 for a degenerate triangle."""
+    cosines = [dr.dot(n, dr.normalize(v)) for v in (a, b, c)]
+    wa, wb, wc = (dr.select(w > 0.01, w, 0.01) for w in cosines)  # 0.01 for NaN too (a vertex at p)
+    y = _sample_linear(u[1], wb + wb, wa + wc)
+    x = _sample_linear(u[0], dr.lerp(wb, wa, y), dr.lerp(wb, wc, y))
+    square = 4.0 * ((1.0 - y) * wb + y * ((1.0 - x) * wa + x * wc)) / (wb + wb + wa + wc)
+    d, omega = square_to_spherical_triangle((x, y), a, b, c)
+    return dr.normalize(d), dr.select(omega > 0.0, omega / square, 0.0)
+
+
+def cosine_table_sample(table: Any, si: Any, p: Any, u: Any, v: Any, active: Any, cosine: Any) -> tuple[Any, ...]:
+    """``emitter_sampling='cosine'``'s half of ``LightTable._sample_table``: (row, valid lanes, a, b, c,
+    the triangle's normal, density, direction).  One choice for every lane, the table's (solid angle x
+    radiance x the receiver's cosine, about the shading normal at the lanes *cosine*, Lambertian
+    vertices; the geometric one elsewhere); then a direction in the chosen triangle: by area where it is
+    small as seen from p (as ``solid_angle``), by Arvo's map at the other lanes, and at the lanes *cosine*
+    by :func:`square_to_cosine_spherical_triangle`, or by projected solid angle
+    (:func:`square_to_projected_triangle`) where the triangle is large (:data:`HUGE_ABOVE`).  Each in a
+    branch that a packet of lanes without it skips.  No hit needs this density (the caller weights BSDF
+    hits on the table's emitters 0 at these vertices), and each lane's technique is a deterministic
+    function of p, so the estimate is unbiased."""
+    normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
+    mine = active & cosine if cosine is not None else mi.Bool(False)
+    receiver = dr.select(mine, normal, mi.Vector3f(si.n))
+    row, probability, u_map, far = table._choose_near(p, u, active, receiver)
+    ok = active & (probability > 0.0)
+    a, b, c, tn = table._vertices(row, ok)
+    ra, rb, rc = a - p, b - p, c - p
+    uv = (mi.Float(u_map), mi.Float(v))
+    small = table._small(ra, rb, rc, far)
+    huge = ~small_triangle(ra, rb, rc, HUGE_ABOVE)
+    d, inv = area_direction(ra, rb, rc, tn, *uv)  # 1 / density
+
+    def arvo(*_: Any) -> tuple[Any, Any]:
+        direction, omega = square_to_spherical_triangle(uv, ra, rb, rc)
+        return dr.normalize(direction), omega
+
+    def warped(*_: Any) -> tuple[Any, Any]:
+        return square_to_cosine_spherical_triangle(ra, rb, rc, normal, uv)
+
+    def projected(*_: Any) -> tuple[Any, Any]:
+        direction, pdf = square_to_projected_triangle(ra, rb, rc, normal, mi.Point2f(*uv))
+        return direction, dr.select(pdf > 0.0, dr.rcp(_safe(pdf)), 0.0)
+
+    def keep(*x: Any) -> tuple[Any, ...]:
+        return x
+
+    for fn, lanes in ((arvo, ~mine), (warped, mine & ~huge), (projected, mine & huge)):
+        d, inv = dr.if_stmt(args=(d, inv), cond=ok & ~small & lanes, true_fn=fn, false_fn=keep)
+    ok &= (dr.dot(p - a, tn) > 0.0) & (inv > 0.0)
+    pdf = mi.Float(table.p_table * probability / mi.Float64(dr.select(inv > 0.0, inv, 1.0)))
+    return row, ok, a, b, c, tn, pdf, d
