@@ -1,5 +1,6 @@
-"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``, and
-``'projected'``: at Lambertian vertices by projected solid angle, see :meth:`LightTable.sample_direction`).
+"""Light sampling by solid angle for ``symsphere_path`` (``emitter_sampling='solid_angle'``; ``'projected'``
+and ``'cosine'``: at Lambertian vertices by projected solid angle, see :meth:`LightTable.sample_direction`
+and :func:`._projected.cosine_table_sample`).
 
 Mitsuba 3 samples a ``rectangle`` or triangle-mesh area emitter by area and converts the density to
 solid angle, so a point near a large light gets wildly varying weights ``d^2 / cos``.  Here every
@@ -11,9 +12,8 @@ shading point p:
    Oosterom & Strackee) times a scalar radiance of its emitter (the mean of its RGB value or texture)
    times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n the
    geometric normal at p; unsigned: 0 only for a triangle in p's tangent plane), 0 behind the triangle
-   (area emitters are one-sided); the cosine made the choice 3.4x better under a disk 0.2 above the
-   floor.  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled, the triangles constants of
-   the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed depth over a spatial order
+   (area emitters are one-sided).  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled,
+   the triangles constants of the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed depth over a spatial order
    (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top (constants), each of
    :data:`FANOUT` runs of the level below (gathered), down to leaves of :data:`TREE_LEAF` triangles; a run
    is chosen by an importance ``power cos cos_r / d^2`` of its bounds (:class:`Group`, as pbrt-v4's
@@ -69,7 +69,7 @@ from ._light_rows import (
     uniform_rgb,
     weight_sum,
 )
-from ._projected import cosine_table_sample, projected_solid_angle, square_to_projected_triangle
+from ._projected import choose_projected, cosine_table_sample, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
 __all__ = ["AREA_BELOW", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX", "TREE_LEAF",
@@ -295,35 +295,6 @@ class LightTable:
 
         return dr.if_stmt(args=by_power, cond=ok & ~far, true_fn=below, false_fn=lambda *power: power)
 
-    def _choose_projected(self, p: Any, normal: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
-        """(row, its probability, u reused): as :meth:`_choose`, with each triangle's weight its projected
-        solid angle about *normal* x radiance (0 behind it: the levels above are :meth:`_choose`'s, whose
-        estimates are 0 only where no member faces p)."""
-        if self.mode == "exact":
-            weights: list[Any] = []
-            for row in range(self.count):
-                if self.lum[row] <= 0.0:
-                    weights.append(None)
-                    continue
-                a, b, c = (mi.ScalarVector3f(*vertex) for vertex in self.tris[row])
-                front = dr.dot(p - a, mi.ScalarVector3f(*self.normal[row])) > 0.0
-                e = projected_solid_angle(a - p, b - p, c - p, normal)
-                weights.append(dr.select(front, e * float(self.lum[row]), 0.0))
-            return pick(weights, u)
-        leaf, probability, u = self._descend(p, u, active, n)
-        start = leaf * self.group_size
-        members = []
-        for k in range(self.group_size):
-            row = start + k
-            ok = active & (row < self.count) & (probability > 0.0)
-            a, b, c, n = self._vertices(row, ok)
-            lum = dr.gather(mi.Float, self._lum32, row, ok)
-            e = projected_solid_angle(a - p, b - p, c - p, normal)
-            members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
-        slot, fraction, u = pick(members, u)
-        probability *= fraction
-        return start + slot, probability, u
-
     def _first_level_weight(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
         """The top level's weight at p of the group (exact: the triangle) that holds *row*, from gathered
         values: the bits of :meth:`_group_weights`' entry."""
@@ -463,7 +434,7 @@ class LightTable:
         if cosine is not None and self.head is None:  # by projected solid angle
             mine = active & cosine
             normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
-            row_c, probability_c, u_c = self._choose_projected(p, normal, mi.Float64(u), mine, mi.Vector3f(si.n))
+            row_c, probability_c, u_c = choose_projected(self, p, normal, mi.Float64(u), mine, mi.Vector3f(si.n))
             ok_c = mine & (probability_c > 0.0)
             a_c, b_c, c_c, n_c = self._vertices(row_c, ok_c)
             d_c, pdf_c = square_to_projected_triangle(
@@ -543,6 +514,12 @@ class LightTable:
     def _tiny_weights(self) -> list[Any]:  # a tiny table's triangles by power
         return [None if w is None else mi.Float(w) for w in self._tiny_power]
 
+    def _small(self, a: Any, b: Any, c: Any, far: Any = None) -> Any:
+        """The lanes sampled by area: *far*, or the triangle (vertices relative to p) small as seen from p
+        (:func:`._light_rows.small_triangle` with :data:`AREA_BELOW`)."""
+        small = small_triangle(a, b, c, AREA_BELOW)
+        return small if far is None else small | far
+
     def _direction(self, a: Any, b: Any, c: Any, n: Any, uv: Any, active: Any, far: Any = None) -> tuple[Any, Any]:
         """(unit direction, 1 / its solid-angle density) towards the triangle a, b, c (relative to p; n
         its unnormalised normal): by area where :meth:`_small` (:func:`._light_rows.area_direction`), else
@@ -553,7 +530,7 @@ class LightTable:
             direction, omega = square_to_spherical_triangle(uv, a, b, c)
             return dr.normalize(direction), omega
 
-        small = small_triangle(a, b, c, AREA_BELOW) | (False if far is None else far)
+        small = self._small(a, b, c, far)
         by_area = area_direction(a, b, c, n, *uv)
         return dr.if_stmt(args=(), cond=active & ~small, true_fn=arvo, false_fn=lambda: by_area)
 
@@ -561,9 +538,14 @@ class LightTable:
 
     def holds(self, si: Any, active: Any) -> Any:
         """The lanes whose *si* lies on one of the table's emitters."""
+        return self._first_rows(si, active)[2]
+
+    def _first_rows(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
+        """(shape id, its first row, the lanes on a table emitter) of the shape hit at *si*."""
         ident = registry_ids(si.shape)
         valid = active & si.is_valid() & (ident < dr.width(self._first))
-        return valid & (dr.gather(mi.UInt32, self._first, ident, valid) != _NONE)
+        first = dr.gather(mi.UInt32, self._first, ident, valid)
+        return ident, first, valid & (first != _NONE)
 
     def pdf_direction(self, scene: Any, prev_si: Any, si: Any, ds: Any, active: Any) -> Any:
         """The density (solid angle) with which :meth:`sample_direction` (at its table's lanes, by solid
@@ -572,10 +554,7 @@ class LightTable:
         samples only at diffuse vertices, whose BSDF hits on the table's emitters count 0); the tests
         check the sampling against it."""
         # Mitsuba's density for its own emitters (none when every emitter it may choose is in the table)
-        ident = registry_ids(si.shape)
-        valid = active & si.is_valid() & (ident < dr.width(self._first))
-        first = dr.gather(mi.UInt32, self._first, ident, valid)
-        ours = valid & (first != _NONE)
+        ident, first, ours = self._first_rows(si, active)
         mitsuba_pdf = scene.pdf_emitter_direction(prev_si, ds, active & ~ours) if self.p_other > 0.0 else mi.Float(0.0)
         rect = dr.gather(mi.UInt32, self._rect, ident, ours) != 0
         index = first + dr.select(rect, dr.select(si.uv.y > si.uv.x, 1, 0), si.prim_index)
@@ -590,7 +569,7 @@ class LightTable:
         far = self._far(p)
         if far is not None:
             probability = dr.select(far, share(self._tiny_weights(), row), probability)
-        small = small_triangle(a - p, b - p, c - p, AREA_BELOW) | (False if far is None else far)  # by area:
+        small = self._small(a - p, b - p, c - p, far)  # by area:
         dist = dr.norm(mi.Vector3f(si.p) - p)  # d^2 / (A |cos|) = 2 d^3 / |(a - p).n|
         height = dr.abs(dr.dot(a - p, n))
         by_area = mi.Float64(2.0 * dist * dist * dist / dr.select(height > 0.0, height, 1.0))

@@ -50,10 +50,10 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
-from ._light_rows import area_direction, small_triangle
+from ._light_rows import area_direction, pick, small_triangle
 from ._warps import square_to_spherical_triangle
 
-__all__ = ["HUGE_ABOVE", "cosine_table_sample", "projected_solid_angle", "square_to_cosine_spherical_triangle",
+__all__ = ["HUGE_ABOVE", "choose_projected", "cosine_table_sample", "projected_solid_angle", "square_to_cosine_spherical_triangle",
            "square_to_projected_triangle", "square_to_projected_triangle_pdf"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
@@ -433,6 +433,37 @@ def square_to_cosine_spherical_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) 
     square = 4.0 * ((1.0 - y) * wb + y * ((1.0 - x) * wa + x * wc)) / (wb + wb + wa + wc)
     d, omega = square_to_spherical_triangle((x, y), a, b, c)
     return dr.normalize(d), dr.select(omega > 0.0, omega / square, 0.0)
+
+
+def choose_projected(table: Any, p: Any, normal: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
+    """``emitter_sampling='projected'``'s choice in *table* (a ``LightTable``): (row, its probability, u
+    reused), as ``LightTable._choose``, with each triangle's weight its projected solid angle about
+    *normal* x radiance (0 behind it: the levels above are ``_choose``'s, whose estimates are 0 only where
+    no member faces p)."""
+    if table.mode == "exact":
+        weights: list[Any] = []
+        for row in range(table.count):
+            if table.lum[row] <= 0.0:
+                weights.append(None)
+                continue
+            a, b, c = (mi.ScalarVector3f(*vertex) for vertex in table.tris[row])
+            front = dr.dot(p - a, mi.ScalarVector3f(*table.normal[row])) > 0.0
+            e = projected_solid_angle(a - p, b - p, c - p, normal)
+            weights.append(dr.select(front, e * float(table.lum[row]), 0.0))
+        return pick(weights, u)
+    leaf, probability, u = table._descend(p, u, active, n)
+    start = leaf * table.group_size
+    members = []
+    for k in range(table.group_size):
+        row = start + k
+        ok = active & (row < table.count) & (probability > 0.0)
+        a, b, c, n = table._vertices(row, ok)
+        lum = dr.gather(mi.Float, table._lum32, row, ok)
+        e = projected_solid_angle(a - p, b - p, c - p, normal)
+        members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
+    slot, fraction, u = pick(members, u)
+    probability *= fraction
+    return start + slot, probability, u
 
 
 def cosine_table_sample(table: Any, si: Any, p: Any, u: Any, v: Any, active: Any, cosine: Any) -> tuple[Any, ...]:
