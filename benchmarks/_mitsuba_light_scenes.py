@@ -80,7 +80,7 @@ def _grid(nx, nz, size, center, dome=0.05):
     return vertices, faces
 
 
-def _room(mi, width, height, camera_origin, camera_target):
+def _room(mi, width, height, camera_origin, camera_target, sampler="independent"):
     T = mi.ScalarTransform4f
     return {
         "type": "scene",
@@ -89,7 +89,7 @@ def _room(mi, width, height, camera_origin, camera_target):
             "fov": 60,
             "to_world": T().look_at(origin=camera_origin, target=camera_target, up=[0, 1, 0]),
             "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent"},
+            "sampler": {"type": sampler},
         },
         # x in [-2, 2], y in [0, 3], z in [-2, 2]; Mitsuba's rectangle is [-1, 1]^2 in z = 0, normal +z
         "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale([2, 2, 1]), "bsdf": _diffuse((0.7, 0.7, 0.7))},
@@ -106,26 +106,26 @@ def _room(mi, width, height, camera_origin, camera_target):
     }  # fmt: skip
 
 
-def light_scene(mi, name, width, height, workdir):
-    """The ``load_dict`` dictionary (or, for a shipped scene, the loaded scene) of *name* at width x height."""
+def light_scene(mi, name, width, height, workdir, sampler="independent"):
+    """The loaded scene *name* at width x height, its sensor's sampler *sampler* (a Mitsuba sampler's name)."""
     if name in _SHIPPED:
         import symsphere.mitsuba as sm
 
-        return mi.load_file(str(sm.scene_path(_SHIPPED[name])), width=width, height=height)
+        return mi.load_file(str(sm.scene_path(_SHIPPED[name])), width=width, height=height, sampler=sampler)
     T = mi.ScalarTransform4f
     workdir = Path(workdir)
     if name == "wall_wash":
-        scene = _room(mi, width, height, [0, 1.5, 3.8], [0, 1.4, -2])
+        scene = _room(mi, width, height, [0, 1.5, 3.8], [0, 1.4, -2], sampler)
         # 0.15 in front of the back wall, facing it (-z): Mitsuba's rectangle faces +z, so turn it round
         scene["washer"] = {"type": "rectangle", "to_world": T().translate([0, 1.8, -1.85]).rotate([0, 1, 0], 180).scale([0.8, 0.5, 1]),
                            "emitter": _emitter((10, 9.5, 8.5))}  # fmt: skip
     elif name == "disk_near_floor":
-        scene = _room(mi, width, height, [0, 1.6, 3.8], [0, 0.3, -1])
+        scene = _room(mi, width, height, [0, 1.6, 3.8], [0, 0.3, -1], sampler)
         vertices, faces = _disk(24, 0.5, (-0.6, 0.2, -0.5))
         scene["disk"] = {"type": "obj", "filename": _write_obj(workdir / "disk24.obj", vertices, faces),
                          "emitter": _emitter((8, 7.5, 7))}  # fmt: skip
     elif name == "mesh_1024":
-        scene = _room(mi, width, height, [0, 1.6, 3.8], [0, 0.3, -1])
+        scene = _room(mi, width, height, [0, 1.6, 3.8], [0, 0.3, -1], sampler)
         vertices, faces = _grid(32, 16, (2.0, 1.0), (-0.4, 0.3, -0.8))
         scene["strip"] = {"type": "obj", "filename": _write_obj(workdir / "grid1024.obj", vertices, faces),
                           "emitter": _emitter((4, 3.8, 3.5))}  # fmt: skip

@@ -5,6 +5,11 @@
 Scenes: benchmarks/_mitsuba_light_scenes.py (--scenes), at --width x --height, variant llvm_ad_rgb, for
 each --depths (max_depth 2: direct light only; 8: full paths; rr_depth 5).
 
+--samplers adds, per Mitsuba sampler named (e.g. ldsampler, multijitter), Mitsuba's ``path`` and
+``symsphere_path`` (``bsdf`` with ``solid_angle`` and with ``cosine``) with the scene's sampler set to it
+(labels `` + NAME``), so that the best of each side can be compared; efficiency ratios stay relative to
+``path`` with ``independent``.
+
 Per scene and depth: a reference (Mitsuba's ``path``, ``independent``, --ref-spp in two independent
 halves whose difference estimates the reference's own relMSE, which is subtracted), then --rounds
 interleaved rounds (alternating order) in which every case renders --spp samples per pixel with a new
@@ -49,6 +54,7 @@ COSINE = [  # after the others (the images' order): near the cosine at Lambertia
     ("symsphere_path symmetric_cosine sobol · cosine",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "cosine"}),
 ]  # fmt: skip
+WITH_SAMPLER = CASES[0], CASES[2], COSINE[0]  # --samplers: these with the scene's sampler set to a better one
 
 
 def _rel_mse(image, reference):
@@ -72,17 +78,21 @@ def run(args, mi, workdir):
             b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
             ref = 0.5 * (a + b)
             own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
-            specs = CASES + (PROJECTED if args.projected else []) + COSINE
-            cases = [(label, mi.load_dict({**spec, **options})) for label, spec in specs]
-            for _, integrator in cases:  # compile
-                _render(mi, scene, integrator, args.spp, 0)
-            errors = {label: [] for label, _ in cases}
-            seconds = {label: [] for label, _ in cases}
-            cpu = {label: [] for label, _ in cases}
+            specs = [(label, spec, None) for label, spec in CASES + (PROJECTED if args.projected else []) + COSINE]
+            scenes = {None: scene}
+            for sampler in args.samplers:
+                scenes[sampler] = light_scene(mi, name, args.width, args.height, workdir, sampler)
+                specs += [(f"{label} + {sampler}", spec, sampler) for label, spec in WITH_SAMPLER]
+            cases = [(label, mi.load_dict({**spec, **options}), sampler) for label, spec, sampler in specs]
+            for _, integrator, sampler in cases:  # compile
+                _render(mi, scenes[sampler], integrator, args.spp, 0)
+            errors = {label: [] for label, *_ in cases}
+            seconds = {label: [] for label, *_ in cases}
+            cpu = {label: [] for label, *_ in cases}
             before, t0 = cpu_snapshot(), time.perf_counter()
             for r in range(args.rounds):
-                for label, integrator in cases if r % 2 == 0 else cases[::-1]:
-                    image, s, c = _render(mi, scene, integrator, args.spp, r + 1)
+                for label, integrator, sampler in cases if r % 2 == 0 else cases[::-1]:
+                    image, s, c = _render(mi, scenes[sampler], integrator, args.spp, r + 1)
                     errors[label].append(_rel_mse(image, ref) - own)
                     seconds[label].append(s)
                     cpu[label].append(c)
@@ -90,15 +100,15 @@ def run(args, mi, workdir):
                         images.setdefault((name, depth), [ref]).append(image)
             load = others_cpu(before, cpu_snapshot(), time.perf_counter() - t0)
             base = CASES[0][0]
-            eff = {label: 1.0 / (np.mean(errors[label]) * statistics.median(seconds[label])) for label, _ in cases}
-            eff_cpu = {label: 1.0 / (np.mean(errors[label]) * statistics.median(cpu[label])) for label, _ in cases}
+            eff = {label: 1.0 / (np.mean(errors[label]) * statistics.median(seconds[label])) for label, *_ in cases}
+            eff_cpu = {label: 1.0 / (np.mean(errors[label]) * statistics.median(cpu[label])) for label, *_ in cases}
             share = "?" if load is None else f"{load['share_of_all_cpus']:.0%}"
             print(
                 f"{name}, max_depth {depth} (reference's own relMSE {own:.2g}; others' CPU share {share})", flush=True
             )
-            for label, _ in cases:
+            for label, _, sampler in cases:
                 row = {
-                    "scene": name, "max_depth": depth, "case": label, "spp": args.spp,
+                    "scene": name, "max_depth": depth, "case": label, "spp": args.spp, "sampler": sampler or "independent",
                     "rel_mse": float(np.mean(errors[label])), "seconds": statistics.median(seconds[label]),
                     "efficiency": eff[label], "efficiency_ratio": eff[label] / eff[base],
                     "rel_mse_ratio": float(np.mean(errors[base]) / np.mean(errors[label])),
@@ -139,6 +149,9 @@ def main(argv=None):
     parser.add_argument("--ref-spp", type=int, default=4096, help="reference spp (default %(default)s)")
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default %(default)s)")
     parser.add_argument("--projected", action="store_true", help="add emitter_sampling='projected' (slow)")
+    parser.add_argument("--samplers", nargs="*", default=[], metavar="NAME",
+                        help="add path and symsphere_path (bsdf: solid_angle, cosine) with the scene's sampler set "
+                        "to NAME (a Mitsuba sampler: ldsampler, multijitter, ...)")  # fmt: skip
     parser.add_argument("--json", metavar="FILE", help="write the results as JSON")
     parser.add_argument("--images", metavar="DIR", help="write DIR/<scene>_<depth>.png: the reference and every "
                         "case's last render side by side, in the order of the table")  # fmt: skip
