@@ -170,6 +170,55 @@ def test_an_answer_far_inside_the_tolerance_has_fewer_randomisations():
     assert auto._jump(lebedev, half[6, 32] / 0.01 * 1.01, 0.95, 10**9, 32 * 6).cost > 32 * 6
 
 
+def _measured(sizes, spreads, method="fibonacci"):
+    """A rotated family (8 rotations a pilot stage, 128 an answer) whose pilot stages measured *spreads*."""
+    family = auto.Rotated(method, exp_dot, "sphere", np.zeros(3), np.random.SeedSequence(3), 8, 128)
+    family.stages = [
+        auto.Stage(size, 8 * size, np.array([1.0]), np.array([spread / math.sqrt(8)]), 8, 8)
+        for size, spread in zip(sizes, spreads, strict=True)
+    ]
+    return family
+
+
+def test_an_answer_near_the_tolerance_has_64_randomisations_one_size_beyond_a_fast_decay():
+    # Pilot spreads at 16, 32, 64 points falling like size^-1.5: predicted 0.125 x 2^-1.5 at 128 points.  With a
+    # tolerance 1.01 x the half-width of 64 rotations there over 0.75 (AIM), 64 rotations of 128 points (8192
+    # evaluations) meet it, and 128 of 64 points (the same cost) do not: the answer is the 64.  128 rotations of
+    # 128 points would meet it too, at twice the cost.
+    spreads = [2.0**-1.5 * k for k in (2.0**1.5, 1.0, 2.0**-1.5)]
+    at_128 = spreads[-1] * 2**-1.5
+    tolerance = stats.t.ppf(0.975, 63) * at_128 / 8 / 0.75 * 1.01
+    assert stats.t.ppf(0.975, 127) * spreads[-1] / math.sqrt(128) > 0.75 * tolerance
+    assert stats.t.ppf(0.975, 127) * at_128 / math.sqrt(128) <= 0.75 * tolerance
+    jump = auto._jump(_measured((16, 32, 64), spreads), tolerance, 0.95, 10**9, 0)
+    assert (jump.k, jump.replicates, jump.cost, jump.meets) == (3, 64, 64 * 128, True)
+    # a slow decay (size^-0.75: the discontinuous cap's), fitted over every size measured: 128 rotations
+    slow = [1.0, 2.0**-0.75, 2.0**-1.5]
+    tolerance = stats.t.ppf(0.975, 63) * slow[-1] * 2**-0.75 / 8 / 0.75 * 1.01
+    assert auto._jump(_measured((16, 32, 64), slow), tolerance, 0.95, 10**9, 0).replicates == 0
+    # a slow decay whose last step fell 3x (8 randomisations of a discontinuous f): the last three sizes fall
+    # faster than size^-1, every size measured does not; 64 rotations of 512 points would meet the tolerance on
+    # the last three's rate, but the answer is 128 rotations
+    sizes = (16, 32, 64, 128, 256)
+    noisy = [(size / 16) ** -0.75 for size in sizes[:-1]] + [(128 / 16) ** -0.75 / 3]
+    last_three = np.polyfit(np.log(sizes[-3:]), np.log(noisy[-3:]), 1)[0]
+    assert np.polyfit(np.log(sizes), np.log(noisy), 1)[0] > -1 > last_three
+    tolerance = stats.t.ppf(0.975, 63) * noisy[-1] * 2**last_three / 8 / 0.75 * 1.01
+    assert auto._jump(_measured(sizes, noisy), tolerance, 0.95, 10**9, 0).replicates == 0
+    # two sizes beyond the largest measured: the 64 rotations of 256 points would meet a tolerance half as large,
+    # but only the next size is trusted; the answer is 128 rotations
+    tolerance = stats.t.ppf(0.975, 63) * at_128 * 2**-1.5 / 8 / 0.75 * 1.01
+    beyond = auto._jump(_measured((16, 32, 64), spreads), tolerance, 0.95, 10**9, 0)
+    assert beyond.meets and beyond.replicates == 0 and beyond.cost >= 128 * 128
+    # not at a rule below 50 points: Lebedev's 6, 14, 26 measured (size^-1.5, not spectral) and a tolerance that 64
+    # rotations of the 26-point rule (1664 evaluations) would meet: the answer is 64 of the 50-point rule (3200),
+    # cheaper than 128 of the 26 (3328)
+    small = [(size / 6) ** -1.5 for size in (6, 14, 26)]
+    tolerance = stats.t.ppf(0.975, 63) * small[-1] / 8 / 0.75 * 1.01
+    jump = auto._jump(_measured((6, 14, 26), small, "lebedev"), tolerance, 0.95, 10**9, 0)
+    assert (jump.k, jump.replicates, jump.cost, jump.meets) == (3, 64, 64 * 50, True)
+
+
 def test_a_stage_far_from_the_reference_predicts_with_the_spread_its_distance_implies():
     # 8 randomisations, estimate 1e-5 with standard error 1e-6, against a reference 0.0126 +- 1e-4: 126 combined
     # standard errors apart (DISAGREE = 4), so the spread is sqrt(distance^2 - 1e-4^2) x sqrt(8), not 1e-6 x sqrt(8)

@@ -18,6 +18,8 @@ The families (the scheme's orbits, rotated Lebedev rules, rotated spherical Fibo
   whose estimate is DISAGREE standard errors or more from the estimate with the most evaluations
   behind it predicts with the spread its distance implies: a small rule that misses a sharp lobe
   measures a tiny spread around a wrong mean); or
+  MID_FACTOR times as many (default 64), also sized to the tolerance, at a rule of MID_RULE points or
+  more measured or the next size, on a fast decay (its spread like size**MID_SLOPE or faster), if cheaper; or
   FEW_FACTOR times as many (default 32) where a rule already measured is *far* inside the tolerance
   (FAR of it: a rule exact to rounding, or converging fast), if cheaper.  Its mean is its own; its
   variance is pooled with a pilot stage's of the same rule and size if one ran (independent draws of
@@ -30,8 +32,9 @@ This is Stein's two-stage procedure: the answer's size is fixed before its value
 interval covers at the stated level, conditioned only on its own half-width meeting the tolerance --
 which, at a size predicted to meet it, is nearly always so (measured: docs/results/integration.md).
 128 randomisations make the t-interval's tails light even for the skewed estimates of a small folded
-rule (Student's t with 127 degrees of freedom exceeds 5 with probability 2e-6, with 7, 1.6e-3); 32
-suffice where the estimates are nearly normal (|t_31| > 5: 2e-5), which the rules far inside the
+rule (Student's t with 127 degrees of freedom exceeds 5 with probability 2e-6, with 7, 1.6e-3); 64
+on rules of 50 points or more (|t_63| > 5: 5e-6; resampled, the folded rules' P(> 5 SE) at most 8e-5); 32
+where the estimates are nearly normal (|t_31| > 5: 2e-5), which the rules far inside the
 tolerance were on the measured integrands (resampled: docs/results/integration.md).  ``n_max`` bounds
 the evaluations of all stages of all families, which is what ``n_evaluations`` counts.  ``result.history`` lists every stage: family,
 evaluations, estimate, standard error, half-width, tolerance, level, and why it ran.
@@ -88,6 +91,16 @@ tolerance or less, from the spread measured at that rule (never extrapolated: a 
 to rounding would answer with an interval of rounding noise around a rounding bias of a few ulps).
 Such a rule is exact to rounding or converging fast, its estimates over rotations nearly normal
 (resampled; the small folded rules, skewed, are nowhere near so far inside)."""
+MID_FACTOR = 8
+"""An answering stage sized to the tolerance (AIM) has this many times the pilot's randomisations (8 x 8 = 64)
+where cheaper than ANSWER_FACTOR x: on a spread falling like size**MID_SLOPE or faster, R randomisations
+reach a half-width h with some R**(1 - 1/(2p)) evaluations (p = -slope), so fewer randomisations of a
+larger rule cost less; only at a rule of MID_RULE points or more (the small folded rules are skewed:
+with 64 their t-intervals had runs 5.9 standard errors off) and at a size measured or the next of the
+ladder (a prediction further out, from 8 randomisations, is often optimistic: a miss then selects the
+stages whose spread happened to be small)."""
+MID_RULE = 50
+MID_SLOPE = -1.0
 EXPLORE = 0.125
 SELF_EXPLORE = True
 """The leader explores its own ladder too (benchmarks/bench_integrate_auto.py runs a family alone both ways)."""
@@ -276,14 +289,26 @@ def _jump(
             root = np.sqrt([known[-2][0], known[-1][0]])
             spectral = SPECTRAL_MARGIN * float((y[-2] - y[-1]) / (root[1] - root[0]))
     copies_from = LEBEDEV_SIZES[-1] if family.name == "lebedev" else math.inf
-    few = FEW_FACTOR * family.replicates if family.answer_replicates > FEW_FACTOR * family.replicates else 0
-    found, quick = Jump(), Jump()
+    # 0: the family's answer_replicates; fewer where allowed (see FEW_FACTOR, MID_FACTOR)
+    options = [0] + [
+        factor * family.replicates
+        for factor in (FEW_FACTOR, MID_FACTOR)
+        if family.answer_replicates > factor * family.replicates
+    ]
+    best = dict.fromkeys(options, Jump())
+    # the decay fitted over every size measured, not the last three (8 randomisations of a discontinuous f can
+    # fall 4x in a step, a sharp lobe's suddenly converge): fewer randomisations only where it is fast, and at the
+    # next size predicted with it if it is the slower
+    measured = np.log([(size, e) for size, (_, e) in sorted(seen.items()) if e > 0]).reshape(-1, 2)
+    overall = float(np.polyfit(measured[:, 0], measured[:, 1], 1)[0]) if len(measured) >= 3 else 0.0
+    next_size = math.inf  # the first size of the ladder beyond the largest measured
     for k in range(64):
         size, cost = family.ladder(k)
+        next_size = size if size > largest and next_size == math.inf else next_size
+        costs = {r: family.ladder(k, r)[1] for r in options}
         if cost <= floor or (size < largest and size not in seen):
             continue
-        few_cost = family.ladder(k, few)[1] if few else cost
-        if few_cost > budget:
+        if min(costs.values()) > budget:
             break
         rule = min(size, copies_from)
         if size in seen:
@@ -296,15 +321,33 @@ def _jump(
             predicted = spread * (rule / largest) ** slope
         if size not in seen and size > rule:
             predicted *= (size / max(rule, largest)) ** -0.5
-        if few and not quick.meets and few_cost > floor and rule <= largest:
-            half_width = t_quantile(family.answer_units(size, few), level) * predicted / math.sqrt(few)
-            quick = Jump(k, few_cost, half_width, half_width <= FAR * tolerance, few)
-        if cost <= budget and not found.meets:
-            half_width = t_quantile(family.answer_units(size), level) * predicted / math.sqrt(family.answer_replicates)
-            found = Jump(k, cost, half_width, half_width <= AIM * tolerance)
-        if found.meets and (quick.meets or few_cost >= found.cost):
+        for r in options:
+            if best[r].meets or not floor < costs[r] <= budget:
+                continue
+            slower = (
+                predicted
+                if rule <= largest or r != MID_FACTOR * family.replicates
+                else spread * (size / largest) ** overall
+            )
+            half_width = (
+                t_quantile(family.answer_units(size, r), level)
+                * max(predicted, slower)
+                / math.sqrt(r or family.answer_replicates)
+            )
+            if r == 0:
+                meets = half_width <= AIM * tolerance
+            elif r == FEW_FACTOR * family.replicates:  # far inside, at a rule measured
+                meets = half_width <= FAR * tolerance and rule <= largest
+            else:  # near the tolerance: a rule measured or the next, on a fast decay
+                meets = (
+                    half_width <= AIM * tolerance and rule >= MID_RULE and size <= next_size and overall <= MID_SLOPE
+                )
+            best[r] = Jump(k, costs[r], half_width, meets, r)
+        met = [j.cost for j in best.values() if j.meets]
+        if met and min(costs.values()) >= min(met):
             break
-    return quick if quick.meets and (not found.meets or quick.cost < found.cost) else found
+    meeting = [j for j in best.values() if j.meets]
+    return min(meeting, key=lambda j: j.cost) if meeting else best[0]
 
 
 def _pooled(family: Family, fresh: Stage) -> Stage:
