@@ -228,6 +228,28 @@ def test_vector_stores_write_their_row_of_the_tables_and_nothing_else(dtype, cou
 
 
 _stream_rows, _store_fence = kernels.stream_rows, kernels.store_fence
+_stage_like = kernels._stage_like
+
+
+@njit
+def _stage_offsets(rows, count):  # pragma: no cover - compiled by numba
+    stage = _stage_like(rows, count)
+    return stage.shape[0], stage.shape[1], (stage.ctypes.data - rows.ctypes.data) % 64
+
+
+def test_weights_and_stage_are_placed_on_cache_lines():
+    # The rotated store loads the weights in 64-byte vectors, the streamed copy the stage: each row
+    # of the weights starts a line, and the stage sits in its lines as the output rows do (for every
+    # placement of the output within a line), so that no load spans two lines.
+    weights = kernels.rotated_weights(frame(np.array([0.0, 0.6, 0.8])), 24)
+    assert weights.shape == (3, 72) and weights.flags.c_contiguous
+    assert [weights[r].ctypes.data % 64 for r in range(3)] == [0, 0, 0]
+    for dtype in (np.float32, np.float64):
+        size = np.dtype(dtype).itemsize
+        raw = np.empty(4 * 72 * size + 64, np.uint8)
+        for shift in range(0, 64, size):
+            rows = raw[shift : shift + 4 * 72 * size].view(dtype).reshape(4, 72)
+            assert _stage_offsets(rows, 32) == (32, 72, 0)
 
 
 @njit
