@@ -209,18 +209,18 @@ def _keep_above(rows, i, normal):
 
 
 @register_jitable
-def _stage_like(rows, count):
-    """An empty (count, rows' columns) array placed as *rows* is within a 64-byte line.
+def _stage_on_lines(count, columns, dtype):
+    """An empty (count, columns) array of *dtype* whose first element starts a 64-byte line.
 
-    Batches of _BATCH orbits are whole lines in both, so every 64-byte load of the stage's copy
-    (:func:`~symsphere._vector_stores.stream_rows`) reads one line, as its non-temporal store writes
-    one: a load that spans two lines costs two.
+    The orbit stores write it in 64-byte vectors (a batch of _BATCH orbits is whole lines): a store
+    that spans two lines costs two, and numba's arrays start anywhere within 32 bytes.  Its copy out
+    (:func:`~symsphere._vector_stores.stream_rows`) then loads across lines where the output starts
+    within one (numpy's large arrays: 16 bytes in), which measured cheaper than the stores doing so.
     """
-    size = count * rows.shape[1]
-    item = rows.itemsize
-    raw = np.empty(size + _LINE // item, dtype=rows.dtype)
-    start = ((rows.ctypes.data - raw.ctypes.data) % _LINE) // item
-    return raw[start : start + size].reshape((count, rows.shape[1]))
+    size = count * columns
+    raw = np.empty(size + _LINE, dtype=dtype)
+    start = (-raw.ctypes.data % _LINE) // raw.itemsize
+    return raw[start : start + size].reshape((count, columns))
 
 
 @register_jitable
@@ -315,7 +315,7 @@ def _fill_kernel(source: int, code: int, kind: int, streamed: bool = False) -> A
             v[j] = 0.5
         base = np.empty((3, _BATCH))
         scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)  # the cut orbit, stored whole
-        stage = _stage_like(rows, 2 * _BATCH if streamed else 0)
+        stage = _stage_on_lines(2 * _BATCH if streamed else 0, rows.shape[1], tail.dtype)
         target = stage if streamed else rows  # once: a reference taken per orbit costs a call (NRT_incref)
         half = 0
         pending = 0
