@@ -10,7 +10,11 @@ The base revision is checked out into a temporary git worktree.  Two worker proc
 script's rows, one with the base's ``src`` first on ``PYTHONPATH`` and one with this checkout's, each
 with its own numba cache (a temporary directory: the first call of each row compiles, untimed).  The
 workers take turns row by row: in every round each row runs once in each, the order of the two
-alternating, and only one process runs at a time, so both see the same machine.  Both workers run
+alternating, and only one process runs at a time, so both see the same machine.  Each turn times the
+row's second call in a row (the first untimed, ``--no-settle``: one call): a call right after the other
+worker's was slower by up to 1.8x, for whichever side ran second (rows about a normal in float32
+``out=``: 1.25-1.79x in all seven idle runs against 5d0170b, whose own rows about a normal take
+45-300 ms; docs/results/write-limit.md), where a user's loop calls after its own work.  Both workers run
 OpenBLAS with one thread (unless ``OPENBLAS_NUM_THREADS`` is set): its threads, busy-waiting after
 5d0170b's numpy products about a normal, took the cores from this checkout's next call (measured: its
 rows about a normal 1.3-1.8x slower than with one BLAS thread, the base's the same).  Reported per row:
@@ -159,6 +163,8 @@ def worker(args):
         name = json.loads(line)
         if name is None:
             break
+        if not args.no_settle:
+            rows[name]()  # untimed: the timed call follows a call of its own, not the other worker's
         start = time.perf_counter()
         rows[name]()
         print(json.dumps(time.perf_counter() - start), flush=True)
@@ -180,7 +186,9 @@ class Worker:
         if args.threads:  # one thread: the kernels' own speed, less sensitive to a loaded machine
             env["NUMBA_NUM_THREADS"] = str(args.threads)
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--n", str(args.n)]
-        command += ["--no-mitsuba"] * args.no_mitsuba + ["--no-render"] * args.no_render
+        command += (
+            ["--no-mitsuba"] * args.no_mitsuba + ["--no-render"] * args.no_render + ["--no-settle"] * args.no_settle
+        )
         self.process = subprocess.Popen(command, cwd=tree, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         text=True)  # fmt: skip
 
@@ -236,7 +244,7 @@ def _limit(medians, rows):
 def report(result):
     print(f"regress.py: base {result['base']} vs this checkout {result['new']}; numba threads: {result['threads']}; "
           f"medians of {result['rounds']} "
-          f"interleaved rounds; n = {result['n']}; {result['cpu']}, {os.cpu_count()} CPUs; "
+          f"interleaved rounds ({'second' if result['settle'] else 'only'} call of each turn timed); n = {result['n']}; {result['cpu']}, {os.cpu_count()} CPUs; "
           f"others' CPU share {result['others_share']}")  # fmt: skip
     for name in ("base", "new"):
         print(f"  {name}: symsphere imported from {result['symsphere'][name]}")
@@ -309,6 +317,7 @@ def main(argv=None):
     parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba row")
     parser.add_argument("--no-render", action="store_true", help="skip the renderer's row")
     parser.add_argument("--threads", type=int, help="NUMBA_NUM_THREADS of both workers (default: numba's own)")
+    parser.add_argument("--no-settle", action="store_true", help="time each turn's only call (no untimed call first)")
     parser.add_argument("--json", type=Path, help="also write every timing and the table here")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -355,7 +364,7 @@ def main(argv=None):
     table = table_rows(names, medians)
     result = {
         "base": base_rev, "new": new_rev, "rounds": args.rounds, "n": args.n, "cpu": cpu_name(),
-        "threads": args.threads or "numba's default",
+        "threads": args.threads or "numba's default", "settle": not args.no_settle,
         "others_share": share, "missing": {name: hello[name]["missing"] for name in hello},
         "symsphere": {name: hello[name]["symsphere"] for name in hello}, "table": table, "times": times,
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
