@@ -11,10 +11,10 @@ script's rows, one with the base's ``src`` first on ``PYTHONPATH`` and one with 
 with its own numba cache (a temporary directory: the first call of each row compiles, untimed).  The
 workers take turns row by row: in every round each row runs once in each, the order of the two
 alternating, and only one process runs at a time, so both see the same machine.  Each turn times the
-row's second call in a row (the first untimed, ``--no-settle``: one call): a call right after the other
-worker's was slower by up to 1.8x, for whichever side ran second (rows about a normal in float32
-``out=``: 1.25-1.79x in all seven idle runs against 5d0170b, whose own rows about a normal take
-45-300 ms; docs/results/write-limit.md), where a user's loop calls after its own work.  Both workers run
+row's second call in a row (the first untimed; ``--no-settle``: one call): timed right after the other
+worker's call, a row ran slower than right after one of its own, this checkout's float32 rows about a
+normal (``out=``) 1.25-1.79x in each of seven idle runs against 5d0170b, whose own calls of that row
+take 45-300 ms (docs/results/write-limit.md); a user's loop calls after its own work.  Both workers run
 OpenBLAS with one thread (unless ``OPENBLAS_NUM_THREADS`` is set): its threads, busy-waiting after
 5d0170b's numpy products about a normal, took the cores from this checkout's next call (measured: its
 rows about a normal 1.3-1.8x slower than with one BLAS thread, the base's the same).  Reported per row:
