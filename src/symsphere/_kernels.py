@@ -213,7 +213,7 @@ def _stage_on_lines(count, columns, dtype):
     """An empty (count, columns) array of *dtype* whose first element starts a 64-byte line.
 
     The orbit stores write it in 64-byte vectors (a batch of _BATCH orbits is whole lines): a store
-    that spans two lines costs two, and numba's arrays start anywhere within 32 bytes.  Its copy out
+    that spans two lines costs two, and numba's arrays start on 32 bytes, not always 64.  Its copy out
     (:func:`~symsphere._vector_stores.stream_rows`) then loads across lines where the output starts
     within one (numpy's large arrays: 16 bytes in), which measured cheaper than the stores doing so.
     """
@@ -248,8 +248,8 @@ def _rotated_weights(basis, count):
     SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.  Built with numpy
     at each call about a normal (in Python, a loop over the 216 weights took ~0.15 ms a call).
     Each row (72 values, 9 lines) starts a cache line: the rotated store loads them in 64-byte
-    vectors, 27 per orbit, and numpy's 16-byte aligned array made each load span two lines (a
-    quarter more CPU time for float32 rows about a normal, docs/results/write-limit.md).
+    vectors, 27 per orbit, and numpy's arrays start on 16 bytes: a load spanning two lines costs two
+    (float32 rows about a normal took ~18 % more CPU, docs/results/write-limit.md).
     """
     weights = _aligned_zeros((3, 3 * count))
     images = np.arange(count)[:, None, None]
