@@ -14,7 +14,7 @@ alternating, and only one process runs at a time, so both see the same machine. 
 row's second call in a row (the first untimed; ``--no-settle``: one call): timed right after the other
 worker's call, a row ran slower than right after one of its own, this checkout's float32 rows about a
 normal (``out=``) 1.25-1.79x in each of seven idle runs against 5d0170b, whose own calls of that row
-take 45-300 ms (docs/results/write-limit.md); a user's loop calls after its own work.  Both workers run
+take 45-300 ms (docs/results/bench-rotation.md); a user's loop calls after its own work.  Both workers run
 OpenBLAS with one thread (unless ``OPENBLAS_NUM_THREADS`` is set): its threads, busy-waiting after
 5d0170b's numpy products about a normal, took the cores from this checkout's next call (measured: its
 rows about a normal 1.3-1.8x slower than with one BLAS thread, the base's the same).  Reported per row:
@@ -319,10 +319,14 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, help="NUMBA_NUM_THREADS of both workers (default: numba's own)")
     parser.add_argument("--no-settle", action="store_true", help="time each turn's only call (no untimed call first)")
     parser.add_argument("--json", type=Path, help="also write every timing and the table here")
+    parser.add_argument("--order", nargs="+", type=Path, metavar="JSON",
+                        help="print how each row's time moved with its place in the turn, from results files")  # fmt: skip
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
         return worker(args)
+    if args.order:
+        return order_effect(args.order)
     base_rev = _revision(ROOT, args.base)
     new_rev = _revision(ROOT) + ("+changes" if _dirty() else "")
     with tempfile.TemporaryDirectory(prefix="symsphere-regress-") as scratch:
@@ -378,6 +382,29 @@ def main(argv=None):
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     return None
+
+
+def order_effect(paths):
+    """Print, per file and row, each side's median time when it ran second in a turn over its median when
+    it ran first (the round's order alternates by round and row, as in :func:`main`)."""
+    for path in paths:
+        result = json.loads(Path(path).read_text())
+        names = [row["row"] for row in result["table"]]
+        print(
+            f"{path}: others' CPU share {result['others_share']}; {'settled' if result.get('settle') else 'one call per turn'}"
+        )
+        for position, row in enumerate(names):
+            cells = []
+            for side in ("base", "new"):
+                runs = result["times"][side][row]
+                first_is_base = [(index + position) % 2 == 0 for index in range(len(runs))]
+                second = [t for t, b in zip(runs, first_is_base, strict=True) if b == (side == "new")]
+                first = [t for t, b in zip(runs, first_is_base, strict=True) if b != (side == "new")]
+                ok = second and first and statistics.median(first)
+                cells.append(
+                    f"{side} {statistics.median(second) / statistics.median(first):.2f}" if ok else f"{side} —"
+                )
+            print(f"  {row}: second / first: " + ", ".join(cells))
 
 
 def _own_cpu():
