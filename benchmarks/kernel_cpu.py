@@ -26,6 +26,13 @@ each round times a row's second call in a row: the host's cache keeps what plain
 reported as 480 MiB) and not what non-temporal ones did, so a row after another would be timed with the
 other's cache.  With ``--threads 2`` the clock is the wall clock
 (``time.perf_counter``), as two threads' CPU time says nothing about their waits for memory.
+
+    python benchmarks/kernel_cpu.py --asm
+
+With ``--asm``: the vector and scalar floating-point instructions of the kernel about a normal (random
+points, the equal-area map; float64 and float32 rows, plain stores), counted in its assembly, compiled
+in an empty numba cache (numba shows no assembly for cached code).  The rotated store appears twice in
+the kernel, for the whole orbits and for a cut one.
 """
 
 from __future__ import annotations
@@ -52,7 +59,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--fresh", action="store_true", help="also the rows with fresh output (np.empty)")
     parser.add_argument("--stores", action="store_true", help="this checkout's plain against streamed stores")
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
+    parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
     args = parser.parse_args(argv)
+    if args.asm:
+        sys.path.insert(0, str(ROOT / "src"))
+        _asm()
+        return 0
     if args.stores:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -165,6 +177,29 @@ def _stores(rounds: int, threads: int, n: int) -> None:
     print(f"kernel_cpu.py --stores: {what} over {rounds} interleaved rounds, n = {n}")
     for key in keys:
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}")
+
+
+def _asm() -> None:
+    import collections
+    import os
+    import re
+
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ["NUMBA_CACHE_DIR"] = cache  # before numba is imported: read when it loads
+        import numpy as np
+
+        import symsphere
+        from symsphere._testing import kernels
+
+        for dtype in (np.float64, np.float32):
+            symsphere.sample_hemisphere(48 * 100, rng=1, dtype=dtype, normal=(1.0, 1.0, 1.0))
+        kernel = kernels._fill_kernel(kernels._RANDOM, 0, kernels._HEMISPHERE_ROTATED, False)
+        for signature, text in kernel.inspect_asm().items():
+            counts: collections.Counter[str] = collections.Counter()
+            for op, operands in re.findall(r"^\s+(v(?:mul|add|sub|cvt)\w*|vbroadcastsd)\s+([^\n]*)", text, re.M):
+                width = next((r for r in ("zmm", "ymm", "xmm") if r in operands), "")
+                counts[f"{op} {width}"] += 1
+            print(f"rows {signature[5].dtype}: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
 
 
 if __name__ == "__main__":

@@ -10,7 +10,12 @@ The base revision is checked out into a temporary git worktree.  Two worker proc
 script's rows, one with the base's ``src`` first on ``PYTHONPATH`` and one with this checkout's, each
 with its own numba cache (a temporary directory: the first call of each row compiles, untimed).  The
 workers take turns row by row: in every round each row runs once in each, the order of the two
-alternating, and only one process runs at a time, so both see the same machine.  Both workers run
+alternating, and only one process runs at a time, so both see the same machine.  Each turn times one
+call; with ``--settle`` the row's second call in a row (the first untimed), as in a user's loop: timed
+right after the other worker's call, a row can run slower than right after one of its own (this
+checkout's float32 rows about a normal, ``out=``, 1.25-1.79x in each of seven idle runs against 5d0170b),
+and 5d0170b's float64 fresh row about a normal took 61 ms settled against 230 ms (``--order`` prints the
+first; docs/results/bench-rotation.md).  Both workers run
 OpenBLAS with one thread (unless ``OPENBLAS_NUM_THREADS`` is set): its threads, busy-waiting after
 5d0170b's numpy products about a normal, took the cores from this checkout's next call (measured: its
 rows about a normal 1.3-1.8x slower than with one BLAS thread, the base's the same).  Reported per row:
@@ -159,6 +164,8 @@ def worker(args):
         name = json.loads(line)
         if name is None:
             break
+        if args.settle:
+            rows[name]()  # untimed: the timed call follows a call of its own, not the other worker's
         start = time.perf_counter()
         rows[name]()
         print(json.dumps(time.perf_counter() - start), flush=True)
@@ -180,7 +187,7 @@ class Worker:
         if args.threads:  # one thread: the kernels' own speed, less sensitive to a loaded machine
             env["NUMBA_NUM_THREADS"] = str(args.threads)
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--n", str(args.n)]
-        command += ["--no-mitsuba"] * args.no_mitsuba + ["--no-render"] * args.no_render
+        command += ["--no-mitsuba"] * args.no_mitsuba + ["--no-render"] * args.no_render + ["--settle"] * args.settle
         self.process = subprocess.Popen(command, cwd=tree, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         text=True)  # fmt: skip
 
@@ -236,7 +243,7 @@ def _limit(medians, rows):
 def report(result):
     print(f"regress.py: base {result['base']} vs this checkout {result['new']}; numba threads: {result['threads']}; "
           f"medians of {result['rounds']} "
-          f"interleaved rounds; n = {result['n']}; {result['cpu']}, {os.cpu_count()} CPUs; "
+          f"interleaved rounds ({'second' if result['settle'] else 'only'} call of each turn timed); n = {result['n']}; {result['cpu']}, {os.cpu_count()} CPUs; "
           f"others' CPU share {result['others_share']}")  # fmt: skip
     for name in ("base", "new"):
         print(f"  {name}: symsphere imported from {result['symsphere'][name]}")
@@ -309,11 +316,17 @@ def main(argv=None):
     parser.add_argument("--no-mitsuba", action="store_true", help="skip the Mitsuba row")
     parser.add_argument("--no-render", action="store_true", help="skip the renderer's row")
     parser.add_argument("--threads", type=int, help="NUMBA_NUM_THREADS of both workers (default: numba's own)")
+    parser.add_argument("--settle", action=argparse.BooleanOptionalAction, default=False,
+                        help="time each turn's second call in a row, the first untimed (default: one call)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write every timing and the table here")
+    parser.add_argument("--order", nargs="+", type=Path, metavar="JSON",
+                        help="print how each row's time moved with its place in the turn, from results files")  # fmt: skip
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
         return worker(args)
+    if args.order:
+        return order_effect(args.order)
     base_rev = _revision(ROOT, args.base)
     new_rev = _revision(ROOT) + ("+changes" if _dirty() else "")
     with tempfile.TemporaryDirectory(prefix="symsphere-regress-") as scratch:
@@ -355,7 +368,7 @@ def main(argv=None):
     table = table_rows(names, medians)
     result = {
         "base": base_rev, "new": new_rev, "rounds": args.rounds, "n": args.n, "cpu": cpu_name(),
-        "threads": args.threads or "numba's default",
+        "threads": args.threads or "numba's default", "settle": args.settle,
         "others_share": share, "missing": {name: hello[name]["missing"] for name in hello},
         "symsphere": {name: hello[name]["symsphere"] for name in hello}, "table": table, "times": times,
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -369,6 +382,29 @@ def main(argv=None):
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     return None
+
+
+def order_effect(paths):
+    """Print, per file and row, each side's median time when it ran second in a turn over its median when
+    it ran first (the round's order alternates by round and row, as in :func:`main`)."""
+    for path in paths:
+        result = json.loads(Path(path).read_text())
+        names = [row["row"] for row in result["table"]]
+        print(
+            f"{path}: others' CPU share {result['others_share']}; {'settled' if result.get('settle') else 'one call per turn'}"
+        )
+        for position, row in enumerate(names):
+            cells = []
+            for side in ("base", "new"):
+                runs = result["times"][side][row]
+                first_is_base = [(index + position) % 2 == 0 for index in range(len(runs))]
+                second = [t for t, b in zip(runs, first_is_base, strict=True) if b == (side == "new")]
+                first = [t for t, b in zip(runs, first_is_base, strict=True) if b != (side == "new")]
+                ok = second and first and statistics.median(first)
+                cells.append(
+                    f"{side} {statistics.median(second) / statistics.median(first):.2f}" if ok else f"{side} —"
+                )
+            print(f"  {row}: second / first: " + ", ".join(cells))
 
 
 def _own_cpu():

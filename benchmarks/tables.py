@@ -232,6 +232,13 @@ def _targets(loaded):
     return "\n".join(lines)
 
 
+def _settled(result):
+    """How each turn was timed, for files that say (written before: one call per turn)."""
+    if "settle" not in result:
+        return ""
+    return ", each turn's second call in a row" if result["settle"] else ", one call per turn"
+
+
 def _regress(loaded):
     sys.path.insert(0, str(Path(__file__).parent))
     import regress
@@ -240,7 +247,7 @@ def _regress(loaded):
     caption = (
         f"`{result.get('command') or 'python benchmarks/regress.py --base ' + result['base']}`: base "
         f"{result['base']} against {result['new']}, {result['date'][:16].replace('T', ' ')} UTC; "
-        f"{result['rounds']} interleaved rounds, n = {result['n']}; {result['cpu']}, numba threads: "
+        f"{result['rounds']} interleaved rounds{_settled(result)}, n = {result['n']}; {result['cpu']}, numba threads: "
         f"{result.get('threads', 'numba' + chr(39) + 's default')}; other processes used {result['others_share']} "
         "of the CPUs while it timed."
     )

@@ -228,31 +228,25 @@ def test_vector_stores_write_their_row_of_the_tables_and_nothing_else(dtype, cou
 
 
 _stream_rows, _store_fence = kernels.stream_rows, kernels.store_fence
+_stage_on_lines = kernels._stage_on_lines
 
 
 @njit
-def _copy_streamed(stage, start, rows, first, count):  # pragma: no cover - compiled by numba
-    _stream_rows(stage, start, rows, first, count)
-    _store_fence()
+def _stage_placement(count, columns, dtype):  # pragma: no cover - compiled by numba
+    stage = _stage_on_lines(count, columns, dtype)
+    return stage.shape[0], stage.shape[1], stage.ctypes.data % 64
 
 
-@pytest.mark.parametrize("dtype", [np.float64, np.float32])
-@pytest.mark.parametrize("columns", [72, 144])
-def test_stream_rows_copies_the_rows_and_nothing_else(dtype, columns):
-    # Rows copied to destinations at every alignment to the element within a 64-byte line (the whole
-    # lines with non-temporal stores, the partial ones with plain), including none and one row: the
-    # values exactly, and the rows around them untouched.
-    size = np.dtype(dtype).itemsize
-    stage = np.random.default_rng(5).random((8, columns)).astype(dtype)
-    raw = np.empty(12 * columns * size + 64, np.uint8)
-    for shift in range(0, 64, size):
-        rows = raw[shift : shift + 12 * columns * size].view(dtype).reshape(12, columns)
-        for start, first, count in [(0, 0, 8), (3, 5, 4), (7, 11, 1), (2, 4, 0), (0, 3, -1)]:
-            rows[:] = np.nan
-            _copy_streamed(stage, start, rows, first, count)
-            copied = max(count, 0)
-            assert np.array_equal(rows[first : first + copied], stage[start : start + copied])
-            assert np.isnan(np.delete(rows, np.s_[first : first + copied], axis=0)).all()
+def test_weights_and_stage_start_cache_lines():
+    # The rotated store loads the weights in 64-byte vectors, the orbit stores write the stage so:
+    # each row of the weights starts a line, and so does the stage, whatever numba's allocator gives.
+    weights = kernels.rotated_weights(frame(np.array([0.0, 0.6, 0.8])), 24)
+    assert weights.shape == (3, 72) and weights.flags.c_contiguous
+    assert [weights[r].ctypes.data % 64 for r in range(3)] == [0, 0, 0]
+    for dtype in (np.float32, np.float64):
+        for columns in (72, 144):
+            for count in (32, 31, 0):
+                assert _stage_placement(count, columns, dtype) == (count, columns, 0)
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])

@@ -125,6 +125,7 @@ def orbit_member(x, y, z, k):
 # (its sine is a polynomial), so LLVM vectorises the batch loop; the stores of one point no
 # longer wait for the next point's dependent chain of square roots and divisions.
 _BATCH = 16
+_LINE = 64  # bytes: a cache line, and an AVX-512 vector
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
 _SPHERE_ORBIT, _HEMISPHERE_ORBIT = orbit_size("sphere"), orbit_size("hemisphere")
 
@@ -208,6 +209,21 @@ def _keep_above(rows, i, normal):
 
 
 @register_jitable
+def _stage_on_lines(count, columns, dtype):
+    """An empty (count, columns) array of *dtype* whose first element starts a 64-byte line.
+
+    The orbit stores write it in 64-byte vectors (a batch of _BATCH orbits is whole lines): a store
+    that spans two lines costs two, and numba's arrays start on 32 bytes, not always 64.  Its copy out
+    (:func:`~symsphere._vector_stores.stream_rows`) then loads across lines where the output starts
+    within one (numpy's large arrays: 16 bytes in), which measured cheaper than the stores doing so.
+    """
+    size = count * columns
+    raw = np.empty(size + _LINE, dtype=dtype)
+    start = (-raw.ctypes.data % _LINE) // raw.itemsize
+    return raw[start : start + size].reshape((count, columns))
+
+
+@register_jitable
 def _copy_members(scratch, tail, offset):
     """tail[i] = member ``(offset + i) % count`` of the orbit stored in *scratch* (1, 3 count)."""
     count = scratch.shape[1] // 3
@@ -217,14 +233,25 @@ def _copy_members(scratch, tail, offset):
             tail[i, l] = scratch[0, 3 * k + l]
 
 
+def _aligned_zeros(shape):
+    """A float64 zero array whose first element starts a 64-byte cache line."""
+    size = int(np.prod(shape))
+    raw = np.zeros(size + _LINE // 8)
+    start = (-raw.ctypes.data % _LINE) // 8
+    return raw[start : start + size].reshape(shape)
+
+
 def _rotated_weights(basis, count):
     """W (3, 3 count) with image k of p = p @ M_k @ basis = p @ W[:, 3k:3k+3].
 
     M_k moves coordinate SOURCES[k, l] to place l with sign SIGNS[k, l], so row
     SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.  Built with numpy
     at each call about a normal (in Python, a loop over the 216 weights took ~0.15 ms a call).
+    Each row (72 values, 9 lines) starts a cache line: the rotated store loads them in 64-byte
+    vectors, 27 per orbit, and numpy's arrays start on 16 bytes: a load spanning two lines costs two
+    (float32 rows about a normal took ~18 % more CPU, docs/results/write-limit.md).
     """
-    weights = np.zeros((3, 3 * count))
+    weights = _aligned_zeros((3, 3 * count))
     images = np.arange(count)[:, None, None]
     weights[_SOURCES[:count, :, None], 3 * images + np.arange(3)] = _SIGNS[:count, :, None] * basis[None, :, :]
     return weights
@@ -288,7 +315,7 @@ def _fill_kernel(source: int, code: int, kind: int, streamed: bool = False) -> A
             v[j] = 0.5
         base = np.empty((3, _BATCH))
         scratch = np.empty((1, rows.shape[1]), dtype=tail.dtype)  # the cut orbit, stored whole
-        stage = np.empty((2 * _BATCH if streamed else 0, rows.shape[1]), dtype=tail.dtype)
+        stage = _stage_on_lines(2 * _BATCH if streamed else 0, rows.shape[1], tail.dtype)
         target = stage if streamed else rows  # once: a reference taken per orbit costs a call (NRT_incref)
         half = 0
         pending = 0
