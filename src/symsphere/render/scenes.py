@@ -92,7 +92,7 @@ def furnace(albedo: float = 0.5, emission: float = 1.0, translucent: bool = Fals
     Examples
     --------
     >>> from symsphere.render import furnace, render
-    >>> image = render(furnace(albedo=0.5, emission=1.0), width=8, height=8, spp=16, sampler="cosine", seed=1).image
+    >>> image = render(furnace(albedo=0.5, emission=1.0), width=8, height=8, spp=16, strategy="cosine", seed=1).image
     >>> bool(abs(image.mean() - 2.0) < 0.1)   # Le / (1 - rho) = 2
     True
     """
