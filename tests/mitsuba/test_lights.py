@@ -27,6 +27,9 @@ UNBIASED_CASES += [("cornell", 2, "projected"), ("textured", 6, "projected"), ("
 # where the map switches inside the image between Arvo's and sampling by area (a tiny table far from or near
 # p; a disk's triangles small or not as seen from p): test_area_sampling_switches_inside_these_images
 UNBIASED_CASES += [("near_rect", 3, "solid_angle"), ("near_disk", 3, "solid_angle")]
+# the rectangle under a sky (Mitsuba's first emitter): where the rectangle is small as seen from p it samples
+# itself, chosen as Mitsuba chooses with u moved onto its interval; near it the table (u < p_table)
+UNBIASED_CASES += [("near_rect_sky", 3, "solid_angle")]
 # a light of 320 triangles: a tree with a level between its top and its leaves (42 leaves > TREE_TOP)
 UNBIASED_CASES += [("tree_light", 3, "solid_angle")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
@@ -83,11 +86,13 @@ def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
 
 
 def _scene(mi, name, tmp_path, bare=False):
-    if name not in ("mesh_light", "tree_light", "near_rect", "near_disk"):
+    if name not in ("mesh_light", "tree_light", "near_rect", "near_disk", "near_rect_sky"):
         return mi.load_dict(scene_dict(mi, name, SIZE))
     scene = scene_dict(mi, "textured", SIZE)
-    del scene["light"], scene["sky"]
-    if name == "near_rect":  # one rectangle (a tiny table) 0.5 above the floor, facing it
+    del scene["light"]
+    if name != "near_rect_sky":
+        del scene["sky"]
+    if name.startswith("near_rect"):  # one rectangle (a tiny table) 0.5 above the floor, facing it
         del scene["ball"], scene["glass"]
         T = mi.ScalarTransform4f
         scene["light"] = {"type": "rectangle", "to_world": T().translate([0, 0.5, 0]).rotate([1, 0, 0], 90).scale(0.6),

@@ -190,6 +190,7 @@ class LightTable:
             # by area" is its own sampling by area (the same density), which far lanes may call instead
             if len(set(emitter_rows)) == 1:
                 self._own_emitter = emitter_rows[0]
+                self._own_below = float(sum(pmf[: emitter_rows[0]]))  # Mitsuba's CDF below that emitter
 
         def runs(span: int) -> list[Group]:
             return [Group(tris, normal, area, lum, k, min(k + span, self.count)) for k in range(0, self.count, span)]
@@ -387,6 +388,14 @@ class LightTable:
         """(ds, radiance / pdf) at the lanes *own*: :meth:`sample_direction`'s emitters that sample
         themselves (*other*: those outside the table, at the table's lanes; *mitsuba*: any, elsewhere;
         *far*: the table's lanes where its one emitter samples itself by area)."""
+        if far is not None and len(scene.emitters()) > 1:
+            # one emitter in the table: its lanes' choice (u < p_table: it, far; else the others by their Mitsuba
+            # probabilities) is Mitsuba's choice of u moved, measure-preserving, so that [0, p_table) lands on its
+            # interval: one scene.sample_emitter for every lane (2 % of the textured scene's time, full paths)
+            below = self._own_below
+            moved = dr.select(u < self.p_table, u + below, dr.select(u < self.p_table + below, u - self.p_table, u))
+            at, inv, u_at = scene.sample_emitter(moved if mitsuba is None else dr.select(mitsuba, u, moved), own)
+            return self._emit(scene, si, at, u_at, sample.y, scene.pdf_emitter(at, own), inv, own)
         index: Any = mi.UInt32(0)
         u_x: Any = u
         selection: Any = mi.Float(1.0)
@@ -410,10 +419,13 @@ class LightTable:
             index = dr.select(far, self._own_emitter, index)
             u_x = dr.select(far, dr.minimum(u / self.p_table, 1.0 - 2.0**-24), u_x)
             selection, inverse = dr.select(far, self.p_table, selection), dr.select(far, 1.0 / self.p_table, inverse)
+        return self._emit(scene, si, index, u_x, sample.y, selection, inverse, own)
+
+    @staticmethod
+    def _emit(scene: Any, si: Any, index: Any, u_x: Any, v: Any, selection: Any, inverse: Any, own: Any) -> Any:
+        """The emitter *index*'s own sample at *si* (its selection probability and inverse given)."""
         emitter = dr.gather(mi.EmitterPtr, scene.emitters_dr(), index, own)
-        ds: Any
-        weight: Any
-        ds, weight = emitter.sample_direction(si, mi.Point2f(u_x, sample.y), own)
+        ds, weight = emitter.sample_direction(si, mi.Point2f(u_x, v), own)
         own = own & (ds.pdf != 0.0)
         ds.pdf = dr.select(own, ds.pdf * selection, 0.0)
         return ds, dr.select(own, weight * inverse, 0.0)
