@@ -257,13 +257,22 @@ def _rotated_weights(basis, count):
     return weights
 
 
+# Part 0 runs in the calling thread at once; a pool thread's part starts after a hand-off, and if it ends
+# after part 0 the caller sleeps until it is woken (25-130 us and 60-250 us on the 2-core Intel host, idle).
+# So part 0 gets the points of this many output bytes more than an equal share and usually ends last
+# (docs/results/bench-rotation.md: float32 sample_sphere(out=) of 48*2^14 and 48*2^16 directions ~4 % faster).
+HEAD_BYTES = 4 * 2**20
+
+
 @register_jitable
-def part_range(m, parts, part):
+def part_range(m, parts, part, head=0):
     """Points ``lo ... hi - 1`` of part *part* when m points are split into *parts* stretches of
-    whole batches (fewer parts than asked if there are fewer batches: see :func:`part_count`)."""
+    whole batches (fewer parts than asked if there are fewer batches: see :func:`part_count`); part 0
+    has up to *head* points more than the others, each of which has at least one batch."""
     batches = (m + _BATCH - 1) // _BATCH
-    lo = min(m, (batches * part // parts) * _BATCH)
-    hi = min(m, (batches * (part + 1) // parts) * _BATCH)
+    head = max(0, min(head // _BATCH, batches - parts)) if parts > 1 else 0
+    lo = min(m, (head + (batches - head) * part // parts) * _BATCH) if part > 0 else 0
+    hi = min(m, (head + (batches - head) * (part + 1) // parts) * _BATCH)
     return lo, hi
 
 
@@ -404,9 +413,10 @@ def _launch(kernel, weights, normal, count, out, m, parts, part_input, offset):
     """
     rows, tail = _split(out, count)
     parts = part_count(m, parts or _default_parts(m))
+    head = HEAD_BYTES // (out.itemsize * 3 * count)
 
     def arguments(index):
-        lo, hi = part_range(m, parts, index)
+        lo, hi = part_range(m, parts, index, head)
         return part_input(lo), lo, hi, weights, normal, rows, tail, offset
 
     run_kernel(kernel, arguments, parts)
@@ -535,11 +545,11 @@ rotated_weights = _rotated_weights
 prepare_kernels = _prepare_kernels
 
 
-def part_bounds(m, parts=0):
+def part_bounds(m, parts=0, head=0):
     """The bounds of the parts of the kernels (for benchmarks and tests): an int64 array."""
     _prepare_kernels()
     count = part_count(m, parts or get_num_threads())
-    return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
+    return np.array([part_range(m, count, p, head)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
 # Non-temporal stores (symsphere._vector_stores.stream_rows) write a touched output up to ~2x faster
