@@ -257,18 +257,16 @@ def _rotated_weights(basis, count):
     return weights
 
 
-# Part 0 runs in the calling thread at once; a pool thread's part starts after a hand-off, and if it ends
-# after part 0 the caller sleeps until it is woken (25-130 us and 60-250 us on the 2-core Intel host, idle).
-# So part 0 gets the points of this many output bytes more than an equal share and usually ends last
-# (docs/results/bench-rotation.md: float32 sample_sphere(out=) of 48*2^14 and 48*2^16 directions ~4 % faster).
+# Part 0 runs at once in the calling thread, a pool thread's after a hand-off; if that one ends last the caller
+# waits to be woken (24-134 and 74-250 us, 2-core Intel host).  So part 0 gets this many output bytes more and
+# usually ends last: sample_sphere(out=) 1-4 % faster, one case 23 % (docs/results/bench-rotation.md).
 HEAD_BYTES = 4 * 2**20
 
 
 @register_jitable
 def part_range(m, parts, part, head=0):
-    """Points ``lo ... hi - 1`` of part *part* when m points are split into *parts* stretches of
-    whole batches (fewer parts than asked if there are fewer batches: see :func:`part_count`); part 0
-    has up to *head* points more than the others, each of which has at least one batch."""
+    """Points ``lo ... hi - 1`` of part *part* of m points in *parts* stretches of whole batches (at most one
+    part a batch: :func:`part_count`), part 0 with up to *head* points more, each other at least a batch."""
     batches = (m + _BATCH - 1) // _BATCH
     head = max(0, min(head // _BATCH, batches - parts)) if parts > 1 else 0
     lo = min(m, (head + (batches - head) * part // parts) * _BATCH) if part > 0 else 0
