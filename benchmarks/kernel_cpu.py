@@ -209,6 +209,12 @@ def _timeline(rounds: int, n: int, head: int | None) -> None:
         print(f"{np.dtype(dtype).name}: write limit {fill:.0f} us; others' share of the CPUs {others:.0%}")
         print("  " + "  ".join(f"{key} {value:.0f}" for key, value in median.items()))
         print(f"  call {fill / median['end']:.2f}x of the limit, the parts' span {fill / span:.2f}x")
+        if "end 1" in median:  # per call, then the median: the pool's late start, the caller's wait after the last end
+            lag = statistics.median(row["start 1"] - row["start 0"] for row in rows)
+            last = [row["back"] - max(row["end 0"], row["end 1"]) for row in rows]
+            pool_last = sum(row["end 1"] > row["end 0"] for row in rows)
+            print(f"  pool's start after the caller's {lag:.0f} us; back after the last part's end {statistics.median(last):.0f} us "
+                  f"(max {max(last):.0f}); the pool's part ended last in {pool_last} of {rounds} calls")  # fmt: skip
 
 
 def _stores(rounds: int, threads: int, n: int) -> None:
