@@ -27,14 +27,14 @@ reported as 480 MiB) and not what non-temporal ones did, so a row after another 
 other's cache.  With ``--threads 2`` the clock is the wall clock
 (``time.perf_counter``), as two threads' CPU time says nothing about their waits for memory.
 
-    python benchmarks/kernel_cpu.py --timeline --rounds 21 [--n 196608] [--head 0]
+    python benchmarks/kernel_cpu.py --timeline --rounds 21 [--n 196608]
 
 With ``--timeline`` (no base): when each part of this checkout's ``sample_sphere(out=)`` (two threads,
 float32 and float64) starts and ends in its thread, in us from the call's start (``time.perf_counter_ns``
 stamps in a copy of ``symsphere._threads.run_parts``): the launch, part 0 in the calling thread, part 1
 on the pool, the caller back from its wait, the call's end; medians over rounds of each call's second run
 in a row, beside the write limit (the ``prange`` non-temporal fill) of the same rounds and the other
-processes' share of the CPUs (``/proc/stat``).  ``--head`` sets ``_kernels.HEAD_BYTES`` (0: equal parts).
+processes' share of the CPUs (``/proc/stat``); per call, the pool's late start and the caller's wait.
 
     python benchmarks/kernel_cpu.py --asm
 
@@ -70,12 +70,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
     parser.add_argument("--timeline", action="store_true", help="when each part of sample_sphere(out=) runs")
-    parser.add_argument("--head", type=int, default=None, help="with --timeline: _kernels.HEAD_BYTES")
     args = parser.parse_args(argv)
     if args.timeline:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
-        _timeline(args.rounds, args.n, args.head)
+        _timeline(args.rounds, args.n)
         return 0
     if args.asm:
         sys.path.insert(0, str(ROOT / "src"))
@@ -142,7 +141,7 @@ def _run(base: str, rounds: int, threads: int, fresh: bool) -> None:
               f"  of fill {fill / min(times[key]):.2f}")  # fmt: skip
 
 
-def _timeline(rounds: int, n: int, head: int | None) -> None:
+def _timeline(rounds: int, n: int) -> None:
     import os
     from concurrent.futures import wait
 
@@ -151,11 +150,9 @@ def _timeline(rounds: int, n: int, head: int | None) -> None:
     from numba import set_num_threads
 
     import symsphere
-    from symsphere import _kernels, _threads
+    from symsphere import _threads
 
     set_num_threads(2)
-    if head is not None:
-        _kernels.HEAD_BYTES = head
     stamps: dict[str, int] = {}
     clock = time.perf_counter_ns
 
@@ -182,8 +179,7 @@ def _timeline(rounds: int, n: int, head: int | None) -> None:
         jiffies = [int(x) for x in Path("/proc/stat").read_text().split("\n")[0].split()[1:]]
         return sum(jiffies) - jiffies[3] - jiffies[4], sum(jiffies)
 
-    print(f"kernel_cpu.py --timeline: us from the call's start, medians of {rounds} rounds, n = {n}, "
-          f"HEAD_BYTES = {_kernels.HEAD_BYTES}")  # fmt: skip
+    print(f"kernel_cpu.py --timeline: us from the call's start, medians of {rounds} rounds, n = {n}")
     for dtype in (np.float32, np.float64):
         out = np.full((n, 3), 0.5, dtype)
         rows: list[dict[str, float]] = []

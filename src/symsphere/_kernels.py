@@ -257,20 +257,13 @@ def _rotated_weights(basis, count):
     return weights
 
 
-# Part 0 runs at once in the calling thread, a pool thread's after a hand-off; if that one ends last the caller
-# waits to be woken (24-134 and 74-250 us, 2-core Intel host).  So part 0 gets this many output bytes more and
-# usually ends last: sample_sphere(out=) 1-4 % faster, one case 23 % (docs/results/bench-rotation.md).
-HEAD_BYTES = 4 * 2**20
-
-
 @register_jitable
-def part_range(m, parts, part, head=0):
-    """Points ``lo ... hi - 1`` of part *part* of m points in *parts* stretches of whole batches (at most one
-    part a batch: :func:`part_count`), part 0 with up to *head* points more, each other at least a batch."""
+def part_range(m, parts, part):
+    """Points ``lo ... hi - 1`` of part *part* when m points are split into *parts* stretches of
+    whole batches (fewer parts than asked if there are fewer batches: see :func:`part_count`)."""
     batches = (m + _BATCH - 1) // _BATCH
-    head = max(0, min(head // _BATCH, batches - parts)) if parts > 1 else 0
-    lo = min(m, (head + (batches - head) * part // parts) * _BATCH) if part > 0 else 0
-    hi = min(m, (head + (batches - head) * (part + 1) // parts) * _BATCH)
+    lo = min(m, (batches * part // parts) * _BATCH)
+    hi = min(m, (batches * (part + 1) // parts) * _BATCH)
     return lo, hi
 
 
@@ -411,10 +404,9 @@ def _launch(kernel, weights, normal, count, out, m, parts, part_input, offset):
     """
     rows, tail = _split(out, count)
     parts = part_count(m, parts or _default_parts(m))
-    head = HEAD_BYTES // (out.itemsize * 3 * count)
 
     def arguments(index):
-        lo, hi = part_range(m, parts, index, head)
+        lo, hi = part_range(m, parts, index)
         return part_input(lo), lo, hi, weights, normal, rows, tail, offset
 
     run_kernel(kernel, arguments, parts)
@@ -543,11 +535,11 @@ rotated_weights = _rotated_weights
 prepare_kernels = _prepare_kernels
 
 
-def part_bounds(m, parts=0, head=0):
+def part_bounds(m, parts=0):
     """The bounds of the parts of the kernels (for benchmarks and tests): an int64 array."""
     _prepare_kernels()
     count = part_count(m, parts or get_num_threads())
-    return np.array([part_range(m, count, p, head)[0] for p in range(count)] + [m], dtype=np.int64)
+    return np.array([part_range(m, count, p)[0] for p in range(count)] + [m], dtype=np.int64)
 
 
 # Non-temporal stores (symsphere._vector_stores.stream_rows) write a touched output up to ~2x faster
