@@ -27,6 +27,15 @@ reported as 480 MiB) and not what non-temporal ones did, so a row after another 
 other's cache.  With ``--threads 2`` the clock is the wall clock
 (``time.perf_counter``), as two threads' CPU time says nothing about their waits for memory.
 
+    python benchmarks/kernel_cpu.py --timeline --rounds 21 [--n 196608]
+
+With ``--timeline`` (no base): when each part of this checkout's ``sample_sphere(out=)`` (two threads,
+float32 and float64) starts and ends in its thread, in us from the call's start (``time.perf_counter_ns``
+stamps in a copy of ``symsphere._threads.run_parts``): the launch, part 0 in the calling thread, part 1
+on the pool, the caller back from its wait, the call's end; medians over rounds of each call's second run
+in a row, beside the write limit (the ``prange`` non-temporal fill) of the same rounds and the other
+processes' share of the CPUs (``/proc/stat``); per call, the pool's late start and the caller's wait.
+
     python benchmarks/kernel_cpu.py --asm
 
 With ``--asm``: the vector and scalar floating-point instructions of the kernel about a normal (random
@@ -60,7 +69,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--stores", action="store_true", help="this checkout's plain against streamed stores")
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
+    parser.add_argument("--timeline", action="store_true", help="when each part of sample_sphere(out=) runs")
     args = parser.parse_args(argv)
+    if args.timeline:
+        sys.path.insert(0, str(ROOT / "src"))
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        _timeline(args.rounds, args.n)
+        return 0
     if args.asm:
         sys.path.insert(0, str(ROOT / "src"))
         _asm()
@@ -124,6 +139,78 @@ def _run(base: str, rounds: int, threads: int, fresh: bool) -> None:
         fill = min(times[f"fill ({'float64' if 'float64' in key else 'float32'})"])
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}"
               f"  of fill {fill / min(times[key]):.2f}")  # fmt: skip
+
+
+def _timeline(rounds: int, n: int) -> None:
+    import os
+    from concurrent.futures import wait
+
+    import _write_limit  # type: ignore[import-not-found]  # benchmarks/, put on the path above
+    import numpy as np
+    from numba import set_num_threads
+
+    import symsphere
+    from symsphere import _threads
+
+    set_num_threads(2)
+    stamps: dict[str, int] = {}
+    clock = time.perf_counter_ns
+
+    def run_parts(task: Callable[[int], None], count: int) -> None:  # _threads.run_parts, with stamps
+        stamps["launch"] = clock()
+
+        def part(index: int) -> None:
+            stamps[f"start {index}"] = clock()
+            task(index)
+            stamps[f"end {index}"] = clock()
+
+        futures = [_threads._executor().submit(part, index) for index in range(1, count)]
+        try:
+            part(0)
+        finally:
+            wait(futures)
+        stamps["back"] = clock()
+        for future in futures:
+            future.result()
+
+    _threads.run_parts = run_parts  # run_kernel looks it up at each call
+
+    def busy() -> tuple[int, int]:
+        jiffies = [int(x) for x in Path("/proc/stat").read_text().split("\n")[0].split()[1:]]
+        return sum(jiffies) - jiffies[3] - jiffies[4], sum(jiffies)
+
+    print(f"kernel_cpu.py --timeline: us from the call's start, medians of {rounds} rounds, n = {n}")
+    for dtype in (np.float32, np.float64):
+        out = np.full((n, 3), 0.5, dtype)
+        rows: list[dict[str, float]] = []
+        limit = []
+        busy0, all0, mine0 = *busy(), sum(os.times()[:2])
+        for _ in range(rounds):
+            for _ in range(2):
+                stamps.clear()
+                start = clock()
+                symsphere.sample_sphere(n, rng=1, dtype=dtype, out=out)
+                end = clock()
+            rows.append({key: (value - start) / 1e3 for key, value in stamps.items()} | {"end": (end - start) / 1e3})
+            for _ in range(2):
+                start = clock()
+                _write_limit._nontemporal(out.reshape(-1), 0.5)
+                end = clock()
+            limit.append((end - start) / 1e3)
+        busy1, all1, mine1 = *busy(), sum(os.times()[:2])
+        others = max(0.0, (busy1 - busy0 - (mine1 - mine0) * os.sysconf("SC_CLK_TCK")) / (all1 - all0))
+        median = {key: statistics.median(row[key] for row in rows) for key in rows[0]}
+        fill = statistics.median(limit)
+        span = max(median["end 0"], median.get("end 1", 0.0)) - median["start 0"]
+        print(f"{np.dtype(dtype).name}: write limit {fill:.0f} us; others' share of the CPUs {others:.0%}")
+        print("  " + "  ".join(f"{key} {value:.0f}" for key, value in median.items()))
+        print(f"  call {fill / median['end']:.2f}x of the limit, the parts' span {fill / span:.2f}x")
+        if "end 1" in median:  # per call, then the median: the pool's late start, the caller's wait after the last end
+            lag = statistics.median(row["start 1"] - row["start 0"] for row in rows)
+            last = [row["back"] - max(row["end 0"], row["end 1"]) for row in rows]
+            pool_last = sum(row["end 1"] > row["end 0"] for row in rows)
+            print(f"  pool's start after the caller's {lag:.0f} us; back after the last part's end {statistics.median(last):.0f} us "
+                  f"(max {max(last):.0f}); the pool's part ended last in {pool_last} of {rounds} calls")  # fmt: skip
 
 
 def _stores(rounds: int, threads: int, n: int) -> None:
