@@ -13,13 +13,13 @@ shading point p:
    times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n the
    geometric normal at p; unsigned: 0 only for a triangle in p's tangent plane), 0 behind the triangle
    (area emitters are one-sided).  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled,
-   the triangles constants of the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed depth over a spatial order
-   (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top (constants), each of
-   :data:`FANOUT` runs of the level below (gathered), down to leaves of :data:`TREE_LEAF` triangles; a run
-   is chosen by an importance ``power cos cos_r / d^2`` of its bounds (:class:`Group`, as pbrt-v4's
-   ``LightBounds::Importance``: 0 only where none of its triangles faces p), a triangle of the leaf by a
-   proxy of w_i (:meth:`LightTable._member_weights`); but where the chosen top run is small as seen from p
-   (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels below;
+   the triangles constants of the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed
+   depth over a spatial order (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top
+   (constants), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
+   :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its bounds
+   (:class:`Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p), a
+   triangle of the leaf by a proxy of w_i (:meth:`LightTable._member_weights`); but where the chosen top run
+   is small as seen from p (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels below;
 2. a direction uniform in the chosen triangle's solid angle (Arvo's map,
    :func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, in float32 as Mitsuba's own sampling),
    but where the triangle is small as seen from p (:data:`AREA_BELOW`) a point uniform in its area,
