@@ -23,10 +23,13 @@ is positive, and the distance of each direction from the numpy float64 map's on 
 from __future__ import annotations
 
 import argparse
-import json
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _scan import timed, write
 
 from symsphere.warps import (
     projected_triangle_to_square,
@@ -207,25 +210,18 @@ def main(argv=None):
     args = parser.parse_args(argv)
     record = {"args": vars(args)}
     for dtype in (np.float64, np.float32):
-        start = time.perf_counter()
         triangles = args.triangles if dtype == np.float64 or args.float32_triangles is None else args.float32_triangles
-        counts = scan_numpy(dtype, triangles, args.samples, args.seed)
-        counts["seconds"] = round(time.perf_counter() - start, 1)
-        record[np.dtype(dtype).name] = counts
-        print(np.dtype(dtype).name, counts, flush=True)
+        timed(record, np.dtype(dtype).name, lambda: scan_numpy(dtype, triangles, args.samples, args.seed))
     for precision in ("f32", "f64") if args.drjit_triangles else ():
         if args.drjit_precision not in (precision, "both"):
             continue
-        start = time.perf_counter()
-        counts = scan_drjit(args.drjit_triangles, args.drjit_samples, args.seed + 1, precision=precision)
-        counts["seconds"] = round(time.perf_counter() - start, 1)
         name = "drjit_float32" if precision == "f32" else "drjit_float64"
-        record[name] = counts
-        print(name, counts, flush=True)
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(record, f, indent=1)
-            f.write("\n")
+        timed(
+            record,
+            name,
+            lambda: scan_drjit(args.drjit_triangles, args.drjit_samples, args.seed + 1, precision=precision),
+        )
+    write(args.json, record)
 
 
 if __name__ == "__main__":

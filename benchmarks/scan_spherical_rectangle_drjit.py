@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _scan import timed, write
 
 
 def _generator():
@@ -65,16 +67,8 @@ def main(argv=None):
 
     record = {"args": vars(args)}
     for f64 in (True, False):
-        start = time.perf_counter()
-        counts = scan(mi, sm, f64, args.batches, args.samples, args.seed)
-        counts["seconds"] = round(time.perf_counter() - start, 1)
-        name = "float64" if f64 else "float32"
-        record[name] = counts
-        print(name, counts, flush=True)
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(record, f, indent=1)
-            f.write("\n")
+        timed(record, "float64" if f64 else "float32", lambda: scan(mi, sm, f64, args.batches, args.samples, args.seed))
+    write(args.json, record)
 
 
 if __name__ == "__main__":

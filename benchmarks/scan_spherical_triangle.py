@@ -14,10 +14,13 @@ densities; triangles below 1e-12 sr are refused by the map (ValueError), counted
 from __future__ import annotations
 
 import argparse
-import json
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _scan import timed, write
 
 from symsphere.warps import spherical_triangle_to_square, square_to_spherical_triangle, square_to_spherical_triangle_pdf
 
@@ -91,15 +94,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     record = {"args": vars(args)}
     for dtype in (np.float64, np.float32):
-        start = time.perf_counter()
-        counts = scan(dtype, args.triangles, args.samples, args.seed)
-        counts["seconds"] = round(time.perf_counter() - start, 1)
-        record[np.dtype(dtype).name] = counts
-        print(np.dtype(dtype).name, counts, flush=True)
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(record, f, indent=1)
-            f.write("\n")
+        timed(record, np.dtype(dtype).name, lambda: scan(dtype, args.triangles, args.samples, args.seed))
+    write(args.json, record)
 
 
 if __name__ == "__main__":
