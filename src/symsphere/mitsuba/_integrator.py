@@ -24,19 +24,18 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
-With ``emitter_sampling`` ``'solid_angle'``, ``'cosine'`` or ``'projected'`` (a light table, :mod:`._lights`) the MIS
-differs at diffuse
-vertices (BSDF flags diffuse only, no glossy or delta part): there the table's emitters are sampled by
-light sampling alone (weight 1), and a BSDF-sampled ray that finds one of them counts 0; other emitters
-keep the power heuristic.  At every other vertex all emitters are sampled as Mitsuba's ``path`` samples
-them, with its MIS (so no hit needs the table's density, and a scene whose every BSDF is glossy renders
-as ``path`` bit for bit); the technique of a vertex depends only on its BSDF.  The two weights of each (vertex,
-emitter) pair still sum to 1, and light sampling covers every direction in which a front-facing table
-triangle is seen (its density is positive there), so the estimator is unbiased; by solid angle, light
-sampling alone at a diffuse vertex leaves only the cosine's variation over the light, which MIS with
-the cosine-weighted BSDF sample barely lowers.  In a scene whose every BSDF is diffuse and whose every
-emitter is in the table, no hit needs the light sampling's density, and the ray from a vertex whose next
-vertex is the last (``max_depth``) is not traced: it can only find emission weighted 0.
+With ``emitter_sampling`` ``'solid_angle'``, ``'cosine'`` or ``'projected'`` (a light table,
+:mod:`._lights`) the MIS differs at diffuse vertices (BSDF flags diffuse only, no glossy or delta part):
+there the table's emitters are sampled by light sampling alone (weight 1), and a BSDF-sampled ray that finds
+one of them counts 0; other emitters keep the power heuristic.  At every other vertex all emitters are
+sampled as Mitsuba's ``path`` samples them, with its MIS (so no hit needs the table's density, and a scene
+whose every BSDF is glossy renders as ``path`` bit for bit); the technique of a vertex depends only on its
+BSDF.  The two weights of each (vertex, emitter) pair still sum to 1, and light sampling covers every
+direction in which a front-facing table triangle is seen (its density is positive there), so the estimator
+is unbiased; by solid angle, light sampling alone at a diffuse vertex leaves only the cosine's variation
+over the light, which MIS with the cosine-weighted BSDF sample barely lowers.  In a scene whose every BSDF is
+diffuse and whose every emitter is in the table, no hit needs the light sampling's density, and the ray from
+a vertex whose next vertex is the last (``max_depth``) is not traced: it can only find emission weighted 0.
 
 Base points (``points``) are ``random`` (hashes) or ``sobol`` (Owen-scrambled, index-shuffled Sobol'),
 as :mod:`symsphere.render`'s samplers; ``bsdf`` takes the scene sampler's points (choose a QMC sampler

@@ -173,7 +173,7 @@ class Level:
 
     def __init__(self, groups: list[Group], soft: float) -> None:
         self.count, self.soft = len(groups), soft
-        self.fields = [column(np.array([g.fields[k] for g in groups], dtype=np.float32)) for k in range(11)]
+        self.fields = [column(field) for field in np.array([g.fields for g in groups], dtype=np.float32).T]
 
     def weight(self, p: Any, node: Any, active: Any, n: Any = None) -> Any:
         """The importance at p of the group *node* (0 where not *active*)."""
