@@ -402,6 +402,10 @@ class _PathMethods:
         ctx = mi.BSDFContext()
 
         while active:
+            if dr.hint(replaces, mode="scalar"):
+                # first: it needs only the sample and the depth, and its chain of dependent multiplies
+                # (hashes, Owen scramble) can then overlap the trace call instead of waiting after the BSDF's
+                local, pdf_local = self._local_direction(key, s, depth)
             si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=(depth == 0))
             if dr.hint(self.hide_emitters, mode="scalar"):  # Mitsuba's: the camera ray passes through area emitters
                 skip = (depth == 0) & si.is_valid() & (si.shape.emitter() != None)  # noqa: E711 - a Dr.Jit comparison
@@ -452,7 +456,6 @@ class _PathMethods:
 
             if dr.hint(replaces, mode="scalar"):
                 lambertian = active_next & (dr.gather(mi.UInt32, table, bsdf_ids(bsdf), active_next) != 0)
-                local, pdf_local = self._local_direction(key, s, depth)
                 local.z = dr.mulsign(local.z, si.wi.z)
                 # A Lambertian BSDF's own (cosine) sample has weight f cos / pdf = its reflectance R at si,
                 # whatever the direction (0 where wi is below a one-sided surface, and in the measure-zero
