@@ -38,10 +38,10 @@ processes' share of the CPUs (``/proc/stat``); per call, the pool's late start a
 
     python benchmarks/kernel_cpu.py --asm
 
-With ``--asm``: the vector and scalar floating-point instructions of the kernel about a normal (random
-points, the equal-area map; float64 and float32 rows, plain stores), counted in its assembly, compiled
-in an empty numba cache (numba shows no assembly for cached code).  The rotated store appears twice in
-the kernel, for the whole orbits and for a cut one.
+With ``--asm``: the vector and scalar floating-point instructions and permutations of the kernel about a
+normal (random points, the equal-area map; float64 and float32 rows, plain stores), counted in its
+assembly, compiled in an empty numba cache (numba shows no assembly for cached code).  The rotated store
+appears twice in the kernel, for the whole orbits and for a cut one.
 """
 
 from __future__ import annotations
@@ -283,7 +283,9 @@ def _asm() -> None:
         kernel = kernels._fill_kernel(kernels._RANDOM, 0, kernels._HEMISPHERE_ROTATED, False)
         for signature, text in kernel.inspect_asm().items():
             counts: collections.Counter[str] = collections.Counter()
-            for op, operands in re.findall(r"^\s+(v(?:mul|add|sub|cvt)\w*|vbroadcastsd)\s+([^\n]*)", text, re.M):
+            for op, operands in re.findall(
+                r"^\s+(v(?:mul|add|sub|cvt|perm|shuf|xor)\w*|vbroadcastsd)\s+([^\n]*)", text, re.M
+            ):
                 width = next((r for r in ("zmm", "ymm", "xmm") if r in operands), "")
                 counts[f"{op} {width}"] += 1
             print(f"rows {signature[5].dtype}: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))

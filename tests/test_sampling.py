@@ -421,10 +421,25 @@ def test_out_and_dtype_for_any_n(dtype, n):
     out = np.full((n, 3), np.nan, dtype=dtype)
     assert sample_sphere(n, rng=5, dtype=dtype, out=out) is out
     fresh = sample_sphere(n, rng=5, dtype=dtype)
-    assert np.array_equal(out, fresh) and fresh.base is None  # a fresh array of n rows, not a view of more
+    assert np.array_equal(out, fresh) and fresh.base.nbytes - fresh.nbytes == 64  # n rows and a line, no more
     assert np.all(np.isfinite(out))
     with pytest.raises(ValueError, match="'out' must have shape"):
         sample_sphere(101, out=np.empty((96, 3), dtype=dtype), dtype=dtype)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_fresh_output_starts_a_line_and_a_large_one_a_huge_page(dtype):
+    # The kernels store in 64-byte vectors, and numpy asks for 2 MiB pages from 4 MiB on, where numpy's
+    # own arrays start 16 bytes into a line: a fresh output (and a block of iter_*) starts on both, a
+    # view of an allocation of its own, one alignment larger.
+    large = 2**22 // (3 * np.dtype(dtype).itemsize) + 1
+    for n, align in ((101, 64), (large, 2**21)):
+        fresh = sample_hemisphere(n, rng=5, normal=(1.0, 1.0, 1.0), dtype=dtype)
+        assert fresh.shape == (n, 3) and fresh.flags.c_contiguous and fresh.flags.writeable
+        assert fresh.ctypes.data % align == 0
+        assert fresh.base.flags.owndata and fresh.base.nbytes - fresh.nbytes == align
+    blocks = list(iter_hemisphere(24 * 40, chunk=24 * 16, dtype=dtype, rng=5))
+    assert all(b.ctypes.data % 64 == 0 and b.base.nbytes - b.nbytes == 64 for b in blocks)
 
 
 @pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])

@@ -6,7 +6,8 @@ orbits by ``_kernels.fill``, in any order, on any thread or process, with identi
 :mod:`symsphere.sampling` fills one range or a stream of chunks, :mod:`symsphere.distributed` one
 range per Dask task, and :mod:`symsphere._integration` one block per partial sum.  Here: the base
 point source with its warnings attributed to the user's line (:func:`base_points`), where a cut
-orbit's members start (:func:`cut_offset`), and the numpy reference the kernels are tested against.
+orbit's members start (:func:`cut_offset`), a fresh output on cache lines and large pages
+(:func:`empty_rows`), and the numpy reference the kernels are tested against.
 """
 
 from __future__ import annotations
@@ -15,6 +16,10 @@ import os
 import sys
 import warnings
 from types import FrameType
+from typing import TypeVar
+
+import numpy as np
+import numpy.typing as npt
 
 from . import frames
 from ._random.splitmix import GOLDEN, mix64_int
@@ -23,7 +28,7 @@ from .points import BasePoints
 from .symmetry import orbit, orbit_size
 from .warps import triangle_warp
 
-__all__ = ["CUT_ORBIT_KEY", "base_points", "cut_offset", "reference_orbits", "warn_at_caller"]
+__all__ = ["CUT_ORBIT_KEY", "base_points", "cut_offset", "empty_rows", "reference_orbits", "warn_at_caller"]
 
 _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
 CUT_ORBIT_KEY = 2
@@ -67,6 +72,32 @@ def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
     while caller is not None and os.path.abspath(caller.f_code.co_filename).startswith(inside):
         level, caller = level + 1, caller.f_back
     warnings.warn(message, category, stacklevel=level)
+
+
+_LINE = 64  # bytes: a cache line, and the kernels' widest store
+_HUGE_PAGE = 2**21
+_HUGE_FROM = 2**22  # numpy asks the operating system for huge pages (madvise) for arrays from 4 MiB on
+_Scalar = TypeVar("_Scalar", bound=np.generic)
+
+
+def empty_rows(n: int, dtype: np.dtype[_Scalar]) -> npt.NDArray[_Scalar]:
+    """An empty (n, 3) array of *dtype* for the kernels to fill: C-contiguous, writeable, a view of an
+    allocation of its own (its ``base``) 64 bytes larger, or 2 MiB from 4 MiB on.
+
+    Its first row starts a 64-byte line, and from 4 MiB on a 2 MiB page.  numpy's large arrays start 16
+    bytes into a line (malloc's header): every 64-byte float64 store of a rotated orbit, and half its
+    32-byte float32 stores, then span two lines.  And numpy asks for 2 MiB pages from 4 MiB on, but a
+    range that does not start on one is mapped in 4 KiB pages up to the first 2 MiB boundary and after
+    the last: ~500 page faults more per call, each stopping the thread that stores (docs/results/
+    bench-stores.md).  The bytes before the first row are never written; after the last row at most
+    one 2 MiB page more may be mapped, when the allocation covers it whole.
+    """
+    size = 3 * n
+    nbytes = size * dtype.itemsize
+    align = _HUGE_PAGE if nbytes >= _HUGE_FROM else _LINE
+    raw = np.empty(size + align // dtype.itemsize, dtype=dtype)
+    start = (-raw.ctypes.data % align) // dtype.itemsize  # numpy's data starts on 16 bytes: whole elements
+    return raw[start : start + size].reshape(n, 3)
 
 
 def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:

@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import frames
-from ._blocks import warn_at_caller
+from ._blocks import empty_rows, warn_at_caller
 from ._constants import HEMISPHERE_AREA, SPHERE_AREA
 from ._fused import Compiled, NonFiniteBlock, compiled_integrand, fused_partials, vectorised
 from ._kernels import Plan as KernelPlan
@@ -358,7 +358,7 @@ def block_partial(plan: Plan, replicate: int, block: int) -> Partial:
     stop = min(start + BLOCK, plan.orbits_per_replicate)
     source = plan.sources[replicate]
     triangle_map = triangle_warp(plan.method)
-    directions = np.empty(((stop - start) * plan.count, 3))
+    directions = empty_rows((stop - start) * plan.count, np.dtype(np.float64))
     if triangle_map.uniform:
         fill(
             KernelPlan(source, plan.method, plan.count, plan.basis), start, stop, directions

@@ -34,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import frames
-from ._blocks import base_points
+from ._blocks import base_points, empty_rows
 from ._clients import client_or_local, close_client, connect, local_client
 from ._integration import (
     Integrand,
@@ -441,7 +441,7 @@ def _directions_task(
 ) -> FloatArray:
     _single_threaded_kernels()
     source = copy.deepcopy(source)  # QMC engines are stateful, and tasks may share a process
-    out = np.empty(((stop - start) * count, 3), dtype=dtype)
+    out = empty_rows((stop - start) * count, dtype)
     return fill(KernelPlan(source, method, count, basis), start, stop, out)
 
 

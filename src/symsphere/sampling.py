@@ -481,7 +481,7 @@ or scipy.stats.qmc.QMCEngine
             for start in range(0, total, per_chunk):
                 stop = min(start + per_chunk, total)
                 if out is None:
-                    block = np.empty(((stop - start) * count, 3), dtype=self.dtype)
+                    block = _blocks.empty_rows((stop - start) * count, self.dtype)
                 else:
                     block = out[start * count : stop * count]
                 yield _kernels.fill(plan, first + start, first + stop, block)
@@ -542,8 +542,9 @@ or scipy.stats.qmc.QMCEngine
 
 
 def _allocate(n: int, dtype: np.dtype[Any]) -> FloatArray:
-    """An empty (n, 3) array; ValueError naming 'n' if it cannot fit in the machine's memory (numpy's
-    MemoryError named neither the argument nor what to do)."""
+    """An empty (n, 3) array (:func:`symsphere._blocks.empty_rows`: on cache lines, a view of an allocation
+    of its own); ValueError naming 'n' if it cannot fit in the machine's memory (numpy's MemoryError named
+    neither the argument nor what to do)."""
     need = 3 * n * dtype.itemsize
     memory = machine_memory()
     hint = "stream them with iter_sphere / iter_hemisphere (chunk=...) or symsphere.io.stream_directions"
@@ -553,7 +554,7 @@ def _allocate(n: int, dtype: np.dtype[Any]) -> FloatArray:
             f"{memory / 2**30:.3g} GiB; {hint}, or pass a smaller n"
         )
     try:
-        return np.empty((n, 3), dtype=dtype)
+        return _blocks.empty_rows(n, dtype)
     except MemoryError:
         raise ValueError(
             f"'n'={n} directions ({need / 2**30:.3g} GiB as {dtype}) do not fit in free memory; {hint}"
