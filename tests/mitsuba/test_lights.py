@@ -615,10 +615,10 @@ def test_a_one_triangle_light_renders_again_from_the_kernel_cache(llvm, tmp_path
     _assert_renders_again_from_the_kernel_cache(mi, mi.load_dict(scene), 2)
 
 
-@pytest.mark.parametrize("scene_name", ["tree_light", "textured"])
+@pytest.mark.parametrize("scene_name", ["tree_light", "textured", "exact_light"])
 def test_the_tree_and_a_tiny_table_render_again_from_the_kernel_cache(llvm, tmp_path, scene_name):
-    """The same with the tree's alias tables (a second render's columns are new arrays) and with a tiny
-    table whose emitter samples itself where it is small."""
+    """The same with the tree's alias tables (a second render's columns are new arrays), with a tiny
+    table whose emitter samples itself where it is small, and with an exact table's emitters' alias tables."""
     _assert_renders_again_from_the_kernel_cache(llvm, _scene(llvm, scene_name, tmp_path), 3)
 
 
