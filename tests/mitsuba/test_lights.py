@@ -32,7 +32,7 @@ UNBIASED_CASES += [("near_rect", 3, "solid_angle"), ("near_disk", 3, "solid_angl
 UNBIASED_CASES += [("near_rect_sky", 3, "solid_angle")]
 # a light of 320 triangles: a tree with a level between its top and its leaves (42 leaves > TREE_TOP)
 UNBIASED_CASES += [("tree_light", 3, "solid_angle")]
-# 24 + 12 triangles, each weighed, but by power where both emitters are small as seen from p
+# 24 + 12 triangles, each weighed, but by power where all runs of their rows are small as seen from p
 UNBIASED_CASES += [("exact_light", 3, "solid_angle")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
 FURNACE_TESTS = 6
@@ -254,7 +254,7 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
 def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
     """Brute force: at random points with random receiver normals, the probabilities with which the table
     chooses each of its triangles (the exact choice of the Cornell box's 2 and of the 36 of a disk and a
-    panel, by power where both are small as seen from p, the tree of the mesh-light scene's 92: leaves
+    panel, by power where all their runs are small as seen from p, the tree of the mesh-light scene's 92: leaves
     under its top, and of the tree-light scene's 332: a level between) sum to 1 wherever a triangle faces
     the point, and a sampled row's probability is the one computed for it."""
     mi = llvm
@@ -338,8 +338,8 @@ def test_alias_tables_choose_rows_by_their_share(llvm):
 
 # (scene, point): the mesh-light scene (two emitters, one chosen through the tree, one exactly; most
 # triangles sampled by area there), near_rect near its light (Arvo's map) and far (by power and area),
-# near_disk where some of its triangles are sampled by area and some by Arvo's map, exact_light where both of
-# its emitters are small as seen from p (an emitter by its importance, its triangle by power)
+# near_disk where some of its triangles are sampled by area and some by Arvo's map, exact_light where every run of
+# its emitters' rows is small as seen from p (a run by its importance, its triangle by power)
 DENSITY_CASES = [("mesh_light", (0.1, 0.3, -0.2)), ("near_rect", (0.2, 0.1, 0.1)), ("near_rect", (1.8, 0.1, 1.2)),
                  ("near_disk", (1.4, 0.1, 0.6)), ("tree_light", (0.3, 0.2, 0.4)), ("exact_light", (1.0, 0.1, 0.8))]  # fmt: skip
 

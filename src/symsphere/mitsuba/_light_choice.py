@@ -2,9 +2,9 @@
 :class:`._lights.LightTable` (its rows' vertices, the weights and the tree; see :mod:`._lights`).
 
 Up to :data:`EXACT_MAX` triangles every weight ``Omega_i(p) L_e c_i`` is evaluated
-(:func:`._light_rows.triangle_weight`), unless every emitter's triangles are small as seen from p
-(:data:`CLUSTER_BELOW`): then an emitter by its importance (:class:`._light_rows.Group`) and its triangle
-by power.  Above, a tree of fixed depth (:func:`._light_rows.tree_spans`): a top run by its importance,
+(:func:`._light_rows.triangle_weight`), unless every group of at most :data:`CLUSTER_ROWS` of an emitter's
+triangles is small as seen from p (:data:`CLUSTER_BELOW`): then a group by its importance
+(:class:`._light_rows.Group`) and its triangle by power.  Above, a tree of fixed depth (:func:`._light_rows.tree_spans`): a top run by its importance,
 by power below it where it is small as seen from p (:data:`TOP_BELOW`), else through the levels below to
 a leaf and a triangle of it by a proxy of its weight.  :meth:`Choice.probability` is the probability of
 a row under the same rules (each deterministic in p, every triangle facing p kept choosable)."""
@@ -31,7 +31,17 @@ from ._light_rows import (
     weight_sum,
 )
 
-__all__ = ["CLUSTER_BELOW", "EXACT_MAX", "FANOUT", "TOP_BELOW", "TREE_LEAF", "TREE_SOFT", "TREE_TOP", "Choice"]
+__all__ = [
+    "CLUSTER_BELOW",
+    "CLUSTER_ROWS",
+    "EXACT_MAX",
+    "FANOUT",
+    "TOP_BELOW",
+    "TREE_LEAF",
+    "TREE_SOFT",
+    "TREE_TOP",
+    "Choice",
+]
 
 EXACT_MAX = 64
 """Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
@@ -45,10 +55,15 @@ distance), its triangle is chosen by power (an alias table), not through the lev
 TREE_SOFT = 0.1
 """The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 CLUSTER_BELOW = 0.4
-"""Up to EXACT_MAX triangles (more than two): where every emitter's triangles are small as seen from p
-(their bounding radius below this times their centre's distance), an emitter is chosen by its importance
-(:class:`._light_rows.Group`) and its triangle by power (an alias table), without the triangles' weights
-(0: never)."""
+"""Up to EXACT_MAX triangles (more than two): where every group of an emitter's triangles (CLUSTER_ROWS) is
+small as seen from p (its bounding radius below this times its centre's distance), a group is chosen by its
+importance (:class:`._light_rows.Group`) and its triangle by power (an alias table), without the triangles'
+weights (0: never)."""
+
+
+CLUSTER_ROWS = 8
+"""CLUSTER_BELOW's groups: runs of at most this many rows of one emitter (in a spatial order), so that a large
+emitter is small as seen from p in parts, and the choice among them follows the light's falloff over it."""
 
 
 class Choice:
@@ -82,11 +97,13 @@ class Choice:
         self._levels = [Level(runs(span), TREE_SOFT) for span in self.spans[1:]]  # gathered: the nodes below the top
         self._fanouts = [a // b for a, b in zip(self.spans, self.spans[1:], strict=False)]
         self._top = Level(groups, TREE_SOFT)  # the top level gathered: the density of a chosen row
-        # small as seen from p: a tree's top run, or every emitter of an exact table, chooses by power (choose)
+        # small as seen from p: a tree's top run, or every group of an exact table, chooses by power (choose)
         self._clusters: list[Group] | None = None
         if self.mode == "tree":
             keep, alias, shares = alias_rows(area * lum, self.spans[0])
         elif count > 2 and CLUSTER_BELOW > 0.0:  # (a table of two: _lights.TINY_MAX)
+            # runs of at most CLUSTER_ROWS rows of an emitter (the table orders each emitter's rows spatially)
+            starts = [k for a, b in zip(starts, [*starts[1:], count], strict=True) for k in range(a, b, CLUSTER_ROWS)]
             sizes = np.diff([*starts, count])
             self._clusters = [Group(tris, normal, area, lum, a, a + k) for a, k in zip(starts, sizes, strict=True)]
             keep, alias, shares = alias_rows(area * lum, starts)
@@ -161,7 +178,7 @@ class Choice:
         return node, probability, u
 
     def _clusters_far(self, p: Any) -> Any:
-        """The lanes where every emitter's triangles are small as seen from p (:data:`CLUSTER_BELOW`): a test
+        """The lanes where every group (:data:`CLUSTER_ROWS`) is small as seen from p (:data:`CLUSTER_BELOW`): a test
         of constants, before any triangle's weight."""
         far = mi.Bool(True)
         for g in self._clusters or []:
@@ -179,8 +196,8 @@ class Choice:
 
     def choose(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
         """(row, its probability at p, u reused) for the point p (mi.Vector3f) and u (mi.Float64).  Exact: each
-        triangle by its weight, but where every emitter is small as seen from p (:meth:`_clusters_far`) an
-        emitter by its importance and its triangle by power.  Tree: a top run by its importance, then, where
+        triangle by its weight, but where every group of an emitter's triangles is small as seen from p
+        (:meth:`_clusters_far`) a group by its importance and its triangle by power.  Tree: a top run by its importance, then, where
         it is small as seen from p, its triangle by power, else a leaf through the levels below and its
         triangle by the members' weights.  The weights in a branch that a packet of lanes all small skips."""
         if self.mode == "exact" and self._clusters is None:

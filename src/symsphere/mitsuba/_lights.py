@@ -13,9 +13,10 @@ shading point p:
    times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n the
    geometric normal at p; unsigned: 0 only for a triangle in p's tangent plane), 0 behind the triangle
    (area emitters are one-sided).  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled,
-   the triangles constants of the kernel; float32 sums: u has 24 bits), but where every emitter's triangles
-   are small as seen from p (:data:`CLUSTER_BELOW`) an emitter by its importance and its triangle by power,
-   no w_i evaluated.  Above, through a tree of fixed
+   the triangles constants of the kernel; float32 sums: u has 24 bits), but where every run of
+   :data:`CLUSTER_ROWS` of an emitter's triangles (in a spatial order) is small as seen from p
+   (:data:`CLUSTER_BELOW`) a run by its importance and its triangle by power, no w_i evaluated.  Above,
+   through a tree of fixed
    depth over a spatial order (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top
    (constants), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
    :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its bounds
@@ -50,7 +51,17 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ._light_choice import CLUSTER_BELOW, EXACT_MAX, FANOUT, TOP_BELOW, TREE_LEAF, TREE_SOFT, TREE_TOP, Choice
+from ._light_choice import (
+    CLUSTER_BELOW,
+    CLUSTER_ROWS,
+    EXACT_MAX,
+    FANOUT,
+    TOP_BELOW,
+    TREE_LEAF,
+    TREE_SOFT,
+    TREE_TOP,
+    Choice,
+)
 from ._light_rows import (
     alias_pick,
     alias_rows,
@@ -71,7 +82,7 @@ from ._light_rows import (
 from ._projected import choose_projected, cosine_table_sample, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
-__all__ = ["AREA_BELOW", "CLUSTER_BELOW", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX",
+__all__ = ["AREA_BELOW", "CLUSTER_BELOW", "CLUSTER_ROWS", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX",
            "TREE_LEAF", "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "alias_pick", "alias_rows", "build"]  # fmt: skip
 
 EMITTER_SAMPLINGS = ("area", "cosine", "projected", "solid_angle")
@@ -135,7 +146,11 @@ class LightTable(Choice):
         uvs = np.concatenate(uv_rows)
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
+        # the spatial order: the tree's runs, an exact table's runs of CLUSTER_ROWS within each emitter
         order = spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        if TINY_MAX < self.count <= EXACT_MAX:
+            stops = [*starts[1:], self.count]
+            order = np.concatenate([a + spatial_order(tris[a:b]) for a, b in zip(starts, stops, strict=True)])
         tris, uvs, lum, emitter_of = tris[order], uvs[order], lum[order], emitter_of[order]
         row_of = np.empty(self.count, dtype=np.uint32)
         row_of[order] = np.arange(self.count, dtype=np.uint32)  # table index (shape's first + prim) -> row
