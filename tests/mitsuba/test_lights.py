@@ -32,6 +32,8 @@ UNBIASED_CASES += [("near_rect", 3, "solid_angle"), ("near_disk", 3, "solid_angl
 UNBIASED_CASES += [("near_rect_sky", 3, "solid_angle")]
 # a light of 320 triangles: a tree with a level between its top and its leaves (42 leaves > TREE_TOP)
 UNBIASED_CASES += [("tree_light", 3, "solid_angle")]
+# 24 + 12 triangles, each weighed, but by power where all runs of their rows are small as seen from p
+UNBIASED_CASES += [("exact_light", 3, "solid_angle")]
 UNBIASED_TESTS = len(UNBIASED_CASES) * (SIZE // 4) ** 2
 FURNACE_TESTS = 6
 BLOCK = 4
@@ -86,7 +88,7 @@ def _disk_obj(path, segments, radius=0.5, height=1.2, x0=0.0):
 
 
 def _scene(mi, name, tmp_path, bare=False):
-    if name not in ("mesh_light", "tree_light", "near_rect", "near_disk", "near_rect_sky"):
+    if name not in ("mesh_light", "tree_light", "exact_light", "near_rect", "near_disk", "near_rect_sky"):
         return mi.load_dict(scene_dict(mi, name, SIZE))
     scene = scene_dict(mi, "textured", SIZE)
     del scene["light"]
@@ -105,7 +107,8 @@ def _scene(mi, name, tmp_path, bare=False):
         return mi.load_dict(scene)
     if bare:  # the lights and the floor only: nothing between a point above the floor and the lights
         del scene["ball"], scene["glass"], scene["wall"]
-    segments = 320 if name == "tree_light" else 80  # > EXACT_MAX: a tree (leaves under its top; 320: a level between)
+    # > EXACT_MAX: a tree (leaves under its top; 320: a level between); exact_light: 24 + 12, each weighed
+    segments = {"tree_light": 320, "exact_light": 24}.get(name, 80)
     scene["light"] = {
         "type": "obj",
         "filename": str(_disk_obj(tmp_path / "disk.obj", segments)),
@@ -138,7 +141,7 @@ def test_the_density_of_a_hit_is_the_density_it_was_sampled_with(llvm, tmp_path)
 
     from symsphere._testing import mitsuba_lights as lights
 
-    for name in (*SCENES, "near_rect", "near_disk", "tree_light"):  # near_*: both maps (by area, Arvo's)
+    for name in (*SCENES, "near_rect", "near_disk", "tree_light", "exact_light"):  # near_*: both maps
         scene = _scene(mi, name, tmp_path)
         table = lights.LightTable(scene)
         rng = np.random.default_rng(5)
@@ -244,22 +247,23 @@ def test_every_triangle_facing_a_point_can_be_chosen_there(llvm, tmp_path):
     normal = mi.Vector3f(*(mi.Float(g[:, k] / np.linalg.norm(g, axis=1)) for k in range(3)))
     assert facing.sum() > 1000
     for receiver in (None, normal):  # without and with the receiver's cosine in the weights
-        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), receiver).numpy()
+        probability = table.probability(point, mi.UInt32(row), mi.Bool(True), receiver).numpy()
         assert np.all(probability[facing] > 0), np.flatnonzero(facing & (probability <= 0))[:5]
 
 
 def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
     """Brute force: at random points with random receiver normals, the probabilities with which the table
-    chooses each of its triangles (the exact choice of the Cornell box's 2, the tree of the mesh-light
-    scene's 92: leaves under its top, and of the tree-light scene's 332: a level between) sum to 1
-    wherever a triangle faces the point, and a sampled row's probability is the one computed for it."""
+    chooses each of its triangles (the exact choice of the Cornell box's 2 and of the 36 of a disk and a
+    panel, by power where all their runs are small as seen from p, the tree of the mesh-light scene's 92: leaves
+    under its top, and of the tree-light scene's 332: a level between) sum to 1 wherever a triangle faces
+    the point, and a sampled row's probability is the one computed for it."""
     mi = llvm
     import drjit as dr
 
     from symsphere._testing import mitsuba_lights as lights
 
     rng = np.random.default_rng(21)
-    for name, mode in (("cornell", "exact"), ("mesh_light", "tree"), ("tree_light", "tree")):
+    for name, mode in (("cornell", "exact"), ("exact_light", "exact"), ("mesh_light", "tree"), ("tree_light", "tree")):
         table = lights.LightTable(_scene(mi, name, tmp_path))
         assert table.mode == mode
         m = 64
@@ -270,7 +274,7 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         pp, nn, row = np.repeat(p, table.count, axis=0), np.repeat(n, table.count, axis=0), np.tile(rows, m)
         point = mi.Vector3f(*(mi.Float(pp[:, k]) for k in range(3)))
         normal = mi.Vector3f(*(mi.Float(nn[:, k]) for k in range(3)))
-        probability = table._probability(point, mi.UInt32(row), mi.Bool(True), normal).numpy()
+        probability = table.probability(point, mi.UInt32(row), mi.Bool(True), normal).numpy()
         sums = probability.reshape(m, table.count).sum(axis=1)
         assert np.all(probability >= 0.0)
         assert np.sum(sums > 0) > m // 2, name
@@ -278,14 +282,17 @@ def test_choice_probabilities_sum_to_one_over_the_triangles(llvm, tmp_path):
         # the sampled row's probability is the computed one
         point1 = mi.Vector3f(*(mi.Float(p[:, k]) for k in range(3)))
         normal1 = mi.Vector3f(*(mi.Float(n[:, k]) for k in range(3)))
-        chosen, chosen_p, _ = table._choose(point1, mi.Float64(rng.random(m)), mi.Bool(True), normal1)
-        again = table._probability(point1, chosen, mi.Bool(True), normal1)
+        chosen, chosen_p, _ = table.choose(point1, mi.Float64(rng.random(m)), mi.Bool(True), normal1)
+        again = table.probability(point1, chosen, mi.Bool(True), normal1)
         dr.eval(chosen_p, again)
         lit = chosen_p.numpy() > 0
         assert lit.sum() > m // 2, name
         np.testing.assert_allclose(again.numpy()[lit], chosen_p.numpy()[lit], rtol=1e-6, err_msg=name)
         if mode == "tree":  # both rules below the top: by power where the chosen top run is small, else the levels
             far = table._top_far(point1, chosen // table.spans[0], mi.Bool(True)).numpy()[lit]
+        if name == "exact_light":  # both rules: by power where every emitter is small as seen from p, else weighed
+            far = table._clusters_far(point1).numpy()[lit]
+        if name != "cornell":
             assert 0.1 < far.mean() < 0.9, (name, far.mean())
 
 
@@ -321,13 +328,20 @@ def test_alias_tables_choose_rows_by_their_share(llvm):
     # two runs: one constraint more than chisquare's default (ddof=1)
     assert stats.chisquare(observed[used], expected[used], ddof=1).pvalue > ALPHA
     assert 0.0 <= reused.min() and reused.max() <= 1.0 and abs(reused.mean() - 0.5) < 0.01
+    # runs given by their starts (an exact table's emitters): each row's share and alias within its own run
+    keep, alias, shares = lights.alias_rows(weights, [0, 3, 8])
+    run = np.searchsorted([3, 8], np.arange(len(weights)), side="right")
+    sums = np.bincount(run, weights)
+    np.testing.assert_allclose(shares, weights / sums[run])
+    assert np.all(run[alias] == run) and np.all(keep[weights == 0.0] == 0.0)
 
 
 # (scene, point): the mesh-light scene (two emitters, one chosen through the tree, one exactly; most
 # triangles sampled by area there), near_rect near its light (Arvo's map) and far (by power and area),
-# near_disk where some of its triangles are sampled by area and some by Arvo's map
+# near_disk where some of its triangles are sampled by area and some by Arvo's map, exact_light where every run of
+# its emitters' rows is small as seen from p (a run by its importance, its triangle by power)
 DENSITY_CASES = [("mesh_light", (0.1, 0.3, -0.2)), ("near_rect", (0.2, 0.1, 0.1)), ("near_rect", (1.8, 0.1, 1.2)),
-                 ("near_disk", (1.4, 0.1, 0.6)), ("tree_light", (0.3, 0.2, 0.4))]  # fmt: skip
+                 ("near_disk", (1.4, 0.1, 0.6)), ("tree_light", (0.3, 0.2, 0.4)), ("exact_light", (1.0, 0.1, 0.8))]  # fmt: skip
 
 
 @pytest.mark.statistical
@@ -601,10 +615,10 @@ def test_a_one_triangle_light_renders_again_from_the_kernel_cache(llvm, tmp_path
     _assert_renders_again_from_the_kernel_cache(mi, mi.load_dict(scene), 2)
 
 
-@pytest.mark.parametrize("scene_name", ["tree_light", "textured"])
+@pytest.mark.parametrize("scene_name", ["tree_light", "textured", "exact_light"])
 def test_the_tree_and_a_tiny_table_render_again_from_the_kernel_cache(llvm, tmp_path, scene_name):
-    """The same with the tree's alias tables (a second render's columns are new arrays) and with a tiny
-    table whose emitter samples itself where it is small."""
+    """The same with the tree's alias tables (a second render's columns are new arrays), with a tiny
+    table whose emitter samples itself where it is small, and with an exact table's emitters' alias tables."""
     _assert_renders_again_from_the_kernel_cache(llvm, _scene(llvm, scene_name, tmp_path), 3)
 
 

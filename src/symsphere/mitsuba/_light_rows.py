@@ -227,14 +227,16 @@ def area_direction(a: Any, b: Any, c: Any, n: Any, u: Any, v: Any) -> tuple[Any,
     return q / dr.select(positive, dist, 1.0), extent
 
 
-def alias_rows(weights: np.ndarray, span: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Walker's alias tables of the runs [k, k + span) of *weights*: per row the probability of keeping
-    it, its alias (a row of the same run, absolute) and its share of its run's weight (float64).  A row of
-    weight 0 is never kept and never an alias."""
+def alias_rows(weights: np.ndarray, span: int | list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Walker's alias tables of the runs [k, k + span) of *weights* (or of the runs that start at the rows
+    *span*, a sorted list beginning with 0): per row the probability of keeping it, its alias (a row of
+    the same run, absolute) and its share of its run's weight (float64).  A row of weight 0 is never kept
+    and never an alias."""
     count = len(weights)
     keep, alias, shares = np.ones(count), np.arange(count, dtype=np.uint32), np.zeros(count)
-    for start in range(0, count, span):
-        w = np.asarray(weights[start : start + span], dtype=np.float64)
+    starts = list(range(0, count, span)) if isinstance(span, int) else list(span)
+    for start, stop in zip(starts, [*starts[1:], count], strict=True):
+        w = np.asarray(weights[start:stop], dtype=np.float64)
         if w.sum() <= 0.0:
             continue
         shares[start : start + len(w)] = w / w.sum()

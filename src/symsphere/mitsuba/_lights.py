@@ -13,13 +13,17 @@ shading point p:
    times the receiver's cosine c_i, ``|n.v|`` summed over the unit vectors v from p to the vertices (n the
    geometric normal at p; unsigned: 0 only for a triangle in p's tangent plane), 0 behind the triangle
    (area emitters are one-sided).  Up to :data:`EXACT_MAX` triangles every w_i is evaluated (unrolled,
-   the triangles constants of the kernel; float32 sums: u has 24 bits).  Above, through a tree of fixed
+   the triangles constants of the kernel; float32 sums: u has 24 bits), but where every run of
+   :data:`CLUSTER_ROWS` of an emitter's triangles (in a spatial order) is small as seen from p
+   (:data:`CLUSTER_BELOW`) a run by its importance and its triangle by power, no w_i evaluated.  Above,
+   through a tree of fixed
    depth over a spatial order (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top
    (constants), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
    :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its bounds
-   (:class:`Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p), a
-   triangle of the leaf by a proxy of w_i (:meth:`LightTable._member_weights`); but where the chosen top run
-   is small as seen from p (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels below;
+   (:class:`._light_rows.Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p), a
+   triangle of the leaf by a proxy of w_i (:meth:`._light_choice.Choice._member_weights`); but where the chosen top
+   run is small as seen from p (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels
+   below (the choice: :class:`._light_choice.Choice`, the table's base);
 2. a direction uniform in the chosen triangle's solid angle (Arvo's map,
    :func:`symsphere.mitsuba._warps.square_to_spherical_triangle`, in float32 as Mitsuba's own sampling),
    but where the triangle is small as seen from p (:data:`AREA_BELOW`) a point uniform in its area,
@@ -47,9 +51,18 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ._light_choice import (
+    CLUSTER_BELOW,
+    CLUSTER_ROWS,
+    EXACT_MAX,
+    FANOUT,
+    TOP_BELOW,
+    TREE_LEAF,
+    TREE_SOFT,
+    TREE_TOP,
+    Choice,
+)
 from ._light_rows import (
-    Group,
-    Level,
     alias_pick,
     alias_rows,
     area_direction,
@@ -63,31 +76,17 @@ from ._light_rows import (
     small_sphere,
     small_triangle,
     spatial_order,
-    tree_spans,
-    triangle_weight,
     triangles,
     uniform_rgb,
-    weight_sum,
 )
 from ._projected import choose_projected, cosine_table_sample, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
-__all__ = ["AREA_BELOW", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX", "TREE_LEAF",
-           "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "build"]  # fmt: skip
+__all__ = ["AREA_BELOW", "CLUSTER_BELOW", "CLUSTER_ROWS", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX",
+           "TREE_LEAF", "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "alias_pick", "alias_rows", "build"]  # fmt: skip
 
 EMITTER_SAMPLINGS = ("area", "cosine", "projected", "solid_angle")
 """The values of ``symsphere_path``'s ``emitter_sampling``, sorted."""
-EXACT_MAX = 64
-"""Up to this many emitter triangles, each is evaluated at every shading point to choose one; above,
-a triangle is chosen through a tree (TREE_LEAF, FANOUT, TREE_TOP)."""
-TREE_LEAF, FANOUT, TREE_TOP = 8, 4, 40
-"""Above EXACT_MAX: a tree over the spatial order, leaves of TREE_LEAF triangles under levels of FANOUT
-nodes, at most TREE_TOP nodes at the top."""
-TOP_BELOW = 0.45
-"""Where the top run chosen at p is small as seen from p (its bounding radius below this times its centre's
-distance), its triangle is chosen by power (an alias table), not through the levels below (0: never)."""
-TREE_SOFT = 0.1
-"""The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 AREA_BELOW = 0.3
 """A chosen triangle whose bounding radius (about its centroid) is below this times the centroid's distance
 from p is sampled by area, not by Arvo's map (0: never).  Measured: 0.6 lost 20 % under the disk."""
@@ -98,7 +97,7 @@ TINY_BELOW = 0.45
 _NONE = 0xFFFFFFFF  # no table row: the shape is not one of the table's emitters
 
 
-class LightTable:
+class LightTable(Choice):
     """The emitter triangles of a scene and their selection (see the module docstring)."""
 
     head: Any = None  # emitter_sampling='cosine': its choice and direction (_projected.cosine_table_sample)
@@ -114,6 +113,7 @@ class LightTable:
         rgb_rows: list[np.ndarray | None] = []
         shape_rows: dict[int, tuple[int, bool]] = {}  # shape id -> (first row, is a rectangle)
         in_table = [False] * len(emitters)
+        starts: list[int] = []  # the first row of each shape
         emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
         for shape in scene.shapes():
             emitter = shape.emitter()
@@ -131,6 +131,7 @@ class LightTable:
             rows.append(tris)
             uv_rows.append(uvs)
             emitter_rows += [index] * len(tris)
+            starts.append(len(emitter_rows) - len(tris))
             radiance += [scalar_radiance(emitter)] * len(tris)
             rgb_rows.append(uniform_rgb(emitter))
             rgb_rows[-1:] = [rgb_rows[-1]] * len(tris)
@@ -145,22 +146,15 @@ class LightTable:
         uvs = np.concatenate(uv_rows)
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
+        # the spatial order: the tree's runs, an exact table's runs of CLUSTER_ROWS within each emitter
         order = spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        if TINY_MAX < self.count <= EXACT_MAX:
+            stops = [*starts[1:], self.count]
+            order = np.concatenate([a + spatial_order(tris[a:b]) for a, b in zip(starts, stops, strict=True)])
         tris, uvs, lum, emitter_of = tris[order], uvs[order], lum[order], emitter_of[order]
         row_of = np.empty(self.count, dtype=np.uint32)
         row_of[order] = np.arange(self.count, dtype=np.uint32)  # table index (shape's first + prim) -> row
-        normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-        area = 0.5 * np.linalg.norm(normal, axis=1)
-        lum = np.where(area > 0.0, lum, 0.0)  # a degenerate triangle is never chosen
-        self.tris, self.normal, self.lum = tris, normal, lum
-        self._columns32 = [column(tris[:, k, j]) for k in range(3) for j in range(3)]
-        self._normal32 = [column(normal[:, j]) for j in range(3)]
-        self._lum32 = column(lum)
-        centroid = tris.mean(axis=1)
-        self._centroid = [column(centroid[:, j]) for j in range(3)]
-        moment = normal * (0.5 * lum)[:, None]  # unit normal x area x radiance
-        self._moment = [column(moment[:, j]) for j in range(3)]
-        self._tri_radius = column(np.max(np.linalg.norm(tris - centroid[:, None], axis=2), axis=1))
+        Choice.__init__(self, tris, lum, starts)
         # every table emitter's radiance one RGB value: gathered, instead of a call of the emitter per sample
         self._rgb = None
         if all(rgb is not None for rgb in rgb_rows):
@@ -174,10 +168,6 @@ class LightTable:
         for ident, (row, is_rect) in shape_rows.items():
             first[ident], rect[ident] = row, int(is_rect)
         self._first, self._rect = column(first, mi.UInt32), column(rect, mi.UInt32)
-        # the levels: one triangle each up to EXACT_MAX, else runs of the spatial order (tree_spans)
-        self.spans = tree_spans(self.count, EXACT_MAX, TREE_LEAF, FANOUT, TREE_TOP)
-        self.group_size = self.spans[-1]  # the rows of a leaf (of the last level)
-        self.mode = "exact" if self.count <= EXACT_MAX else "tree"
         # a tiny table (as the Cornell box's two triangles): where its bounding sphere is small as seen
         # from p, a triangle is chosen by its power (constants: no weight is evaluated)
         self._tiny = None
@@ -185,143 +175,15 @@ class LightTable:
         if self.count <= TINY_MAX:
             centre = tris.reshape(-1, 3).mean(axis=0)
             self._tiny = (mi.ScalarVector3f(*centre), float(np.max(np.linalg.norm(tris - centre, axis=2))))
-            self._tiny_power = [float(w) if w > 0.0 else None for w in area * lum]
+            self._tiny_power = [float(w) if w > 0.0 else None for w in self.area * self.lum]
             # one emitter's triangles (a rectangle): its power shares are its area shares, so "by power, then
             # by area" is its own sampling by area (the same density), which far lanes may call instead
             if len(set(emitter_rows)) == 1:
                 self._own_emitter = emitter_rows[0]
                 self._own_below = float(sum(pmf[: emitter_rows[0]]))  # Mitsuba's CDF below that emitter
 
-        def runs(span: int) -> list[Group]:
-            return [Group(tris, normal, area, lum, k, min(k + span, self.count)) for k in range(0, self.count, span)]
-
-        self.groups = groups = runs(self.spans[0])
-        self._levels = [Level(runs(span), TREE_SOFT) for span in self.spans[1:]]  # gathered: the nodes below the top
-        self._fanouts = [a // b for a, b in zip(self.spans, self.spans[1:], strict=False)]
-        self._top = Level(groups, TREE_SOFT)  # the top level gathered: the density of a chosen row
-        if self.mode == "tree":  # a top run small as seen from p: its triangle by power (_choose)
-            keep, alias, shares = alias_rows(area * lum, self.spans[0])
-            self._keep, self._alias = column(keep.astype(np.float32)), column(alias, mi.UInt32)
-            self._share = column(shares.astype(np.float32))
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
-
-    # --- per-point weights ---------------------------------------------------------------------
-
-    def _vertices(self, row: Any, active: Any) -> tuple[Any, Any, Any, Any]:
-        c = [dr.gather(mi.Float, col, row, active) for col in self._columns32]
-        n = [dr.gather(mi.Float, col, row, active) for col in self._normal32]
-        return (
-            mi.Vector3f(c[0], c[1], c[2]),
-            mi.Vector3f(c[3], c[4], c[5]),
-            mi.Vector3f(c[6], c[7], c[8]),
-            mi.Vector3f(*n),
-        )
-
-    def _group_weights(self, p: Any, n: Any = None) -> list[Any]:
-        """The top level's weights at p (float32; None for a group that is never chosen): a triangle's
-        exact weight, or a group's importance (see :class:`Group`)."""
-        weights: list[Any] = []
-        for g in self.groups:
-            if g.power <= 0.0:
-                weights.append(None)
-            elif g.stop - g.start == 1:
-                a, b, c = (mi.ScalarVector3f(*vertex) for vertex in self.tris[g.start])
-                weights.append(
-                    triangle_weight(p, a, b, c, mi.ScalarVector3f(*self.normal[g.start]), float(self.lum[g.start]), n)
-                )
-            else:
-                weights.append(g.importance(p, TREE_SOFT, n))
-        return weights
-
-    def _member_weights(self, p: Any, start: Any, active: Any, receiver: Any = None) -> list[Any]:
-        """The weights at p of the rows [start, start + group_size) of a leaf, slot by slot: a proxy of the
-        exact weight, ``(e.N) / max(|e|, r)^3`` times the receiver's cosine bound ``(|e.n| + r) / max(|e|, r)``
-        (e = p - centroid, N the normal x area x radiance, r the bounding radius about the centroid): 7
-        gathers and a reciprocal square root instead of 13 gathers, 3 square roots and an arctangent, with
-        the same relMSE under the 1024-triangle light; 0 only behind the triangle."""
-        weights = []
-        for k in range(self.group_size):
-            row = start + k
-            ok = active & (row < self.count)
-            g = mi.Vector3f(*(dr.gather(mi.Float, col, row, ok) for col in self._centroid))
-            m = mi.Vector3f(*(dr.gather(mi.Float, col, row, ok) for col in self._moment))
-            r = dr.gather(mi.Float, self._tri_radius, row, ok)
-            e = p - g
-            inv = dr.rsqrt(dr.maximum(dr.squared_norm(e), r * r))
-            h = dr.dot(e, m)
-            w = h * inv * inv * inv
-            if receiver is not None:
-                w *= dr.minimum((dr.abs(dr.dot(e, receiver)) + r) * inv, 1.0)
-            weights.append(dr.select(ok & (h > 0.0), w, 0.0))
-        return weights
-
-    def _descend(self, p: Any, u: Any, active: Any, n: Any = None, top: Any = None) -> tuple[Any, Any, Any]:
-        """(node of the last level: the row in exact mode, else a leaf; its probability; u reused): a node
-        of the top by its weight (*top*: already chosen), then a child of it by its importance, level by level."""
-        node, probability, u = pick(self._group_weights(p, n), u) if top is None else top
-        for level, fanout in zip(self._levels, self._fanouts, strict=True):
-            first = node * fanout
-            slot, fraction, u = pick(level.weights(p, first, fanout, active & (probability > 0.0), n), u)
-            probability *= fraction
-            node = first + slot
-        return node, probability, u
-
-    def _top_far(self, p: Any, node: Any, active: Any) -> Any:
-        """The lanes where the top run *node* is small as seen from p (:data:`TOP_BELOW`)."""
-        centre = mi.Vector3f(*(dr.gather(mi.Float, self._top.fields[k], node, active) for k in range(3)))
-        return active & small_sphere(p, centre, dr.gather(mi.Float, self._top.fields[3], node, active), TOP_BELOW)
-
-    def _choose(self, p: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
-        """(row, its probability at p, u reused) for the point p (mi.Vector3f) and u (mi.Float64): a top run
-        by its weight, then, where it is small as seen from p, its triangle by power, else a leaf through
-        the levels below and its triangle by the members' weights (in a branch: a packet of lanes all
-        small skips it)."""
-        if self.mode == "exact":
-            return self._descend(p, u, active, n)
-        node, probability, u = pick(self._group_weights(p, n), u)
-        ok = active & (probability > 0.0)
-        far = self._top_far(p, node, ok)
-        span = self.spans[0]
-        row, u_far = alias_pick(
-            self._keep, self._alias, node * span, dr.minimum(span, self.count - node * span), u, far
-        )
-        by_power = (row, probability * mi.Float64(dr.gather(mi.Float, self._share, row, far)), u_far)
-
-        def below(*_: Any) -> tuple[Any, Any, Any]:
-            leaf, leaf_p, u_leaf = self._descend(p, u, ok, n, (node, probability, u))
-            start = leaf * self.group_size
-            slot, fraction, u_leaf = pick(self._member_weights(p, start, ok & (leaf_p > 0.0), n), u_leaf)
-            return start + slot, leaf_p * fraction, u_leaf
-
-        return dr.if_stmt(args=by_power, cond=ok & ~far, true_fn=below, false_fn=lambda *power: power)
-
-    def _first_level_weight(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
-        """The top level's weight at p of the group (exact: the triangle) that holds *row*, from gathered
-        values: the bits of :meth:`_group_weights`' entry."""
-        if self.mode == "exact":
-            c = [dr.gather(mi.Float, col, row, active) for col in self._columns32]
-            tn = mi.Vector3f(*(dr.gather(mi.Float, col, row, active) for col in self._normal32))
-            lum = dr.gather(mi.Float, self._lum32, row, active)
-            a, b, cc = mi.Vector3f(c[0], c[1], c[2]), mi.Vector3f(c[3], c[4], c[5]), mi.Vector3f(c[6], c[7], c[8])
-            return dr.select(lum > 0.0, triangle_weight(p, a, b, cc, tn, lum, n), 0.0)
-        return self._top.weight(p, row // self.spans[0], active, n)
-
-    def _probability(self, p: Any, row: Any, active: Any, n: Any = None) -> Any:
-        """The probability with which :meth:`_choose` at p picks *row*: the product of its shares, level by level."""
-        total = mi.Float64(weight_sum(self._group_weights(p, n)))
-        mine = mi.Float64(self._first_level_weight(p, row, active, n))
-        probability = dr.select(total > 0.0, mine / dr.select(total > 0.0, total, 1.0), 0.0)
-        if self.mode == "exact":
-            return probability
-        far = self._top_far(p, row // self.spans[0], active)
-        by_power = probability * mi.Float64(dr.gather(mi.Float, self._share, row, far))
-        for level, fanout, span in zip(self._levels, self._fanouts, self.spans[1:], strict=True):
-            node = row // span
-            first = node // fanout * fanout
-            probability *= share(level.weights(p, first, fanout, active, n), node - first)
-        start = row // self.group_size * self.group_size
-        return dr.select(far, by_power, probability * share(self._member_weights(p, start, active, n), row - start))
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
@@ -437,18 +299,13 @@ class LightTable:
         if self.head is not None:  # emitter_sampling='cosine' (symsphere.mitsuba._projected)
             row, ok, a, b, c, n, pdf, d = self.head(self, si, p, u, v, active, cosine)
         elif not cosine_only:  # by solid angle (a triangle small as seen from p: by area, see _small)
-            row, probability, u_map, far = self._choose_near(p, u, active, mi.Vector3f(si.n))
-            ok = active & (probability > 0.0)
-            a, b, c, n = self._vertices(row, ok)
-            d, omega = self._direction(a - p, b - p, c - p, n, (mi.Float(u_map), mi.Float(v)), ok, far)
-            ok &= (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
-            pdf = mi.Float(self.p_table * probability / mi.Float64(dr.select(omega > 0.0, omega, 1.0)))
+            row, ok, a, b, c, n, pdf, d = self.sample_triangle(p, u, v, active, mi.Vector3f(si.n))
         if cosine is not None and self.head is None:  # by projected solid angle
             mine = active & cosine
             normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
             row_c, probability_c, u_c = choose_projected(self, p, normal, mi.Float64(u), mine, mi.Vector3f(si.n))
             ok_c = mine & (probability_c > 0.0)
-            a_c, b_c, c_c, n_c = self._vertices(row_c, ok_c)
+            a_c, b_c, c_c, n_c = self.vertices(row_c, ok_c)
             d_c, pdf_c = square_to_projected_triangle(
                 a_c - p, b_c - p, c_c - p, normal, mi.Point2f(mi.Float(u_c), mi.Float(v))
             )
@@ -500,18 +357,31 @@ class LightTable:
         ds.delta = mi.Bool(False)
         return ds, value
 
-    def _choose_near(self, p: Any, u: Any, active: Any, n: Any) -> tuple[Any, Any, Any, Any]:
-        """(row, probability, u reused, :meth:`_far`'s lanes): :meth:`_choose`, but by power where a tiny
+    def sample_triangle(self, p: Any, u: Any, v: Any, active: Any, n: Any, warp: Any = None) -> tuple[Any, ...]:
+        """The table's sample at p (vectors mi.Vector3f; *n* the receiver's normal of the choice): (row, valid
+        lanes, its vertices a, b, c and unnormalised normal, the density with the choice and p_table, the
+        direction).  A triangle by :meth:`choose_near`, a direction in it by :meth:`_direction` (*warp*:
+        its other maps)."""
+        row, probability, u_map, far = self.choose_near(p, u, active, n)
+        ok = active & (probability > 0.0)
+        a, b, c, tn = self.vertices(row, ok)
+        d, inv = self._direction(a - p, b - p, c - p, tn, (mi.Float(u_map), mi.Float(v)), ok, far, warp)
+        ok &= (dr.dot(p - a, tn) > 0.0) & (inv > 0.0)
+        pdf = mi.Float(self.p_table * probability / mi.Float64(dr.select(inv > 0.0, inv, 1.0)))
+        return row, ok, a, b, c, tn, pdf, d
+
+    def choose_near(self, p: Any, u: Any, active: Any, n: Any) -> tuple[Any, Any, Any, Any]:
+        """(row, probability, u reused, :meth:`_far`'s lanes): :meth:`choose`, but by power where a tiny
         table is far from p."""
         far = self._far(p)
         if far is None:
-            return (*self._choose(p, mi.Float64(u), active, n), None)
+            return (*self.choose(p, mi.Float64(u), active, n), None)
         # by power: constants, outside the branch (a branch's literal result, as the row of a table with one
         # triangle of power, failed Dr.Jit 1.5's LLVM backend: "does not dominate all uses")
         by_power = pick(self._tiny_weights(), mi.Float64(u))
 
         def by_weight(*_: Any) -> tuple[Any, Any, Any]:
-            return self._choose(p, mi.Float64(u), active, n)
+            return self.choose(p, mi.Float64(u), active, n)
 
         chosen = dr.if_stmt(args=by_power, cond=active & ~far, true_fn=by_weight, false_fn=lambda *power: power)
         return (*chosen, far)
@@ -532,19 +402,26 @@ class LightTable:
         small = small_triangle(a, b, c, AREA_BELOW)
         return small if far is None else small | far
 
-    def _direction(self, a: Any, b: Any, c: Any, n: Any, uv: Any, active: Any, far: Any = None) -> tuple[Any, Any]:
+    def _direction(
+        self, a: Any, b: Any, c: Any, n: Any, uv: Any, active: Any, far: Any = None, warp: Any = None
+    ) -> tuple[Any, Any]:
         """(unit direction, 1 / its solid-angle density) towards the triangle a, b, c (relative to p; n
         its unnormalised normal): by area where :meth:`_small` (:func:`._light_rows.area_direction`), else
-        by Arvo's map (the solid angle) in a branch that a packet of lanes all small skips.  Each lane's
-        density is its technique's; no MIS at the table's vertices: any deterministic criterion is unbiased."""
+        by Arvo's map (the solid angle) in a branch that a packet of lanes all small skips.  *warp*: other
+        maps, ``warp(a, b, c, uv, lanes, d, inv) -> (d, inv, lanes left to Arvo's map)`` at the lanes not
+        small (``emitter_sampling='cosine'``).  Each lane's density is its technique's; no MIS at the
+        table's vertices: any deterministic criterion is unbiased."""
 
-        def arvo() -> tuple[Any, Any]:
+        def arvo(*_: Any) -> tuple[Any, Any]:
             direction, omega = square_to_spherical_triangle(uv, a, b, c)
             return dr.normalize(direction), omega
 
         small = self._small(a, b, c, far)
         by_area = area_direction(a, b, c, n, *uv)
-        return dr.if_stmt(args=(), cond=active & ~small, true_fn=arvo, false_fn=lambda: by_area)
+        if warp is None:
+            return dr.if_stmt(args=(), cond=active & ~small, true_fn=arvo, false_fn=lambda: by_area)
+        d, inv, rest = warp(a, b, c, uv, active & ~small, *by_area)
+        return dr.if_stmt(args=(d, inv), cond=rest, true_fn=arvo, false_fn=lambda *x: x)
 
     # --- the density of a hit (MIS) ----------------------------------------------------------------
 
@@ -572,11 +449,11 @@ class LightTable:
         index = first + dr.select(rect, dr.select(si.uv.y > si.uv.x, 1, 0), si.prim_index)
         row = dr.gather(mi.UInt32, self._row_of, index, ours)
         p = mi.Vector3f(prev_si.p)
-        a, b, c, n = self._vertices(row, ours)
+        a, b, c, n = self.vertices(row, ours)
         # the map's own solid angle (the same operations on the same float32 values as in sampling)
         omega = unit_spherical_triangle_solid_angle(dr.normalize(a - p), dr.normalize(b - p), dr.normalize(c - p))
         front = (dr.dot(p - a, n) > 0.0) & (omega > 0.0)
-        probability = self._probability(mi.Vector3f(prev_si.p), row, ours, mi.Vector3f(prev_si.n))
+        probability = self.probability(mi.Vector3f(prev_si.p), row, ours, mi.Vector3f(prev_si.n))
         pdf = dr.select(front, probability / dr.select(omega > 0.0, omega, 1.0), 0.0)
         far = self._far(p)
         if far is not None:

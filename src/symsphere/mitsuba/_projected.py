@@ -50,7 +50,7 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
-from ._light_rows import area_direction, pick, small_triangle
+from ._light_rows import pick, small_triangle
 from ._warps import square_to_spherical_triangle
 
 __all__ = ["HUGE_ABOVE", "choose_projected", "cosine_table_sample", "projected_solid_angle", "square_to_cosine_spherical_triangle",
@@ -437,8 +437,8 @@ def square_to_cosine_spherical_triangle(a: Any, b: Any, c: Any, n: Any, u: Any) 
 
 def choose_projected(table: Any, p: Any, normal: Any, u: Any, active: Any, n: Any = None) -> tuple[Any, Any, Any]:
     """``emitter_sampling='projected'``'s choice in *table* (a ``LightTable``): (row, its probability, u
-    reused), as ``LightTable._choose``, with each triangle's weight its projected solid angle about
-    *normal* x radiance (0 behind it: the levels above are ``_choose``'s, whose estimates are 0 only where
+    reused), as ``LightTable.choose``, with each triangle's weight its projected solid angle about
+    *normal* x radiance (0 behind it: the levels above are ``choose``'s, whose estimates are 0 only where
     no member faces p)."""
     if table.mode == "exact":
         weights: list[Any] = []
@@ -451,14 +451,14 @@ def choose_projected(table: Any, p: Any, normal: Any, u: Any, active: Any, n: An
             e = projected_solid_angle(a - p, b - p, c - p, normal)
             weights.append(dr.select(front, e * float(table.lum[row]), 0.0))
         return pick(weights, u)
-    leaf, probability, u = table._descend(p, u, active, n)
+    leaf, probability, u = table.descend(p, u, active, n)
     start = leaf * table.group_size
     members = []
     for k in range(table.group_size):
         row = start + k
         ok = active & (row < table.count) & (probability > 0.0)
-        a, b, c, n = table._vertices(row, ok)
-        lum = dr.gather(mi.Float, table._lum32, row, ok)
+        a, b, c, n = table.vertices(row, ok)
+        lum = table.luminance(row, ok)
         e = projected_solid_angle(a - p, b - p, c - p, normal)
         members.append(dr.select(ok & (dr.dot(p - a, n) > 0.0) & (lum > 0.0), e * lum, 0.0))
     slot, fraction, u = pick(members, u)
@@ -479,32 +479,20 @@ def cosine_table_sample(table: Any, si: Any, p: Any, u: Any, v: Any, active: Any
     function of p, so the estimate is unbiased."""
     normal = dr.mulsign(mi.Vector3f(si.sh_frame.n), si.wi.z)
     mine = active & cosine if cosine is not None else mi.Bool(False)
-    receiver = dr.select(mine, normal, mi.Vector3f(si.n))
-    row, probability, u_map, far = table._choose_near(p, u, active, receiver)
-    ok = active & (probability > 0.0)
-    a, b, c, tn = table._vertices(row, ok)
-    ra, rb, rc = a - p, b - p, c - p
-    uv = (mi.Float(u_map), mi.Float(v))
-    small = table._small(ra, rb, rc, far)
-    huge = ~small_triangle(ra, rb, rc, HUGE_ABOVE)
-    d, inv = area_direction(ra, rb, rc, tn, *uv)  # 1 / density
 
-    def arvo(*_: Any) -> tuple[Any, Any]:
-        direction, omega = square_to_spherical_triangle(uv, ra, rb, rc)
-        return dr.normalize(direction), omega
+    def warp(ra: Any, rb: Any, rc: Any, uv: Any, lanes: Any, d: Any, inv: Any) -> tuple[Any, Any, Any]:
+        huge = ~small_triangle(ra, rb, rc, HUGE_ABOVE)
 
-    def warped(*_: Any) -> tuple[Any, Any]:
-        return square_to_cosine_spherical_triangle(ra, rb, rc, normal, uv)
+        def warped(*_: Any) -> tuple[Any, Any]:
+            return square_to_cosine_spherical_triangle(ra, rb, rc, normal, uv)
 
-    def projected(*_: Any) -> tuple[Any, Any]:
-        direction, pdf = square_to_projected_triangle(ra, rb, rc, normal, mi.Point2f(*uv))
-        return direction, dr.select(pdf > 0.0, dr.rcp(_safe(pdf)), 0.0)
+        def projected(*_: Any) -> tuple[Any, Any]:
+            direction, pdf = square_to_projected_triangle(ra, rb, rc, normal, mi.Point2f(*uv))
+            return direction, dr.select(pdf > 0.0, dr.rcp(_safe(pdf)), 0.0)
 
-    def keep(*x: Any) -> tuple[Any, ...]:
-        return x
+        for fn, where in ((warped, mine & ~huge), (projected, mine & huge)):
+            d, inv = dr.if_stmt(args=(d, inv), cond=lanes & where, true_fn=fn, false_fn=lambda *x: x)
+        return d, inv, lanes & ~mine
 
-    for fn, lanes in ((arvo, ~mine), (warped, mine & ~huge), (projected, mine & huge)):
-        d, inv = dr.if_stmt(args=(d, inv), cond=ok & ~small & lanes, true_fn=fn, false_fn=keep)
-    ok &= (dr.dot(p - a, tn) > 0.0) & (inv > 0.0)
-    pdf = mi.Float(table.p_table * probability / mi.Float64(dr.select(inv > 0.0, inv, 1.0)))
-    return row, ok, a, b, c, tn, pdf, d
+    sample: tuple[Any, ...] = table.sample_triangle(p, u, v, active, dr.select(mine, normal, mi.Vector3f(si.n)), warp)
+    return sample
