@@ -45,6 +45,12 @@ def _close(fused, reference, rtol=1e-12):
     np.testing.assert_allclose(fused.standard_error, reference.standard_error, rtol=1e-9, atol=1e-12 * scale)
 
 
+# The tests of exp_xyz and exp_vector on one xdist worker (Makefile: --dist loadgroup): a user's compiled f is
+# compiled into a kernel per map in each process that runs it (numba cannot cache it on disk), once here.
+_USER_F = pytest.mark.xdist_group("fused_user_f")
+
+
+@_USER_F
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize(
     "domain, normal, points",
@@ -70,6 +76,7 @@ def test_fused_equals_numpy_path(method, domain, normal, points):
     _close(integrate(exp_vector, **kwargs), reference)
 
 
+@_USER_F
 def test_fused_with_an_engine():
     reference = integrate(exp_numpy, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
     fused = integrate(exp_xyz, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
@@ -77,6 +84,7 @@ def test_fused_with_an_engine():
     np.testing.assert_allclose(fused.integral, reference.integral, rtol=1e-12)
 
 
+@_USER_F
 def test_fused_does_not_depend_on_threads():
     from numba import get_num_threads, set_num_threads
 

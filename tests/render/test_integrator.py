@@ -532,6 +532,12 @@ def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.15):
     )
 
 
+# The pairs and the translucent scene on one xdist worker (Makefile: --dist loadgroup): their module-scoped
+# references (renders of 256-512 spp) are made once, not once per worker.
+_REFERENCES = pytest.mark.xdist_group("render_references")
+
+
+@_REFERENCES
 @pytest.mark.slow
 @pytest.mark.parametrize("integrator, sampler", _PAIRS)
 def test_every_pair_agrees_with_the_other_integrator(integrator, sampler, references):
@@ -545,6 +551,7 @@ def translucent_reference():
     return _replicate_stats(translucent_scene(), "bsdf", "cosine", 384, seed0=70_000)
 
 
+@_REFERENCES
 @pytest.mark.slow
 @pytest.mark.parametrize("sampler", _TRANSLUCENT_SAMPLERS)
 def test_translucent_scene_path_agrees_with_bsdf(sampler, translucent_reference):
