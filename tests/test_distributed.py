@@ -163,7 +163,7 @@ def test_killed_worker_gives_identical_result(client):
     result = ss_distributed.integrate(slow_exp_dot, client=client, chunk_blocks=1, **kwargs)
     killer.join()
     assert time.perf_counter() - start > 1.0  # the kill happened during the run
-    assert _same(result, symsphere.integrate(slow_exp_dot, **kwargs)) and _same(result, expected)
+    assert _same(result, expected)  # slow_exp_dot's values are exp_dot's: the single-process run is the reference
     client.wait_for_workers(2, timeout=60)  # the nanny restarts the worker
 
 

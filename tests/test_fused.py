@@ -45,6 +45,12 @@ def _close(fused, reference, rtol=1e-12):
     np.testing.assert_allclose(fused.standard_error, reference.standard_error, rtol=1e-9, atol=1e-12 * scale)
 
 
+# The tests of exp_xyz and exp_vector on one xdist worker (Makefile: --dist loadgroup): a user's compiled f is
+# compiled into a kernel per map in each process that runs it (numba cannot cache it on disk), once here.
+_USER_F = pytest.mark.xdist_group("fused_user_f")
+
+
+@_USER_F
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize(
     "domain, normal, points",
@@ -70,6 +76,7 @@ def test_fused_equals_numpy_path(method, domain, normal, points):
     _close(integrate(exp_vector, **kwargs), reference)
 
 
+@_USER_F
 def test_fused_with_an_engine():
     reference = integrate(exp_numpy, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
     fused = integrate(exp_xyz, n=48 * 1024, points=qmc.Sobol(d=2, rng=4))
@@ -77,6 +84,7 @@ def test_fused_with_an_engine():
     np.testing.assert_allclose(fused.integral, reference.integral, rtol=1e-12)
 
 
+@_USER_F
 def test_fused_does_not_depend_on_threads():
     from numba import get_num_threads, set_num_threads
 
@@ -99,13 +107,47 @@ def test_suite_integrands_fused(name):
     _close(integrate(g, **kwargs), integrate(g.f, **kwargs), rtol=1e-11)
 
 
+def _directions(g):
+    return ss.sample_hemisphere(24 * 40, rng=3) if g.domain == "hemisphere" else ss.sample_sphere(48 * 20, rng=3)
+
+
+def _spec_in_python(g):
+    """g's kernel as Python: the same code numba compiles (the polynomial's chain of register_jitable
+    functions, which stay Python functions, or evaluate's Python source) with g's constants."""
+    kind, params, chain = g.kernel.symsphere_spec
+    if kind == integrand_kernels.POLYNOMIAL:
+        return chain
+    return lambda x, y, z: integrand_kernels.evaluate.py_func(kind, params, x, y, z)
+
+
 @pytest.mark.parametrize("name", sorted(INTEGRANDS))
 def test_suite_kernels_equal_f(name):
+    # Every integrand's kernel (its formula with its constants, run as Python) is f.  Numba's compile of the
+    # formulas is checked below, once per formula: compiling each of the 37 kernels on its own costs ~18 CPU-s
+    # that no other test needs (the fused kernels inline the same spec: test_suite_integrands_fused).
     g = INTEGRANDS[name]
     assert g.kernel is not None
-    d = ss.sample_hemisphere(24 * 40, rng=3) if g.domain == "hemisphere" else ss.sample_sphere(48 * 20, rng=3)
-    values = np.array([g.kernel(*w) for w in d])
+    d = _directions(g)
+    values = np.array([_spec_in_python(g)(*w) for w in d])
     np.testing.assert_allclose(values, g.f(d), rtol=1e-12, atol=1e-13)
+
+
+# One integrand of each formula, and two polynomials: a shift and three terms, and a constant term (zero exponents).
+_COMPILED = ("cap", "cosine", "exp", "phong", "quad_light", "sphere_light", "shifted_sh4_0", "shifted_cubic4")
+
+
+def test_compiled_cases_cover_every_formula():
+    assert {INTEGRANDS[name].kernel.symsphere_spec[0] for name in _COMPILED} == set(integrand_kernels.KINDS)
+
+
+@pytest.mark.parametrize("name", _COMPILED)
+def test_compiled_suite_kernel_equals_its_python(name):
+    g = INTEGRANDS[name]
+    d = _directions(g)
+    python = np.array([_spec_in_python(g)(*w) for w in d])
+    compiled = np.array([g.kernel(*w) for w in d])
+    np.testing.assert_allclose(compiled, python, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(compiled, g.f(d), rtol=1e-12, atol=1e-13)
 
 
 def test_vexp_within_two_ulps_of_exact():

@@ -240,8 +240,7 @@ def test_uniform_triangle_rejected_by_linear_pdf():
 @pytest.mark.parametrize("domain", ["sphere", "hemisphere", "triangle"])
 @pytest.mark.parametrize("bins", [(8, 4), (7, 5), (64, 64)])
 def test_uniform_integral_is_one(domain, bins):
-    p = bin_probabilities(uniform_pdf(domain), domain, bins)
-    assert abs(p.sum() - 1) < 1e-6
+    # res.integral is the sum of bin_probabilities over these bins (tests/test_bins.py checks that function itself)
     res = chi2_test(
         uniform_sphere(1000, 0)
         if domain == "sphere"

@@ -48,6 +48,7 @@ Unbiasedness against the other integrator
 """
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -190,6 +191,12 @@ _PDF_CASES = [
 ]  # fmt: skip
 
 
+# The tests of the emitter probes (first_hits, emitter_pdfs, emitter_samples) on one xdist worker (Makefile:
+# --dist loadgroup): the probes' compile (~3 CPU-s) is done once, not by both workers at once.
+_EMITTER_PROBES = pytest.mark.xdist_group("emitter_probes")
+
+
+@_EMITTER_PROBES
 @pytest.mark.parametrize("name, emitter, point, axis, cos_max", _PDF_CASES, ids=[c[0] for c in _PDF_CASES])
 def test_emitter_pdf_integrates_to_one_over_the_visible_emitter(name, emitter, point, axis, cos_max):
     """E over directions uniform in a cone holding the emitter of [hit] emitter_pdf / q = 1 (each point seen once).
@@ -218,6 +225,7 @@ def test_emitter_pdf_integrates_to_one_over_the_visible_emitter(name, emitter, p
     assert abs(mean - 1) < critical * error and error < 0.01, (mean, error)
 
 
+@_EMITTER_PROBES
 @pytest.mark.parametrize("name, emitter, point, axis, cos_max", _PDF_CASES, ids=[c[0] for c in _PDF_CASES])
 def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, point, axis, cos_max):
     """sample_emitter: points on the (clipped) emitter, visible from p, and emitter_pdf gives their pdf."""
@@ -244,6 +252,7 @@ def test_emitter_samples_lie_on_the_emitter_with_the_stated_pdf(name, emitter, p
     np.testing.assert_allclose(P.emitter_pdfs(p, 0, ts, cosines, spheres, quads), out[:, 4], rtol=1e-6)
 
 
+@_EMITTER_PROBES
 def test_cap_and_cone_and_quad_samples_have_their_distributions():
     """Kolmogorov-Smirnov: cap heights and azimuths uniform (Archimedes), cone cosines uniform, quad points uniform.
 
@@ -285,6 +294,7 @@ def _triangle_solid_angle(a, b, c):
     return 2 * np.arctan2(numerator, denominator)
 
 
+@_EMITTER_PROBES
 @pytest.mark.parametrize("point", [(0.2, 0.3, -0.8), (2.5, -0.4, 0.3), (0.1, 0.2, 0.05)])
 def test_rectangle_samples_are_uniform_in_solid_angle(point):
     """Urena et al. 2013: a 4 x 4 grid of sub-rectangles receives samples in proportion to their solid angles.
@@ -315,6 +325,7 @@ def test_rectangle_samples_are_uniform_in_solid_angle(point):
     assert stats.chi2.sf(statistic, df=15) > _sidak(3), (statistic, counts, expected)
 
 
+@_EMITTER_PROBES
 def test_rectangle_solid_angle_everywhere():
     """emitter_pdf of a rectangle = 1 / its solid angle (Van Oosterom & Strackee, numpy) from points all around it.
 
@@ -340,6 +351,7 @@ def test_rectangle_solid_angle_everywhere():
         assert math.isclose(pdf, 1 / expected, rel_tol=1e-8), (p, pdf, 1 / expected)
 
 
+@_EMITTER_PROBES
 def test_clipped_sphere_intersection_against_numpy():
     """The kernel's nearest kept root equals a direct numpy solution of the quadratic with the half-space test."""
     center, radius = np.array([0.2, -0.1, 0.3]), 1.3
@@ -411,16 +423,21 @@ _DIRECT_SAMPLERS = (
 )  # fmt: skip
 
 
-@pytest.fixture(scope="module")
-def direct_references():
-    return {light: _direct_reference(light, 24, 16) for light in ("sphere", "quad")}
+@functools.cache
+def _direct_reference_24x16(light):
+    """The reference image of a light, once per process: not a module-scoped fixture, which pytest tears down
+    whenever xdist runs another module's tests in between."""
+    return _direct_reference(light, 24, 16)
 
 
+# One xdist worker runs the cases (Makefile: --dist loadgroup): the renderer's kernel for these scenes (a
+# specialisation no other test uses, ~4 CPU-s for each light) is compiled once, not by both workers at once.
+@pytest.mark.xdist_group("direct_lighting")
 @pytest.mark.parametrize("sampler", _DIRECT_SAMPLERS)
 @pytest.mark.parametrize("light", ["sphere", "quad"])
-def test_direct_lighting_matches_the_closed_form(light, sampler, direct_references):
+def test_direct_lighting_matches_the_closed_form(light, sampler):
     """NEE + MIS on a diffuse plane under a sphere or a square light equals (rho / pi) E per pixel (t-test per block)."""
-    reference = direct_references[light]
+    reference = _direct_reference_24x16(light)
     seed = 100 * _DIRECT_SAMPLERS.index(sampler) + (light == "quad")
     image = render(_direct_scene(light), width=24, height=16, spp=64, **_words(sampler), seed=seed).image
     np.testing.assert_array_equal(image[..., 0], image[..., 2])  # grey
@@ -515,6 +532,12 @@ def _z_check(block_mean, block_variance, ref_mean, ref_variance, teeth=0.15):
     )
 
 
+# The pairs and the translucent scene on one xdist worker (Makefile: --dist loadgroup): their module-scoped
+# references (renders of 256-512 spp) are made once, not once per worker.
+_REFERENCES = pytest.mark.xdist_group("render_references")
+
+
+@_REFERENCES
 @pytest.mark.slow
 @pytest.mark.parametrize("integrator, sampler", _PAIRS)
 def test_every_pair_agrees_with_the_other_integrator(integrator, sampler, references):
@@ -528,6 +551,7 @@ def translucent_reference():
     return _replicate_stats(translucent_scene(), "bsdf", "cosine", 384, seed0=70_000)
 
 
+@_REFERENCES
 @pytest.mark.slow
 @pytest.mark.parametrize("sampler", _TRANSLUCENT_SAMPLERS)
 def test_translucent_scene_path_agrees_with_bsdf(sampler, translucent_reference):

@@ -30,15 +30,15 @@ from symsphere.stats import chi2_test, one_per_orbit, uniform_pdf
 SIGNIFICANCE = 0.01
 # equal_area on T0 (4 point sets) + sphere + hemisphere (2) + paper maps on T0 (2) + sphere pdfs (3) + quick
 CHI2_TESTS = 4 + 1 + 2 + 2 + 3 + 1
-N_T0 = 1_000_000
 N_BASE = 512**2  # a square (stratified) and a power of 2 (Sobol)
+N_T0 = N_BASE  # the paper maps on T0 (independent points): the target's power, at a third of 10^6 points' CPU time
 N_ORBITS = 400_000
 # What the tests that must pass must also detect, with probability >= 99 % at their Sidak-corrected level:
 # an alternative of Cohen's effect size w = 0.04 over the default bins (tests/references.py), e.g. a density
 # 4 % too high on half the domain and 4 % too low on the other half, or 12 % too high on a tenth.  The
 # default bins grow with n (2079 cells for 512^2 points, 3872 for 400 000), so the smallest w detected at
 # 99 % power falls only as n^(-1/4): N_BASE = 512^2 detects w >= 0.038, N_ORBITS w >= 0.036 (sized to the
-# target), N_T0 = 10^6 (the paper maps against their own pdf) more.  _check asserts the power for each test.
+# target), N_T0 = N_BASE too (the paper maps against their own pdf).  _check asserts the power for each test.
 MUST_DETECT_W = 0.04
 
 
