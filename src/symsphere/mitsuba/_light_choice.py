@@ -55,7 +55,8 @@ distance), its triangle is chosen by power (an alias table), not through the lev
 TREE_SOFT = 0.1
 """The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 CLUSTER_BELOW = 0.4
-"""Up to EXACT_MAX triangles (more than two): where every group of an emitter's triangles (CLUSTER_ROWS) is
+"""From CLUSTER_ROWS + 1 up to EXACT_MAX triangles (fewer: the wall washer's 4 rows lost 2 % of their paths/s to the
+test, docs/results/light-selection-cost.md): where every group of an emitter's triangles (CLUSTER_ROWS) is
 small as seen from p (its bounding radius below this times its centre's distance), a group is chosen by its
 importance (:class:`._light_rows.Group`) and its triangle by power (an alias table), without the triangles'
 weights (0: never)."""
@@ -101,7 +102,7 @@ class Choice:
         self._clusters: list[Group] | None = None
         if self.mode == "tree":
             keep, alias, shares = alias_rows(area * lum, self.spans[0])
-        elif count > 2 and CLUSTER_BELOW > 0.0:  # (a table of two: _lights.TINY_MAX)
+        elif count > CLUSTER_ROWS and CLUSTER_BELOW > 0.0:  # fewer rows: their weights cost what the test does
             # runs of at most CLUSTER_ROWS rows of an emitter (the table orders each emitter's rows spatially)
             starts = [k for a, b in zip(starts, [*starts[1:], count], strict=True) for k in range(a, b, CLUSTER_ROWS)]
             sizes = np.diff([*starts, count])
