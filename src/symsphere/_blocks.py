@@ -24,6 +24,7 @@ import numpy.typing as npt
 from . import frames
 from ._random.splitmix import GOLDEN, mix64_int
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
+from ._vector_stores import LINE as _LINE
 from .points import BasePoints
 from .symmetry import orbit, orbit_size
 from .warps import triangle_warp
@@ -74,7 +75,6 @@ def warn_at_caller(message: str, category: type[Warning] = UserWarning) -> None:
     warnings.warn(message, category, stacklevel=level)
 
 
-_LINE = 64  # bytes: a cache line, and the kernels' widest store
 _HUGE_PAGE = 2**21
 _HUGE_FROM = 2**22  # numpy asks the operating system for huge pages (madvise) for arrays from 4 MiB on
 _Scalar = TypeVar("_Scalar", bound=np.generic)

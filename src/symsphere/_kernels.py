@@ -40,6 +40,9 @@ from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
 from ._vector_stores import (
+    LINE as _LINE,
+)
+from ._vector_stores import (
     store_fence,
     store_hemisphere_orbit,
     store_rotated_hemisphere,
@@ -125,7 +128,6 @@ def orbit_member(x, y, z, k):
 # (its sine is a polynomial), so LLVM vectorises the batch loop; the stores of one point no
 # longer wait for the next point's dependent chain of square roots and divisions.
 _BATCH = 16
-_LINE = 64  # bytes: a cache line, and an AVX-512 vector
 _SPHERE, _HEMISPHERE, _HEMISPHERE_ROTATED = 0, 1, 2
 _SPHERE_ORBIT, _HEMISPHERE_ORBIT = orbit_size("sphere"), orbit_size("hemisphere")
 

@@ -30,6 +30,7 @@ _item_pointer = cast(Callable[..., Any], cgutils.get_item_pointer)  # numba: unt
 _function = cast(Callable[..., Any], cgutils.get_or_insert_function)  # numba: untyped
 
 __all__ = [
+    "LINE",
     "orbit_mask",
     "store_fence",
     "store_hemisphere_orbit",
