@@ -2,12 +2,13 @@
 :class:`._lights.LightTable` (its rows' vertices, the weights and the tree; see :mod:`._lights`).
 
 Up to :data:`EXACT_MAX` triangles every weight ``Omega_i(p) L_e c_i`` is evaluated
-(:func:`._light_rows.triangle_weight`), unless every group of at most :data:`CLUSTER_ROWS` of an emitter's
-triangles is small as seen from p (:data:`CLUSTER_BELOW`): then a group by its importance
-(:class:`._light_rows.Group`) and its triangle by power.  Above, a tree of fixed depth (:func:`._light_rows.tree_spans`): a top run by its importance,
-by power below it where it is small as seen from p (:data:`TOP_BELOW`), else through the levels below to
-a leaf and a triangle of it by a proxy of its weight.  :meth:`Choice.probability` is the probability of
-a row under the same rules (each deterministic in p, every triangle facing p kept choosable)."""
+(:func:`._light_rows.triangle_weight`), unless (more than :data:`CLUSTER_ROWS` triangles) every group of at
+most :data:`CLUSTER_ROWS` of an emitter's triangles is small as seen from p (:data:`CLUSTER_BELOW`): then a
+group by its importance (:class:`._light_rows.Group`) and its triangle by power.  Above, a tree of fixed
+depth (:func:`._light_rows.tree_spans`): a top run by its importance, by power below it where it is
+small as seen from p (:data:`TOP_BELOW`), else through the levels below to a leaf and a triangle of it by
+a proxy of its weight.  :meth:`Choice.probability` is the probability of a row under the same rules (each
+deterministic in p, every triangle facing p kept choosable)."""
 
 from __future__ import annotations
 
@@ -55,8 +56,8 @@ distance), its triangle is chosen by power (an alias table), not through the lev
 TREE_SOFT = 0.1
 """The tree's runs are weighed with the distance ``sqrt(d^2 + TREE_SOFT r^2)`` (:class:`._light_rows.Group`)."""
 CLUSTER_BELOW = 0.4
-"""From CLUSTER_ROWS + 1 up to EXACT_MAX triangles (fewer: the wall washer's 4 rows lost 2 % of their paths/s to the
-test, docs/results/light-selection-cost.md): where every group of an emitter's triangles (CLUSTER_ROWS) is
+"""From CLUSTER_ROWS + 1 up to EXACT_MAX triangles (fewer: the test costs what the weights it skips do,
+docs/results/light-selection-cost.md): where every group of an emitter's triangles (CLUSTER_ROWS) is
 small as seen from p (its bounding radius below this times its centre's distance), a group is chosen by its
 importance (:class:`._light_rows.Group`) and its triangle by power (an alias table), without the triangles'
 weights (0: never)."""
