@@ -15,6 +15,11 @@ from symsphere.symmetry import SPHERE_MAPS
 
 reference_orbits = blocks.reference_orbits
 
+# One worker runs the file (Makefile: --dist loadgroup): its cases compile the sampling kernel's variants
+# (method, count, frame, dtype, point set), most of them shared by several cases; split over two workers,
+# both compiled some of them.
+pytestmark = pytest.mark.xdist_group("sampling_kernels")
+
 # How far the kernels' map may be from the numpy path's, relative to each component, in EPS64
 # (the error model of tests/references.py; E = ELEMENTARY_ULPS per elementary function, 1/2 per
 # rounding, first order).  The kernel calls libm, numpy its SIMD loops:

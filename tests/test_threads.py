@@ -181,6 +181,7 @@ class _SwallowingKernel(_ProbeKernel):
         super().compile(signature)
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # Python's own handler, whatever the worker's
 @pytest.mark.parametrize("fail", [True, False], ids=["compile-failed", "compile-finished"])
 def test_a_sigint_lost_inside_the_compile_still_interrupts(fail):
     from symsphere._testing import threads
@@ -224,6 +225,7 @@ def test_every_numba_function_of_the_package_compiles_on_the_interruptible_path(
     assert not unrouted, f"add route_compiles(globals()) to the modules of {unrouted}"
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # Python's own handler, whatever the worker's
 @pytest.mark.parametrize("fail", [True, False], ids=["compile-failed", "compile-finished"])
 def test_a_sigint_lost_in_the_first_compile_of_a_routed_function_still_interrupts(fail):
     # The validation kernel of symsphere.io compiled at its first call, not in run_kernel: a Ctrl-C lost

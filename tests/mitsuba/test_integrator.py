@@ -624,6 +624,9 @@ def _gradients(mi, scene, integrator, key, seeds=GRADIENT_SEEDS):
 _PRB: dict[str, np.ndarray] = {}
 
 
+# One worker runs the cases (Makefile: --dist loadgroup): prb's gradients of each parameter, the reference
+# of seven cases, are rendered once, not by both workers.
+@pytest.mark.xdist_group("gradients_against_prb")
 @pytest.mark.statistical
 @pytest.mark.parametrize("parameter", sorted(PARAMETERS))
 @pytest.mark.parametrize("case", CASES, ids=_ids)

@@ -96,8 +96,12 @@ def _batch(mi, rng, count, per, precision="f32"):
 
 # precision: (direction, relative E and pdf) bounds against numpy's float64 map
 BOUNDS = {"f64": (1e-9, 1e-9), "f32": (2e-3, 5e-4)}
+# The tests with numpy's map as their reference run on the worker of tests/warps/test_projected_triangle.py
+# (Makefile: --dist loadgroup): its numba kernels (about 6 CPU-s to compile) are compiled once, not by both.
+_NUMPY_MAP = pytest.mark.xdist_group("projected_triangle")
 
 
+@_NUMPY_MAP
 @pytest.mark.parametrize("precision", PRECISIONS)
 def test_equals_numpy(llvm, precision):
     mi = llvm
@@ -186,6 +190,7 @@ def test_mitsuba_chi2_rejects_solid_angle_sampling(llvm, tmp_path, monkeypatch):
     assert not test.run(significance_level=0.01, test_count=1)
 
 
+@_NUMPY_MAP
 @pytest.mark.parametrize("precision", PRECISIONS)
 def test_lambertian_direct_light_relative_std(llvm, precision):
     """Unoccluded Lambertian points lit by one triangle light: relative std of L rho/pi cos/pdf <= 1e-3."""

@@ -56,6 +56,8 @@ CASES = {
 }
 CASES = {name: ([_unit(v) for v in tri], _unit(n)) for name, (tri, n) in CASES.items()}
 SIGNIFICANCE = 0.01
+# with the numpy references of tests/mitsuba/test_projected.py: one worker compiles the map's kernels
+pytestmark = pytest.mark.xdist_group("projected_triangle")
 CHI2_TESTS = len(CASES)
 N_CHI2 = 200_000
 EDGE_VALUES = (0.0, 1e-300, 1e-17, 1e-8, 0.5, 1 - 1e-8, 1 - 1e-16, 1.0)
