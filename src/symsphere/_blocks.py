@@ -25,6 +25,7 @@ from . import frames
 from ._random.splitmix import GOLDEN, mix64_int
 from ._typing import Float64Array, FloatArray, MapMethod, PointsLike, RNGLike
 from ._vector_stores import LINE as _LINE
+from ._vector_stores import aligned_empty
 from .points import BasePoints
 from .symmetry import orbit, orbit_size
 from .warps import triangle_warp
@@ -92,12 +93,9 @@ def empty_rows(n: int, dtype: np.dtype[_Scalar]) -> npt.NDArray[_Scalar]:
     bench-stores.md).  The bytes before the first row are never written; after the last row at most
     one 2 MiB page more may be mapped, when the allocation covers it whole.
     """
-    size = 3 * n
-    nbytes = size * dtype.itemsize
-    align = _HUGE_PAGE if nbytes >= _HUGE_FROM else _LINE
-    raw = np.empty(size + align // dtype.itemsize, dtype=dtype)
-    start = (-raw.ctypes.data % align) // dtype.itemsize  # numpy's data starts on 16 bytes: whole elements
-    return raw[start : start + size].reshape(n, 3)
+    align = _HUGE_PAGE if 3 * n * dtype.itemsize >= _HUGE_FROM else _LINE
+    rows: npt.NDArray[_Scalar] = aligned_empty(3 * n, dtype, align).reshape(n, 3)
+    return rows
 
 
 def reference_orbits(uv: Float64Array, method: MapMethod, count: int, basis: Float64Array | None) -> FloatArray:

@@ -39,10 +39,9 @@ from ._numba_cache import invalidate_if_changed
 from ._random.pcg64 import pcg64_random, pcg64_state
 from ._threads import route_compiles, run_kernel, start_threads
 from ._typing import Float64Array, FloatArray, MapMethod
+from ._vector_stores import LINE as _LINE
 from ._vector_stores import (
-    LINE as _LINE,
-)
-from ._vector_stores import (
+    aligned_empty,
     store_fence,
     store_hemisphere_orbit,
     store_rotated_hemisphere,
@@ -219,10 +218,7 @@ def _stage_on_lines(count, columns, dtype):
     (:func:`~symsphere._vector_stores.stream_rows`) then loads across lines where the output starts
     within one (numpy's large arrays: 16 bytes in), which measured cheaper than the stores doing so.
     """
-    size = count * columns
-    raw = np.empty(size + _LINE, dtype=dtype)
-    start = (-raw.ctypes.data % _LINE) // raw.itemsize
-    return raw[start : start + size].reshape((count, columns))
+    return aligned_empty(count * columns, dtype, _LINE).reshape((count, columns))
 
 
 @register_jitable
@@ -237,10 +233,9 @@ def _copy_members(scratch, tail, offset):
 
 def _aligned_zeros(shape):
     """A float64 zero array whose first element starts a 64-byte cache line."""
-    size = int(np.prod(shape))
-    raw = np.zeros(size + _LINE // 8)
-    start = (-raw.ctypes.data % _LINE) // 8
-    return raw[start : start + size].reshape(shape)
+    zeros = aligned_empty(int(np.prod(shape)), np.float64, _LINE)
+    zeros[:] = 0.0
+    return zeros.reshape(shape)
 
 
 def _rotated_weights(basis, count):

@@ -11,6 +11,8 @@ tests/test_kernels.py compares every image with the tables and with the numpy pa
 
 :func:`stream_rows` copies stored orbits out of a stage with non-temporal stores (whole 64-byte lines
 only, the partial ones plain, as a memset does), for outputs the kernels write that way.
+:func:`aligned_empty` gives the arrays these stores and loads want to start a line (the stage, the
+rotation's weights, fresh outputs).
 """
 
 from __future__ import annotations
@@ -19,10 +21,11 @@ import platform
 from collections.abc import Callable
 from typing import Any, cast
 
+import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.extending import intrinsic, register_jitable
 
 from .symmetry import SIGNS, SOURCES, orbit_size
 
@@ -31,6 +34,7 @@ _function = cast(Callable[..., Any], cgutils.get_or_insert_function)  # numba: u
 
 __all__ = [
     "LINE",
+    "aligned_empty",
     "orbit_mask",
     "store_fence",
     "store_hemisphere_orbit",
@@ -163,6 +167,17 @@ store_rotated_hemisphere = _rotated_store(orbit_size("hemisphere"))
 
 
 LINE = 64  # bytes: a cache line, and a non-temporal store's size and alignment
+
+
+@register_jitable
+def aligned_empty(size: int, dtype: Any, align: int) -> Any:
+    """An empty 1-d array of *size* elements of *dtype* whose first element starts on *align* bytes (a
+    multiple of the itemsize): a view of an allocation *align* bytes larger (numpy's and numba's arrays
+    start on 16 or 32 bytes).  Python and numba alike."""
+    pad = align // np.empty(1, dtype=dtype).itemsize  # (numba has no np.dtype(dtype).itemsize)
+    raw = np.empty(size + pad, dtype=dtype)
+    start = (-raw.ctypes.data % align) // raw.itemsize
+    return raw[start : start + size]
 
 
 def _stream_rows(typingctx: Any, stage: Any, start: Any, rows: Any, first: Any, count: Any) -> Any:
