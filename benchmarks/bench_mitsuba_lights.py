@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _machine import cpu_name, cpu_snapshot, others_cpu
+from _machine import cpu_snapshot, others_cpu, run_header
 from _mitsuba_light_scenes import LIGHT_SCENES, light_scene
 
 CASES = [  # (label, integrator dict)
@@ -167,7 +167,8 @@ def main(argv=None):
     mi.set_variant("llvm_ad_rgb")
     import symsphere.mitsuba  # noqa: F401  (registers symsphere_path)
 
-    record = {"cpu": cpu_name(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
+    # run_header: the command, date and measured sources (benchmarks/tables.py's verdict table and its stale note)
+    record = {**run_header(), "cpus": os.cpu_count(), "load_before": os.getloadavg(), "args": vars(args),
               "mitsuba": mi.__version__}  # fmt: skip
     print(
         f"{record['cpu']}, {record['cpus']} CPUs, load {record['load_before'][0]:.2f}, Mitsuba {mi.__version__}",

@@ -16,6 +16,8 @@ the repository's root); everything between the two markers is replaced.  Kinds (
 * ``cold-start``            -- the steps of ``first_sample.py --cold-start --json`` (wall and CPU seconds);
 * ``bench_integrate_auto``  -- evaluations of ``integrate(method='auto')`` against the best rule family
                                alone, from ``bench_integrate_auto.py --json``;
+* ``mitsuba_lights-verdict`` -- symsphere_path's emitter samplings against Mitsuba's ``path`` (efficiency,
+                               relMSE, paths/s), from ``bench_mitsuba_lights.py --projected --samplers multijitter``;
 * ``speed-sentence``        -- one sentence for the README (``sample_sphere`` and the hemisphere about a
                                normal against the memory write limit), from a ``bench_sample.py`` file.
 
@@ -335,6 +337,56 @@ def _integrate_auto(loaded):
     return "\n".join(lines)
 
 
+_LIGHT_SCENES = {
+    "wall_wash": "wall washer (1.6 × 1.0 rectangle 0.15 from the wall)",
+    "disk_near_floor": "24-triangle disk 0.2 above the floor",
+    "mesh_1024": "1024-triangle light 0.3 above the floor",
+    "cornell": "Cornell box (2-triangle light)",
+    "textured": "textured (rectangle light + sky)",
+    "veach_mis": "Veach MIS (sphere lights: unchanged)",
+}
+
+
+def _lights_verdict(loaded):
+    """symsphere_path's emitter samplings against Mitsuba's path, from bench_mitsuba_lights.py --projected
+    --samplers multijitter: one row per scene and max_depth, efficiency ratios (bold: the verdict's columns)."""
+    (_, result), *_ = loaded
+    rows = result["rows"]
+    caption = (
+        f"`{result.get('command', 'python benchmarks/bench_mitsuba_lights.py')}`: {result.get('date', '?')}; "
+        f"{result['cpus']}-core {result['cpu']}, Mitsuba {result['mitsuba']}; medians of "
+        f"{result['args']['rounds']} interleaved rounds."
+    )
+    lines = [
+        caption,
+        "",
+        "| scene | max_depth | relMSE × lower | paths/s × | efficiency × `path` | CPU | `cosine` | `symmetric_cosine` "
+        "· Sobol' | `projected` | `path` + mj | + mj: × `path` + mj | best / best | `area`: paths/s × | others' CPU share |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    two = lambda x: f"{x:.2f}"  # noqa: E731
+    for scene, label in _LIGHT_SCENES.items():
+        for depth in sorted({r["max_depth"] for r in rows if r["scene"] == scene}):
+            case = {r["case"]: r for r in rows if r["scene"] == scene and r["max_depth"] == depth}
+            ours = case["symsphere_path bsdf · solid_angle"]
+            mj = case["Mitsuba path + multijitter"]["efficiency_ratio"]
+            ours_mj = case["symsphere_path bsdf · solid_angle + multijitter"]["efficiency_ratio"]
+            best = max(
+                r["efficiency_ratio"] for k, r in case.items() if k.startswith("symsphere_path") and "· area" not in k
+            )
+            share = max(r["others_cpu_share"] or 0.0 for r in case.values())
+            cells = [
+                label if depth == min(r["max_depth"] for r in rows if r["scene"] == scene) else "〃", str(depth),
+                two(ours["rel_mse_ratio"]), two(ours["speed_ratio"]), f"**{two(ours['efficiency_ratio'])}**",
+                two(ours["cpu_efficiency_ratio"]), two(case["symsphere_path bsdf · cosine"]["efficiency_ratio"]),
+                two(case["symsphere_path symmetric_cosine sobol · solid_angle"]["efficiency_ratio"]),
+                two(case["symsphere_path bsdf · projected"]["efficiency_ratio"]), two(mj), two(ours_mj / mj),
+                f"**{two(best / max(1.0, mj))}**", two(case["symsphere_path bsdf · area"]["speed_ratio"]), f"{share:.0%}",
+            ]  # fmt: skip
+            lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 AUTO_CODE = (
     "src/symsphere/_auto.py", "src/symsphere/_families.py", "src/symsphere/_integration.py", "src/symsphere/_lebedev.py",
     "src/symsphere/peers.py", "src/symsphere/integrands.py", "src/symsphere/harmonics.py",
@@ -348,6 +400,7 @@ KINDS: dict[str, tuple[Callable[[list[tuple[str, dict]]], str], tuple[str, ...],
     "regress": (_regress, (SOURCE + "/",), None),
     "speed-sentence": (_sentence, SAMPLING_CODE, "make bench"),
     "cold-start": (_cold_start, (SOURCE + "/",), None),
+    "mitsuba_lights-verdict": (_lights_verdict, (SOURCE + "/mitsuba/",), None),
 }
 
 
