@@ -639,3 +639,35 @@ def _assert_renders_again_from_the_kernel_cache(mi, scene, max_depth):
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
     assert compiled and all(k["cache_hit"] for k in compiled), compiled
+
+
+def _domed_grid(nx, nz, size, dome):
+    """The triangles (2 nx nz, 3, 3) of an nx x nz grid of quads over size = (sx, sz), its middle raised by
+    *dome*, facing down (-y): the shape of the benchmarks' 1024-triangle light."""
+    a, b = np.meshgrid(np.arange(nx + 1) / nx - 0.5, np.arange(nz + 1) / nz - 0.5, indexing="ij")
+    v = np.stack([a * size[0], dome * (1 - 4 * a * a) * (1 - 4 * b * b), b * size[1]], axis=-1)
+    v00, v10, v01, v11 = v[:-1, :-1], v[1:, :-1], v[:-1, 1:], v[1:, 1:]
+    quads = np.stack([np.stack([v00, v10, v11], axis=-2), np.stack([v00, v11, v01], axis=-2)], axis=2)
+    return quads.reshape(-1, 3, 3)
+
+
+def test_the_trees_runs_are_compact(llvm):
+    """The tree's order (``tree_order``): on a slightly domed 32 x 16 grid of quads over 2 x 1 (1024
+    triangles, quads of 1/16), every aligned run of 32 rows (a top run) is no larger than a 4 x 4 patch of
+    quads (bounding radius about the mean of its centroids within 1.1 x the patch's half-diagonal) and
+    every run of 8 (a node below it, a leaf) no larger than a 2 x 2 patch; the order is a permutation,
+    also of triangles that face several ways.  (The Morton curve of before, the centroids scaled to the
+    unit cube, ran along the dome's 0.05 as along the width: runs of 32 with radii up to 0.92.)"""
+    from symsphere._testing import mitsuba_lights as lights
+
+    tris = _domed_grid(32, 16, (2.0, 1.0), 0.05)
+    order = lights.tree_order(tris)
+    np.testing.assert_array_equal(np.sort(order), np.arange(len(tris)))
+    for span, quads in ((32, 4), (8, 2)):
+        runs = tris[order].reshape(-1, span, 3, 3)
+        centre = runs.mean(axis=2).mean(axis=1)
+        radius = np.linalg.norm(runs - centre[:, None, None], axis=-1).max(axis=(1, 2))
+        assert radius.max() < 1.1 * quads / 16 * np.sqrt(0.5), (span, radius.max())
+    rng = np.random.default_rng(5)
+    soup = np.concatenate([tris[:100], tris[:60, ::-1], rng.standard_normal((77, 3, 3))])
+    np.testing.assert_array_equal(np.sort(lights.tree_order(soup)), np.arange(len(soup)))

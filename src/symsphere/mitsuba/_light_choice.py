@@ -5,10 +5,10 @@ Up to :data:`EXACT_MAX` triangles every weight ``Omega_i(p) L_e c_i`` is evaluat
 (:func:`._light_rows.triangle_weight`), unless (more than :data:`CLUSTER_ROWS` triangles) every group of at
 most :data:`CLUSTER_ROWS` of an emitter's triangles is small as seen from p (:data:`CLUSTER_BELOW`): then a
 group by its importance (:class:`._light_rows.Group`) and its triangle by power.  Above, a tree of fixed
-depth (:func:`._light_rows.tree_spans`): a top run by its importance, by power below it where it is
-small as seen from p (:data:`TOP_BELOW`), else through the levels below to a leaf and a triangle of it by
-a proxy of its weight.  :meth:`Choice.probability` is the probability of a row under the same rules (each
-deterministic in p, every triangle facing p kept choosable)."""
+depth (:func:`._light_rows.tree_spans`) over compact runs (:func:`._light_rows.tree_order`): a top run by its
+importance, by power below it where it is small as seen from p (:data:`TOP_BELOW`), else through the levels
+below to a leaf and a triangle of it by a proxy of its weight.  :meth:`Choice.probability` is the
+probability of a row under the same rules (each deterministic in p, every triangle facing p kept choosable)."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ a triangle is chosen through a tree (TREE_LEAF, FANOUT, TREE_TOP)."""
 TREE_LEAF, FANOUT, TREE_TOP = 8, 4, 40
 """Above EXACT_MAX: a tree over the spatial order, leaves of TREE_LEAF triangles under levels of FANOUT
 nodes, at most TREE_TOP nodes at the top."""
-TOP_BELOW = 0.45
+TOP_BELOW = 0.25
 """Where the top run chosen at p is small as seen from p (its bounding radius below this times its centre's
 distance), its triangle is chosen by power (an alias table), not through the levels below (0: never)."""
 TREE_SOFT = 0.1

@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 __all__ = ["alias_pick", "alias_rows", "area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share",
-           "registry_ids", "shape_id", "small_sphere", "small_triangle", "spatial_order", "tree_spans", "triangle_weight",
+           "registry_ids", "shape_id", "small_sphere", "small_triangle", "spatial_order", "tree_order", "tree_spans", "triangle_weight",
            "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
 
 
@@ -84,6 +84,32 @@ def spatial_order(tris: np.ndarray) -> np.ndarray:
         for k in range(3):
             code |= ((cells[:, k] >> bit) & 1) << (3 * bit + k)
     return np.lexsort((code, facing))
+
+
+def tree_order(tris: np.ndarray) -> np.ndarray:
+    """The tree's order (:func:`tree_spans`): by the axis their normal is closest to (and its sign), then
+    a bounding-volume split: the centroids sorted along their longest extent, the first 2^k (the least
+    power of two >= half) split off and both parts split again.  Every aligned run of 2^j rows inside a
+    part is then one of its halves' halves, compact in every axis: a Morton curve of the centroids scaled
+    to the unit cube (:func:`spatial_order`) ran through the dome of a nearly flat light as through its
+    width, which left runs of 32 triangles with radii up to 4x their size (their importance a poor
+    estimate of their light)."""
+    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    axis = np.argmax(np.abs(normal), axis=1)
+    facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
+    centroid = tris.mean(axis=1)
+    order: list[np.ndarray] = []
+    stack = [np.flatnonzero(facing == f) for f in np.unique(facing)[::-1]]
+    while stack:  # depth first, the first part first
+        rows = stack.pop()
+        if len(rows) <= 2:
+            order.append(rows)
+            continue
+        c = centroid[rows]
+        rows = rows[np.argsort(c[:, np.argmax(np.ptp(c, axis=0))], kind="stable")]
+        half = 1 << int(np.ceil(np.log2(len(rows) / 2)))
+        stack += [rows[half:], rows[:half]]
+    return np.concatenate(order)
 
 
 REACH = 0.1

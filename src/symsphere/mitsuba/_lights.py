@@ -76,6 +76,7 @@ from ._light_rows import (
     small_sphere,
     small_triangle,
     spatial_order,
+    tree_order,
     triangles,
     uniform_rgb,
 )
@@ -147,7 +148,7 @@ class LightTable(Choice):
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
         # the spatial order: the tree's runs, an exact table's runs of CLUSTER_ROWS within each emitter
-        order = spatial_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        order = tree_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
         if TINY_MAX < self.count <= EXACT_MAX:
             stops = [*starts[1:], self.count]
             order = np.concatenate([a + spatial_order(tris[a:b]) for a, b in zip(starts, stops, strict=True)])
