@@ -308,6 +308,32 @@ def test_cosine_strategy_renders_the_bsdf_strategys_image(llvm):
     assert not np.array_equal(images[0], images[2])  # Sobol' points: its own directions, not the BSDF's
 
 
+def test_a_small_rectangle_light_under_a_sky_is_sampled_as_paths(llvm, monkeypatch):
+    """The textured scene: a rectangle light (bounding radius 1.13) whose every diffuse vertex is farther
+    than 2.5 from its centre or lies on the light itself (behind its plane), and a sky.  There the light
+    table gives every diffuse vertex to Mitsuba's sampling with its MIS, so each emitter_sampling renders
+    `path`'s image bit for bit.  With light sampling alone at those vertices (the rule switched off: the
+    BSDF's hits on the light weighted 0) the image is another."""
+    mi = llvm
+    import symsphere.mitsuba as sm
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = mi.load_file(str(sm.scene_path("textured")), width=16, height=16)
+
+    def render(integrator):
+        return np.array(mi.render(scene, integrator=mi.load_dict({**integrator, "max_depth": 8}), spp=8, seed=3))
+
+    path = render({"type": "path"})
+    for sampling in ("solid_angle", "cosine", "projected"):
+        assert np.array_equal(
+            render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling}), path
+        )
+    monkeypatch.setattr(lights.LightTable, "hand_far_lanes", lambda self: None)
+    assert not np.array_equal(
+        render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"}), path
+    )
+
+
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN_SEEDS = 8
 SAMPLERS = ("independent", "orthogonal", "stratified")
