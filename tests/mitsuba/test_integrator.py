@@ -334,6 +334,31 @@ def test_a_small_rectangle_light_under_a_sky_is_sampled_as_paths(llvm, monkeypat
     )
 
 
+@pytest.mark.parametrize("sampling", ["solid_angle", "cosine"])
+def test_a_small_tables_rows_selected_from_constants_are_the_gathered_rows(llvm, monkeypatch, sampling):
+    """A light table of at most SELECT_MAX rows takes a chosen row's vertices, normal, RGB radiance and emitter
+    from constants by selects: the image is the one with the rows gathered, bit for bit (the Cornell box with
+    a second, differently coloured rectangle light: 4 rows of two emitters)."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = mi.cornell_box()
+    scene["sensor"]["film"] = {"type": "hdrfilm", "width": 16, "height": 16, "rfilter": {"type": "box"}}
+    T = mi.ScalarTransform4f
+    scene["light2"] = {
+        "type": "rectangle",
+        "to_world": T().translate([-0.6, 0.0, -0.9]).rotate([1, 0, 0], 180).scale(0.2),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2.0, 9.0, 4.0]}},
+    }
+    scene = mi.load_dict(scene)
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling})
+    assert lights.SELECT_MAX >= 4 and lights.build(scene, sampling).count == 4
+    selected = np.array(mi.render(scene, integrator=integrator, spp=8, seed=2))
+    monkeypatch.setattr(lights, "SELECT_MAX", 0)
+    gathered = np.array(mi.render(scene, integrator=integrator, spp=8, seed=2))
+    assert np.array_equal(selected, gathered) and np.all(np.isfinite(selected))
+
+
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN_SEEDS = 8
 SAMPLERS = ("independent", "orthogonal", "stratified")

@@ -82,7 +82,7 @@ from ._light_rows import (
 from ._projected import choose_projected, cosine_table_sample, square_to_projected_triangle
 from ._warps import square_to_spherical_triangle, unit_spherical_triangle_solid_angle
 
-__all__ = ["AREA_BELOW", "CLUSTER_BELOW", "CLUSTER_ROWS", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "TINY_BELOW", "TINY_MAX",
+__all__ = ["AREA_BELOW", "CLUSTER_BELOW", "CLUSTER_ROWS", "EMITTER_SAMPLINGS", "EXACT_MAX", "FANOUT", "LightTable", "SELECT_MAX", "TINY_BELOW", "TINY_MAX",
            "TREE_LEAF", "TOP_BELOW", "TREE_SOFT", "TREE_TOP", "alias_pick", "alias_rows", "build"]  # fmt: skip
 
 EMITTER_SAMPLINGS = ("area", "cosine", "projected", "solid_angle")
@@ -94,6 +94,10 @@ TINY_MAX = 2
 """A table of at most this many triangles: where its bounding radius is below :data:`TINY_BELOW` times
 its centre's distance from p, a triangle is chosen by its power and sampled by area."""
 TINY_BELOW = 0.45
+SELECT_MAX = 4
+"""A table of at most this many rows selects a chosen row's vertices, normal, RGB radiance and emitter from
+constants instead of gathering them (measured: 2 and 4 rows 2.3-2.6 % more paths/s with full paths, 26 rows
+the same paths/s as the gathers)."""
 _NONE = 0xFFFFFFFF  # no table row: the shape is not one of the table's emitters
 
 
@@ -161,8 +165,10 @@ class LightTable(Choice):
         if all(rgb is not None for rgb in rgb_rows):
             rgb = np.asarray(rgb_rows, dtype=np.float32)[order]
             self._rgb = [column(rgb[:, j]) for j in range(3)]
+            self._rgb_values = rgb
         self._uv = [column(uvs[:, k, j]) for k in range(3) for j in range(2)]
         self._emitter = column(emitter_of, mi.UInt32)
+        self._emitter_values = emitter_of
         self._row_of = column(row_of, mi.UInt32)
         size = max(shape_rows) + 1
         first, rect = np.full(size, _NONE, dtype=np.uint32), np.zeros(size, dtype=np.uint32)
@@ -195,6 +201,29 @@ class LightTable(Choice):
 
         others = [p if not t else 0.0 for p, t in zip(pmf, in_table, strict=True)]
         self._other = mi.DiscreteDistribution(mi.Float(others)) if self.p_other > 0.0 else None
+
+    def vertices(self, row: Any, active: Any) -> tuple[Any, Any, Any, Any]:
+        """:meth:`Choice.vertices`, but for a table of at most :data:`SELECT_MAX` rows selected from constants
+        (no gathers: 2.5 % of the wall washer's time with full paths)."""
+        if self.count > SELECT_MAX:
+            return Choice.vertices(self, row, active)
+        tris, normal = self.tris.astype(np.float32), self.normal.astype(np.float32)
+        a, b, c = (
+            mi.Vector3f(*(self._row_value(tris[:, k, j], None, row, active) for j in range(3))) for k in range(3)
+        )
+        return a, b, c, mi.Vector3f(*(self._row_value(normal[:, j], None, row, active) for j in range(3)))
+
+    def _row_value(self, values: np.ndarray, col: Any, row: Any, active: Any) -> Any:
+        """values[row] (*col*: the same values as a Dr.Jit array): gathered, or for a table of at most
+        :data:`SELECT_MAX` rows selected from constants (0 outside *active*, as a gather)."""
+        kind = mi.UInt32 if values.dtype == np.uint32 else mi.Float
+        if self.count > SELECT_MAX:
+            return dr.gather(kind, col, row, active)
+        cast = int if kind is mi.UInt32 else float
+        out: Any = kind(cast(values[0]))
+        for i in range(1, len(values)):
+            out = dr.select(row == i, cast(values[i]), out)
+        return dr.select(active, out, 0)
 
     # --- sampling (next-event estimation) ------------------------------------------------------------
 
@@ -354,14 +383,19 @@ class LightTable(Choice):
         ds.d = d
         ds.dist = t_plane
         ds.emitter = dr.gather(
-            mi.EmitterPtr, scene.emitters_dr(), dr.gather(mi.UInt32, self._emitter, row, active), active
+            mi.EmitterPtr,
+            scene.emitters_dr(),
+            self._row_value(self._emitter_values, self._emitter, row, active),
+            active,
         )
         active &= t_plane > 0.0
         if self._rgb is None:
             radiance: Any = ds.emitter.eval_direction(si, ds, active)
         else:  # the area emitter's eval_direction: its value on the front side (cos_n < 0), else 0
             lit = active & (cos_n < 0.0)
-            radiance = mi.Spectrum(*(dr.gather(mi.Float, col, row, lit) for col in self._rgb))
+            radiance = mi.Spectrum(
+                *(self._row_value(self._rgb_values[:, j], col, row, lit) for j, col in enumerate(self._rgb))
+            )
             radiance = dr.select(lit, radiance, 0.0)
         value = dr.select(active & (pdf > 0.0), radiance / dr.select(pdf > 0.0, pdf, 1.0), 0.0)
         ds.pdf = dr.select(active, pdf, 0.0)
