@@ -328,10 +328,42 @@ def test_a_small_rectangle_light_under_a_sky_is_sampled_as_paths(llvm, monkeypat
         assert np.array_equal(
             render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling}), path
         )
-    monkeypatch.setattr(lights.LightTable, "hand_far_lanes", lambda self: None)
+    monkeypatch.setattr(lights.LightTable, "hand_far_lanes", lambda self, scene=None: None)
     assert not np.array_equal(
         render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"}), path
     )
+
+
+@pytest.mark.parametrize(
+    ("centre", "bsdf", "reached"),
+    [
+        ([0.0, 0.0, 3.0], "diffuse", False),  # its box 2.5 from the light's centre; far beyond 0.707 / 0.45 = 1.57
+        ([0.0, 0.0, 1.5], "diffuse", True),  # its box reaches 1.0 from the centre, in front (z > 0)
+        ([0.0, 0.0, -1.5], "diffuse", False),  # as near, behind the light
+        ([0.0, 0.0, 1.5], "roughplastic", False),  # near, but not diffuse only: Mitsuba's sampling anyway
+    ],
+)
+def test_a_tiny_table_out_of_reach_of_every_diffuse_surface_hands_every_lane(llvm, centre, bsdf, reached):
+    """hand_far_lanes(scene): where no diffuse-only surface's bounding box comes near the tiny table and in
+    front of it, every lane is handed to Mitsuba (a constant: the table's code is never traced); else only
+    the far ones, so a point near the light and in front of it stays the table's."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    material = {"type": "diffuse"} if bsdf == "diffuse" else {"type": "roughplastic", "alpha": 0.2}
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "light": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(0.5), "emitter": {"type": "area"}},
+            "ball": {"type": "sphere", "center": centre, "radius": 0.5, "bsdf": material},
+            "sky": {"type": "constant", "radiance": 0.1},
+        }
+    )  # the rectangle [-0.5, 0.5]^2 in z = 0, lit side z > 0 (Mitsuba's rectangle)
+    table = lights.build(scene, "solid_angle")
+    assert np.allclose(table.normal / np.linalg.norm(table.normal, axis=1)[:, None], [0.0, 0.0, 1.0])
+    near_in_front = mi.Vector3f(0.1, 0.0, 0.3)
+    handed = table.hand_far_lanes(scene)(near_in_front)
+    assert bool(handed[0]) is not reached
 
 
 @pytest.mark.parametrize("sampling", ["solid_angle", "cosine"])

@@ -390,7 +390,7 @@ class _PathMethods:
         cosine_only = projected and only_table and all_lambertian(scene)
         # a tiny table far from p (or p behind it): Mitsuba's own sampling with its MIS, where no last ray is
         # saved (the table's "by power, then by area" there is Mitsuba's sampling without the MIS)
-        far_lanes: Any = lights.hand_far_lanes() if lights is not None and not only_table else None
+        far_lanes: Any = lights.hand_far_lanes(scene) if lights is not None and not only_table else None
         prev_alone = mi.Bool(False)  # the previous vertex sampled the table's emitters alone
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
