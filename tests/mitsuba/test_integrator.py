@@ -308,6 +308,89 @@ def test_cosine_strategy_renders_the_bsdf_strategys_image(llvm):
     assert not np.array_equal(images[0], images[2])  # Sobol' points: its own directions, not the BSDF's
 
 
+def test_a_small_rectangle_light_under_a_sky_is_sampled_as_paths(llvm, monkeypatch):
+    """The textured scene: a rectangle light (bounding radius 1.13) whose every diffuse vertex is farther
+    than 2.5 from its centre or lies on the light itself (behind its plane), and a sky.  There the light
+    table gives every diffuse vertex to Mitsuba's sampling with its MIS, so each emitter_sampling renders
+    `path`'s image bit for bit.  With light sampling alone at those vertices (the rule switched off: the
+    BSDF's hits on the light weighted 0) the image is another."""
+    mi = llvm
+    import symsphere.mitsuba as sm
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = mi.load_file(str(sm.scene_path("textured")), width=16, height=16)
+
+    def render(integrator):
+        return np.array(mi.render(scene, integrator=mi.load_dict({**integrator, "max_depth": 8}), spp=8, seed=3))
+
+    path = render({"type": "path"})
+    for sampling in ("solid_angle", "cosine", "projected"):
+        assert np.array_equal(
+            render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling}), path
+        )
+    monkeypatch.setattr(lights.LightTable, "hand_far_lanes", lambda self, scene=None: None)
+    assert not np.array_equal(
+        render({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": "solid_angle"}), path
+    )
+
+
+@pytest.mark.parametrize(
+    ("centre", "bsdf", "reached"),
+    [
+        ([0.0, 0.0, 3.0], "diffuse", False),  # its box 2.5 from the light's centre; far beyond 0.707 / 0.45 = 1.57
+        ([0.0, 0.0, 1.5], "diffuse", True),  # its box reaches 1.0 from the centre, in front (z > 0)
+        ([0.0, 0.0, -1.5], "diffuse", False),  # as near, behind the light
+        ([0.0, 0.0, 1.5], "roughplastic", False),  # near, but not diffuse only: Mitsuba's sampling anyway
+    ],
+)
+def test_a_tiny_table_out_of_reach_of_every_diffuse_surface_hands_every_lane(llvm, centre, bsdf, reached):
+    """hand_far_lanes(scene): where no diffuse-only surface's bounding box comes near the tiny table and in
+    front of it, every lane is handed to Mitsuba (a constant: the table's code is never traced); else only
+    the far ones, so a point near the light and in front of it stays the table's."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    material = {"type": "diffuse"} if bsdf == "diffuse" else {"type": "roughplastic", "alpha": 0.2}
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "light": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(0.5), "emitter": {"type": "area"}},
+            "ball": {"type": "sphere", "center": centre, "radius": 0.5, "bsdf": material},
+            "sky": {"type": "constant", "radiance": 0.1},
+        }
+    )  # the rectangle [-0.5, 0.5]^2 in z = 0, lit side z > 0 (Mitsuba's rectangle)
+    table = lights.build(scene, "solid_angle")
+    assert np.allclose(table.normal / np.linalg.norm(table.normal, axis=1)[:, None], [0.0, 0.0, 1.0])
+    near_in_front = mi.Vector3f(0.1, 0.0, 0.3)
+    handed = table.hand_far_lanes(scene)(near_in_front)
+    assert bool(handed[0]) is not reached
+
+
+@pytest.mark.parametrize("sampling", ["solid_angle", "cosine"])
+def test_a_small_tables_rows_selected_from_constants_are_the_gathered_rows(llvm, monkeypatch, sampling):
+    """A light table of at most SELECT_MAX rows takes a chosen row's vertices, normal, RGB radiance and emitter
+    from constants by selects: the image is the one with the rows gathered, bit for bit (the Cornell box with
+    a second, differently coloured rectangle light: 4 rows of two emitters)."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = mi.cornell_box()
+    scene["sensor"]["film"] = {"type": "hdrfilm", "width": 16, "height": 16, "rfilter": {"type": "box"}}
+    T = mi.ScalarTransform4f
+    scene["light2"] = {
+        "type": "rectangle",
+        "to_world": T().translate([-0.6, 0.0, -0.9]).rotate([1, 0, 0], 180).scale(0.2),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2.0, 9.0, 4.0]}},
+    }
+    scene = mi.load_dict(scene)
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling})
+    assert lights.SELECT_MAX >= 4 and lights.build(scene, sampling).count == 4
+    selected = np.array(mi.render(scene, integrator=integrator, spp=8, seed=2))
+    monkeypatch.setattr(lights, "SELECT_MAX", 0)
+    gathered = np.array(mi.render(scene, integrator=integrator, spp=8, seed=2))
+    assert np.array_equal(selected, gathered) and np.all(np.isfinite(selected))
+
+
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN_SEEDS = 8
 SAMPLERS = ("independent", "orthogonal", "stratified")

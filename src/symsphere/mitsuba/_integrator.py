@@ -27,7 +27,9 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 With ``emitter_sampling`` ``'solid_angle'``, ``'cosine'`` or ``'projected'`` (a light table,
 :mod:`._lights`) the MIS differs at diffuse vertices (BSDF flags diffuse only, no glossy or delta part):
 there the table's emitters are sampled by light sampling alone (weight 1), and a BSDF-sampled ray that finds
-one of them counts 0; other emitters keep the power heuristic.  At every other vertex all emitters are
+one of them counts 0; other emitters keep the power heuristic (but where the table is one small light, as a
+``rectangle``, seen small from the vertex or from behind its plane, in a scene where light sampling alone saves
+no last ray, that vertex is Mitsuba's: :meth:`._lights.LightTable.hand_far_lanes`).  At every other vertex all emitters are
 sampled as Mitsuba's ``path`` samples them, with its MIS (so no hit needs the table's density, and a scene
 whose every BSDF is glossy renders as ``path`` bit for bit); the technique of a vertex depends only on its
 BSDF.  The two weights of each (vertex, emitter) pair still sum to 1, and light sampling covers every
@@ -386,6 +388,9 @@ class _PathMethods:
         projected = lights is not None and lights.projected
         lambertian_ids = self._lambertian_table(scene) if projected else None
         cosine_only = projected and only_table and all_lambertian(scene)
+        # a tiny table far from p (or p behind it): Mitsuba's own sampling with its MIS, where no last ray is
+        # saved (the table's "by power, then by area" there is Mitsuba's sampling without the MIS)
+        far_lanes: Any = lights.hand_far_lanes(scene) if lights is not None and not only_table else None
         prev_alone = mi.Bool(False)  # the previous vertex sampled the table's emitters alone
         ray = mi.Ray3f(dr.detach(ray))
         # the variant's types (mi.Float & co.), which Mitsuba's stubs cannot name before run time
@@ -440,6 +445,8 @@ class _PathMethods:
             flags = bsdf.flags()
             active_em = active_next & mi.has_flag(flags, mi.BSDFFlags.Smooth)
             alone = active_em & diffuse_only(flags) if lights is not None else mi.Bool(False)
+            if dr.hint(far_lanes is not None, mode="scalar"):
+                alone &= ~far_lanes(mi.Vector3f(si.p))
             cosine = None
             if dr.hint(projected, mode="scalar"):
                 cosine = alone & (dr.gather(mi.UInt32, lambertian_ids, bsdf_ids(bsdf), alone) != 0)
