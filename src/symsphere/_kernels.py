@@ -238,6 +238,7 @@ def _rotated_weights(basis, count):
     its last output, which leaves numpy's code out of the caches, and building them took 0.1-0.3 ms a
     call there against ~30 us to find them (docs/results/write-limit.md).
     """
+    assert basis.dtype == np.float64 and basis.shape == (3, 3)  # the key is its 72 bytes
     return _weights_of(basis.tobytes(), count)
 
 
