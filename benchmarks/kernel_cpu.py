@@ -42,6 +42,17 @@ With ``--asm``: the vector and scalar floating-point instructions and permutatio
 normal (random points, the equal-area map; float64 and float32 rows, plain stores), counted in its
 assembly, compiled in an empty numba cache (numba shows no assembly for cached code).  The rotated store
 appears twice in the kernel, for the whole orbits and for a cut one.
+
+    python benchmarks/kernel_cpu.py --bound --rounds 15
+
+With ``--bound``: what bounds the rows about a normal, in ns of one thread's CPU per orbit (24 directions;
+medians), float32 and float64: the rotated store alone and the hemisphere's orbit store alone (256 fixed
+points stored over and over into 32 rows on cache lines, in L1: the stores' own arithmetic); the whole
+kernel (random points, equal-area map) in the cache (its dispatcher called 10 times into an output of 512
+and of 1536 orbits, 0.15-0.9 MB: the slope between the two, without the calls' fixed cost); and at n = 48 * 2**16 (``--n``) into a
+touched ``out=`` (non-temporal stores, the kernels' rule) and fresh (``_blocks.empty_rows``, page faults
+included), beside the write limit's non-temporal fill (touched) and ``prange`` fill (fresh) of the same
+bytes (benchmarks/_write_limit.py).  Each timed call follows one of its own.
 """
 
 from __future__ import annotations
@@ -70,7 +81,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
     parser.add_argument("--timeline", action="store_true", help="when each part of sample_sphere(out=) runs")
+    parser.add_argument("--bound", action="store_true", help="per orbit: the stores alone, in the cache, out=, fresh")
     args = parser.parse_args(argv)
+    if args.bound:
+        sys.path.insert(0, str(ROOT / "src"))
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        _bound(args.rounds, args.n)
+        return 0
     if args.timeline:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -264,6 +281,95 @@ def _stores(rounds: int, threads: int, n: int) -> None:
     print(f"kernel_cpu.py --stores: {what} over {rounds} interleaved rounds, n = {n}")
     for key in keys:
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}")
+
+
+def _repeat(kernel: Callable[..., object], arguments: tuple[object, ...]) -> None:
+    for _ in range(10):
+        kernel(*arguments)
+
+
+def _bound(rounds: int, n: int) -> None:
+    import os
+
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")  # the fills' prange threads, as symsphere starts them
+    import numpy as np
+    from _write_limit import fills  # type: ignore[import-not-found]  # benchmarks/ is on sys.path
+    from numba import njit, set_num_threads
+
+    import symsphere
+    from symsphere._testing import blocks, kernels
+    from symsphere.frames import frame
+
+    set_num_threads(1)
+    count = 24
+    basis = frame(np.ones(3) / np.sqrt(3.0))
+    seed = symsphere.points.BasePoints("random", 1, total=n).seed_words
+    points = np.random.default_rng(0).random((3, 256))
+
+    @njit(nogil=True)
+    def alone(rotated, rows, repeats, weights):  # pragma: no cover - compiled by numba
+        for i in range(repeats):
+            x, y, z = points[0, i & 255], points[1, i & 255], points[2, i & 255]
+            if rotated:
+                kernels.store_rotated_hemisphere(x, y, z, rows, i & 31, weights)
+            else:
+                kernels.store_hemisphere_orbit(x, y, z, rows, i & 31)
+
+    rows: dict[str, tuple[float, Callable[[], object]]] = {}  # per orbit: (orbits a call, the call)
+    m = n // count
+    for dtype in (np.float32, np.float64):
+        name = np.dtype(dtype).name
+        stage = blocks.empty_rows(32 * count, np.dtype(dtype)).reshape(32, 3 * count)
+        limit = fills(n, dtype)
+        rows[f"write limit, out= ({name})"] = (m, limit["numba prange, non-temporal", "out="])
+        rows[f"write limit, fresh ({name})"] = (m, limit["numba prange", "fresh"])
+        for label, frame_basis in (("hemisphere", None), ("about (1,1,1)", basis)):
+            weights = kernels.rotated_weights(basis, count)
+            rows[f"{label}: its store alone, in L1 ({name})"] = (
+                2**16,
+                partial(alone, frame_basis is not None, stage, 2**16, weights),
+            )
+            kind = kernels._HEMISPHERE if frame_basis is None else kernels._HEMISPHERE_ROTATED
+            kernel = kernels._fill_kernel(kernels._RANDOM, 0, kind, False)
+            kernel_weights = kernels._NO_WEIGHTS if frame_basis is None else weights
+            normal = kernels._NO_NORMAL if frame_basis is None else np.ascontiguousarray(basis[2])
+            for size in (512, 1536):  # the kernel's own dispatcher, 10 calls a turn: no Python around it
+                out = np.empty((size, 3 * count), dtype)
+                state = kernels.RandomPoints(seed, 0, size).part_input(0)
+                arguments = (state, 0, size, kernel_weights, normal, out, np.empty((0, 3), dtype), 0)
+                rows[f"{label}: kernel, {size} orbits ({name})"] = (10 * size, partial(_repeat, kernel, arguments))
+            touched = np.full((m * count, 3), 0.5, dtype)
+            rows[f"{label}: kernel, out= ({name})"] = (
+                m,
+                partial(
+                    kernels.fill_orbits, kernels.RandomPoints(seed, 0, m), "equal_area", count, frame_basis, touched
+                ),
+            )
+            rows[f"{label}: kernel, fresh ({name})"] = (
+                m,
+                lambda b=frame_basis, d=dtype: kernels.fill_orbits(
+                    kernels.RandomPoints(seed, 0, m), "equal_area", count, b, blocks.empty_rows(m * count, np.dtype(d))
+                ),
+            )
+    for _, call in rows.values():
+        call()
+    times: dict[str, list[float]] = {key: [] for key in rows}
+    keys = list(rows)
+    for r in range(rounds):
+        for key in keys[r % len(keys) :] + keys[: r % len(keys)]:
+            for _ in range(2):  # the call timed follows one of its own
+                start = time.thread_time()
+                rows[key][1]()
+            times[key].append((time.thread_time() - start) / rows[key][0] * 1e9)
+    print(f"kernel_cpu.py --bound: one thread, thread CPU ns per orbit of {count} directions (medians), "
+          f"{rounds} interleaved rounds, n = {n}")  # fmt: skip
+    for key in keys:
+        if "1536 orbits" in key:
+            small = statistics.median(times[key.replace("1536", "512")]) * 5120
+            print(f"{key.replace(', 1536 orbits', ' in the cache'):60s} "
+                  f"{(statistics.median(times[key]) * 15360 - small) / 10240:7.2f}")  # fmt: skip
+        elif "512 orbits" not in key:
+            print(f"{key:60s} {statistics.median(times[key]):7.2f}")
 
 
 def _asm() -> None:

@@ -254,6 +254,25 @@ def test_weights_and_stage_start_cache_lines():
                 assert _stage_placement(count, columns, dtype) == (count, columns, 0)
 
 
+def test_rotated_weights_are_the_images_of_the_basis_and_kept_per_basis():
+    # Block k of the weights is SPHERE_MAPS[k] @ basis (a signed permutation of the basis rows: exact,
+    # signs of zeros included), for every basis asked for, also after more bases than are kept; a basis
+    # asked for again gets the same values.
+    rng = np.random.default_rng(7)
+    normals = [rng.normal(size=3) for _ in range(20)] + [np.array([0.0, 0.0, 1.0]), np.array([0.0, -0.0, -1.0])]
+    for normal in normals + normals[:3]:
+        basis = frame(normal / np.linalg.norm(normal))
+        for count in (24, 48):
+            weights = kernels.rotated_weights(basis, count)
+            for k in range(count):
+                # row r of M_k @ basis without a sum (which would turn -0.0 into 0.0): its one nonzero
+                expected = np.array(
+                    [row[np.flatnonzero(row)[0]] * basis[np.flatnonzero(row)[0]] for row in SPHERE_MAPS[k]]
+                )
+                assert np.array_equal(weights[:, 3 * k : 3 * k + 3], expected)
+                assert np.array_equal(np.signbit(weights[:, 3 * k : 3 * k + 3]), np.signbit(expected))
+
+
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("count, normal", [(48, None), (24, None), (24, (0.3, -0.5, -0.8))])
 def test_streamed_kernels_write_the_same_rows(dtype, count, normal, monkeypatch):

@@ -231,27 +231,31 @@ def _copy_members(scratch, tail, offset):
             tail[i, l] = scratch[0, 3 * k + l]
 
 
-def _aligned_zeros(shape):
-    """A float64 zero array whose first element starts a 64-byte cache line."""
-    zeros = aligned_empty(int(np.prod(shape)), np.float64, _LINE)
-    zeros[:] = 0.0
-    return zeros.reshape(shape)
-
-
 def _rotated_weights(basis, count):
-    """W (3, 3 count) with image k of p = p @ M_k @ basis = p @ W[:, 3k:3k+3].
+    """W (3, 3 count) with image k of p = p @ M_k @ basis = p @ W[:, 3k:3k+3] (float64, exact).
 
-    M_k moves coordinate SOURCES[k, l] to place l with sign SIGNS[k, l], so row
-    SOURCES[k, l] of M_k @ basis is SIGNS[k, l] * basis[l]: the weights are exact.  Built with numpy
-    at each call about a normal (in Python, a loop over the 216 weights took ~0.15 ms a call).
-    Each row (72 values, 9 lines) starts a cache line: the rotated store loads them in 64-byte
-    vectors, 27 per orbit, and numpy's arrays start on 16 bytes: a load spanning two lines costs two
-    (float32 rows about a normal took ~18 % more CPU, docs/results/write-limit.md).
+    Kept for the last 16 bases (the kernels only read them): a call about a normal follows the write of
+    its last output, which leaves numpy's code out of the caches, and building them took 0.1-0.3 ms a
+    call there against ~30 us to find them (docs/results/write-limit.md).
     """
-    weights = _aligned_zeros((3, 3 * count))
-    images = np.arange(count)[:, None, None]
-    weights[_SOURCES[:count, :, None], 3 * images + np.arange(3)] = _SIGNS[:count, :, None] * basis[None, :, :]
-    return weights
+    assert basis.dtype == np.float64 and basis.shape == (3, 3)  # the key is its 72 bytes
+    return _weights_of(basis.tobytes(), count)
+
+
+@functools.lru_cache(maxsize=16)
+def _weights_of(basis_bytes, count):
+    """M_k moves coordinate SOURCES[k, l] to place l with sign SIGNS[k, l], so row SOURCES[k, l] of
+    M_k @ basis is SIGNS[k, l] * basis[l]: W[SOURCES[k, l], 3k + l'] = SIGNS[k, l] * basis[l, l'] (a
+    gather and a sign).  Each row (72 values, 9 lines) starts a cache line: the rotated store loads
+    them in 64-byte vectors, 27 per orbit, and one spanning two lines costs two (float32 rows about a
+    normal took ~18 % more CPU with numpy's 16 bytes into a line, docs/results/write-limit.md)."""
+    index, sign = np.empty((3, 3 * count), dtype=np.intp), np.empty((3, 3 * count))
+    rows, columns = _SOURCES[:count, :, None], 3 * np.arange(count)[:, None, None] + np.arange(3)
+    index[rows, columns] = 3 * np.arange(3)[None, :, None] + np.arange(3)
+    sign[rows, columns] = _SIGNS[:count, :, None]
+    weights = aligned_empty(9 * count, np.float64, _LINE)
+    np.multiply(np.frombuffer(basis_bytes).take(index.ravel()), sign.ravel(), out=weights)
+    return weights.reshape(3, 3 * count)
 
 
 @register_jitable

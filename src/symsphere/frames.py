@@ -74,7 +74,7 @@ def frame_rows(nx: float, ny: float, nz: float) -> tuple[tuple[float, float, flo
         if not math.isfinite(number):
             raise ValueError(f"'{name}' must be finite; got {short_repr(value)}")
         values.append(number)
-    _check_unit(np.array(values), "'nx', 'ny', 'nz'")
+    _check_unit(values, "'nx', 'ny', 'nz'")
     return _rows(*values)
 
 
@@ -85,10 +85,13 @@ def _frame_rows_in_kernels(
     return _rows
 
 
-def _check_unit(vector: Float64Array, names: str) -> None:
-    """ValueError naming *names* unless the finite float64 3-vector *vector* has norm 1 within UNIT_TOLERANCE."""
-    scale = float(np.max(np.abs(vector)))
-    norm = scale * math.sqrt(float(np.sum((vector / scale) ** 2))) if scale > 0 else 0.0
+def _check_unit(vector: list[float], names: str) -> None:
+    """ValueError naming *names* unless the 3 finite floats *vector* have norm 1 within UNIT_TOLERANCE.
+
+    In Python floats: a sampler about a normal calls it after writing its last output, which leaves
+    numpy's code out of the caches (each numpy call then costs ~10-30 us; docs/results/write-limit.md)."""
+    scale = max(abs(c) for c in vector)
+    norm = scale * math.sqrt(sum((c / scale) * (c / scale) for c in vector)) if scale > 0 else 0.0
     if abs(norm - 1.0) > UNIT_TOLERANCE:
         raise ValueError(f"{names} must be a unit vector (norm 1 within {UNIT_TOLERANCE:g}); got a norm of {norm:.6g}")
 
@@ -140,10 +143,10 @@ def frame(normal: npt.ArrayLike) -> Float64Array:
     arr = as_float_array(normal, "normal")
     if arr.shape != (3,):
         raise ValueError(f"'normal' must be a 3-vector; got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    nx, ny, nz = values = arr.astype(np.float64).tolist()
+    if not all(math.isfinite(c) for c in values):
         raise ValueError(f"'normal' must be finite (no NaN or inf); got {short_repr(normal)}")
-    nx, ny, nz = (float(c) for c in arr.astype(np.float64))
-    _check_unit(np.array([nx, ny, nz]), "'normal'")
+    _check_unit(values, "'normal'")
     t, b = _rows(nx, ny, nz)
     return np.array([t, b, (nx, ny, nz)])
 

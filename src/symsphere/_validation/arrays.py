@@ -253,18 +253,22 @@ def check_normal(normal: npt.ArrayLike | None, name: str = "normal") -> Float64A
     arr = as_float_array(normal, name).astype(np.float64)
     if arr.shape != (3,):
         raise ValueError(f"'{name}' must be a 3-vector, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)) or not np.any(arr):
-        raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {arr.tolist()}")
+    values = arr.tolist()
+    if not all(math.isfinite(c) for c in values) or not any(values):
+        raise ValueError(f"'{name}' must be a finite, non-zero 3-vector, got {values}")
     # IEEE-only, so the same bits on every machine: squares and the division correctly rounded, the sum
     # exactly rounded (math.fsum), sqrt correctly rounded.  np.linalg.norm's dot product comes from
     # BLAS, whose kernels differ by CPU (OpenBLAS's AVX-512 one uses FMA): 3**-0.5 * (1, 1, 1) was left
-    # as it is on an AMD AVX2 machine and changed by 1 ulp on an Intel AVX-512 one.
-    largest = float(np.max(np.abs(arr)))
+    # as it is on an AMD AVX2 machine and changed by 1 ulp on an Intel AVX-512 one.  In Python floats:
+    # a sampler calls this after writing its last output, which leaves numpy's code out of the caches
+    # (each numpy call then costs ~10-30 us; docs/results/write-limit.md).
+    largest = max(abs(c) for c in values)
     if (
         not 1e-150 < largest < 1e150
     ):  # scale first: the squares of [1e200, 0, 0] or [1e-170, 0, 0] overflow or underflow
-        arr = arr / largest
-    unit: Float64Array = arr / math.sqrt(math.fsum((arr * arr).tolist()))
+        values = [c / largest for c in values]
+    norm = math.sqrt(math.fsum([c * c for c in values]))
+    unit: Float64Array = np.array([c / norm for c in values])
     return unit
 
 

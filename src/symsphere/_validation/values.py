@@ -5,6 +5,7 @@ Part of :mod:`symsphere._validation` (import the validators from there).
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 import os
@@ -144,9 +145,11 @@ float64 RGB several times over (the sum, a pass, the mean: 24 bytes a pixel each
 limit); ``width = height = 2**31`` used to reach numpy's "array is too big", naming neither."""
 
 
+@functools.cache
 def machine_memory() -> int | None:
     """Bytes of memory this process may use: the physical memory, or a smaller cgroup limit (containers,
-    batch jobs); None where neither can be read."""
+    batch jobs); None where neither can be read.  Read once per process: every fresh sampling output
+    asks, and reading the files after a large write took 0.2-0.4 ms a call (docs/results/write-limit.md)."""
     sizes = []
     try:
         sizes.append(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
