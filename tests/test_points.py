@@ -200,3 +200,12 @@ def test_per_point_is_checked(point_set):
     with pytest.raises(ValueError, match="per_point"):
         points.unit_square_points(64, point_set, 1, per_point=2**60)
     assert points.unit_square_points(64, point_set, 1, per_point=48).shape == (64, 2)
+
+
+@pytest.mark.parametrize("rng", [0, 5, np.int64(2**40), np.random.SeedSequence(9, spawn_key=(1,))])
+def test_root_entropy_is_the_first_draw_of_default_rng(rng):
+    # An int or SeedSequence seeds without a Generator: the same four numbers as the documented draw.
+    expected = np.random.default_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
+    assert BasePoints("random", rng, total=1).root_entropy == tuple(int(e) for e in expected)
+    generator = np.random.default_rng(rng)
+    assert BasePoints("random", generator, total=1).root_entropy == tuple(int(e) for e in expected)

@@ -40,6 +40,8 @@ CUT_ORBIT_KEY = 2
 def base_points(points: PointsLike, rng: RNGLike, total: int, count: int, n: int | None = None) -> BasePoints:
     """``BasePoints(points, rng, total, per_point=count, n=n)``, its warnings (scipy's Sobol' balance
     warning) attributed to the user's line that called into symsphere, not to a line of the package."""
+    if isinstance(points, str) and points == "random":  # no engine: nothing warns (catching costs ~40 us)
+        return BasePoints(points, rng, total, per_point=count, n=n)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         source = BasePoints(points, rng, total, per_point=count, n=n)

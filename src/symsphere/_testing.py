@@ -23,7 +23,7 @@ from . import _numba_cache as numba_cache
 from . import _strategies as strategies
 from . import _threads as threads
 from . import _validation as validation
-from ._random import hashes, owen_sobol, pcg64, splitmix
+from ._random import hashes, owen_sobol, pcg64, seed_sequence, splitmix
 from .render import _directions as render_directions
 from .render import _emitters as render_emitters
 from .render import _integrator as render_integrator
@@ -42,6 +42,7 @@ __all__ = [
     "numba_cache",
     "owen_sobol",
     "pcg64",
+    "seed_sequence",
     "splitmix",
     "strategies",
     "threads",

@@ -37,6 +37,8 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit, prange
 
+from ._random.pcg64 import pcg64_integers63
+from ._random.seed_sequence import seed_words
 from ._threads import route_compiles, start_threads
 from ._typing import Float64Array, PointSet, PointsLike, RNGLike
 from ._validation import (
@@ -44,7 +46,7 @@ from ._validation import (
     as_float_array,
     check_count,
     check_point_set,
-    check_rng,
+    check_rng_seed,
     check_size,
     check_sobol_size,
     check_square_count,
@@ -144,8 +146,7 @@ or scipy.stats.qmc.QMCEngine
         check_sobol_size(points, self.total, per_point, n=n)  # at the call, not when the last chunk is drawn
         self._kind: str = "engine" if self._engine is not None else points
         self._side: int | None = None
-        entropy = check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)
-        self.root_entropy = tuple(int(e) for e in entropy)
+        self.root_entropy = _root_entropy(rng)
         if self._kind == "stratified":
             self._side = check_square_count(self.total, per_point, n)
         elif self._kind in ("sobol", "halton") or self._kind in _INTERLACED:
@@ -164,10 +165,9 @@ or scipy.stats.qmc.QMCEngine
             if type(self._engine).__name__ == "Sobol" and self.total & (self.total - 1):
                 warnings.warn(_SOBOL_WARNING, UserWarning, stacklevel=3)
         else:
-            self._stream_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_STREAM_KEY,))
-            # What numpy's PCG64 takes from the SeedSequence (uint64[4]): the kernels seed their
-            # own copy of the stream from it (symsphere._kernels.pcg64_seeded).
-            self.seed_words = self._stream_seed.generate_state(4, np.uint64)
+            # What numpy's PCG64 takes from SeedSequence(root_entropy, spawn_key=(_STREAM_KEY,))
+            # (uint64[4]): the kernels seed their own copy of the stream from it (pcg64_seeded).
+            self.seed_words = np.array(seed_words(self.root_entropy, (_STREAM_KEY,)), dtype=np.uint64)
             self._stream_start: Any = None  # numpy's PCG64 state at point 0, made when take() needs it
 
     @property
@@ -198,7 +198,8 @@ or scipy.stats.qmc.QMCEngine
 
     def _generator_at(self, index: int) -> np.random.Generator:
         if self._stream_start is None:
-            self._stream_start = np.random.PCG64(self._stream_seed).state
+            stream_seed = np.random.SeedSequence(self.root_entropy, spawn_key=(_STREAM_KEY,))
+            self._stream_start = np.random.PCG64(stream_seed).state
         bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
         bit_generator.state = self._stream_start
         bit_generator.advance(2 * int(index))  # two draws per point; advance takes Python ints only
@@ -219,6 +220,17 @@ or scipy.stats.qmc.QMCEngine
             # The balance warning is given once, for the whole run, at construction.
             warnings.filterwarnings("ignore", message="The balance properties of Sobol")
             return np.asarray(engine.random(stop - start), dtype=np.float64)
+
+
+def _root_entropy(rng: RNGLike) -> tuple[int, ...]:
+    """``check_rng(rng).integers(0, 2**63, size=4, dtype=np.int64)`` as Python ints.  From an int, None or a
+    SeedSequence the same four numbers without a Generator: its PCG64 drawn (and an int's SeedSequence hashed)
+    in Python's integers."""
+    seed = check_rng_seed(rng)
+    if isinstance(seed, np.random.Generator):
+        return tuple(int(e) for e in seed.integers(0, 2**63, size=4, dtype=np.int64))
+    words = seed.generate_state(4, np.uint64) if isinstance(seed, np.random.SeedSequence) else seed_words(seed)
+    return pcg64_integers63(words, 4)
 
 
 def interlace_digits(x: npt.ArrayLike, factor: int) -> Float64Array:

@@ -40,7 +40,7 @@ from ._validation import (
     check_dtype,
     check_normal,
     check_out,
-    check_rng,
+    check_rng_seed,
     check_unit_directions,
     machine_memory,
 )
@@ -398,13 +398,13 @@ or scipy.stats.qmc.QMCEngine
         self._basis = None if self.normal is None else frames.frame(self.normal)
         # An engine of the user's is drawn from by position: each call puts it back where it was.
         self._engine_start = 0 if engine is None else engine.num_generated
-        generator = check_rng(rng)
-        if isinstance(rng, (np.random.Generator, np.random.BitGenerator)):
+        seed = check_rng_seed(rng)
+        if isinstance(seed, np.random.Generator):
             # The user's: keep its state for the sources, and advance it once by the draw a source makes.
-            self._seed = copy.deepcopy(generator)
-            generator.integers(0, 2**63, size=4, dtype=np.int64)
+            self._seed: np.random.Generator | np.random.SeedSequence | int = copy.deepcopy(seed)
+            seed.integers(0, 2**63, size=4, dtype=np.int64)
         else:
-            self._seed = generator
+            self._seed = seed  # an int or SeedSequence: every source drawn from it starts the same stream
         self._random_plan: _kernels.Plan | None = None
         self._position = 0
 

@@ -48,5 +48,12 @@ def test_pcg64_seeding_and_jump_ahead_equal_numpys(seed):
         bit_generator = np.random.PCG64(sequence)
         bit_generator.advance(int(draws))
         assert _as_int128(jump(start, np.uint64(draws))) == _numpy_state(bit_generator)
-        # The kernels' parts start from pcg64_state (Python's integers seed, numpy's advance jumps).
+        # The kernels' parts start from pcg64_state (Python's integers seed and jump).
         assert _as_int128(pcg64.pcg64_state(words, int(draws))) == _numpy_state(bit_generator)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2**40 + 3])
+def test_pcg64_integers63_equal_numpys_integers(seed):
+    sequence = np.random.SeedSequence(seed)
+    expected = np.random.Generator(np.random.PCG64(sequence)).integers(0, 2**63, size=6, dtype=np.int64)
+    assert pcg64.pcg64_integers63(sequence.generate_state(4, np.uint64), 6) == tuple(int(e) for e in expected)

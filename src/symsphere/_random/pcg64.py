@@ -10,6 +10,7 @@ A part of a kernel starts from the state :func:`pcg64_state` gives (Python's int
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,7 @@ from numba.extending import intrinsic, register_jitable
 
 from .._constants import TWO_POW_M53
 
-__all__ = ["pcg64_random", "pcg64_advanced", "pcg64_seeded", "pcg64_state"]
+__all__ = ["pcg64_random", "pcg64_advanced", "pcg64_seeded", "pcg64_state", "pcg64_integers63"]
 
 _PCG64_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
 _MUL_HI = np.uint64(_PCG64_MULTIPLIER >> 64)
@@ -28,6 +29,7 @@ _MUL_LO = np.uint64(_PCG64_MULTIPLIER & (2**64 - 1))
 _U0, _U1, _U11, _U58, _U63, _U64 = (np.uint64(k) for k in (0, 1, 11, 58, 63, 64))
 _MASK64 = 2**64 - 1
 _MASK128 = 2**128 - 1
+_Words = Sequence[int] | npt.NDArray[np.unsignedinteger[Any]]  # a SeedSequence's 4 uint64 words
 
 
 @intrinsic
@@ -115,24 +117,54 @@ def pcg64_advanced(start, draws):
     return stream
 
 
-def pcg64_state(seed_words: npt.NDArray[np.unsignedinteger[Any]], draws: int) -> npt.NDArray[np.uint64]:
+def pcg64_state(seed_words: _Words, draws: int) -> npt.NDArray[np.uint64]:
     """The stream (uint64[4]: state hi, lo; inc hi, lo) of numpy's ``PCG64(seed_sequence)`` after
     *draws* draws, with *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``.
 
-    Python's integers do the seeding (O'Neill's ``pcg_setseq_128_srandom_r``, as numpy does it:
-    two steps of the LCG) and numpy's own ``PCG64.advance`` the jump, so the kernels need not
-    compile either: a part of a kernel starts from this state and only steps.
+    Python's integers do it all (a kernel's part starts from this state and only steps, so the kernels
+    compile neither): the seeding as numpy does it, then the jump as ``PCG64.advance``.  One numpy
+    call: after a large write, each numpy call costs 10-30 us more (its code has left the caches), and
+    a numpy ``PCG64`` took five.
     """
+    state, increment = _seeded(seed_words)
+    s = _jumped(state, increment, int(draws))
+    return np.array([s >> 64, s & _MASK64, increment >> 64, increment & _MASK64], dtype=np.uint64)
+
+
+def pcg64_integers63(seed_words: _Words, count: int) -> tuple[int, ...]:
+    """``Generator(PCG64(seed_sequence)).integers(0, 2**63, size=count, dtype=np.int64)`` as Python ints,
+    *seed_words* = ``seed_sequence.generate_state(4, np.uint64)``, without making the Generator.
+
+    numpy draws integers below 2**63 by Lemire's method, which for a power-of-2 range is the top bits of
+    one draw and never rejects: each is ``next_uint64() >> 1`` (tested against numpy).
+    """
+    state, increment = _seeded(seed_words)
+    draws = []
+    for _ in range(count):
+        state = (state * _PCG64_MULTIPLIER + increment) & _MASK128
+        hi, lo = state >> 64, state & _MASK64
+        mixed, rotation = hi ^ lo, hi >> 58  # XSL-RR: the high half's top 6 bits rotate the xor
+        draws.append(((mixed >> rotation) | (mixed << (64 - rotation))) & _MASK64)
+    return tuple(d >> 1 for d in draws)
+
+
+def _seeded(seed_words: _Words) -> tuple[int, int]:
+    """The (state, increment) of numpy's ``PCG64`` seeded with *seed_words* (O'Neill's
+    ``pcg_setseq_128_srandom_r``, as numpy seeds it: two steps of the LCG)."""
     w0, w1, w2, w3 = (int(w) for w in seed_words)
     increment = (((w2 << 64) | w3) << 1 | 1) & _MASK128
     state = increment  # one step from state 0
     state = (state + ((w0 << 64) | w1)) & _MASK128
     state = (state * _PCG64_MULTIPLIER + increment) & _MASK128
-    bit_generator = np.random.PCG64(0)  # any seed (not None: that reads OS entropy); replaced next
-    bit_generator.state = {
-        "bit_generator": "PCG64", "state": {"state": state, "inc": increment}, "has_uint32": 0, "uinteger": 0,
-    }  # fmt: skip
-    bit_generator.advance(int(draws))
-    advanced = bit_generator.state["state"]
-    s, inc = advanced["state"], advanced["inc"]
-    return np.array([s >> 64, s & _MASK64, inc >> 64, inc & _MASK64], dtype=np.uint64)
+    return state, increment
+
+
+def _jumped(state: int, increment: int, draws: int) -> int:
+    """*state* after *draws* steps x -> M x + inc (mod 2**128): M^d x + inc (M^d - 1) / (M - 1).
+
+    The geometric sum is exact from M^d modulo (M - 1) 2**128 (M - 1 divides M^d - 1), so Python's
+    three-argument ``pow`` does the jump: the same state as numpy's ``PCG64.advance`` (tested).
+    """
+    m = _PCG64_MULTIPLIER
+    geometric = (pow(m, draws, (m - 1) << 128) - 1) // (m - 1)
+    return (pow(m, draws, 1 << 128) * state + geometric * increment) & _MASK128

@@ -54,6 +54,7 @@ __all__ = [
     "check_positive_real",
     "check_real",
     "check_rng",
+    "check_rng_seed",
     "check_seed",
     "check_size",
     "check_sobol_size",
@@ -258,14 +259,26 @@ def check_sobol_size(points: object, total: int, per_point: int = 1, *, n: int |
 
 def check_rng(rng: object, name: str = "rng") -> np.random.Generator:
     """Return a ``numpy.random.Generator`` from None, int, SeedSequence or Generator (SPEC 7)."""
+    seed = check_rng_seed(rng, name)
+    return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+
+
+def check_rng_seed(rng: object, name: str = "rng") -> np.random.Generator | np.random.SeedSequence | int:
+    """As :func:`check_rng`, but an int or a SeedSequence as it is and None as a fresh SeedSequence: a seed
+    of ``default_rng``'s stream, the same at every use, without making a Generator (which costs a small
+    call more than its work after a large write).  A Generator (or BitGenerator) is returned as one."""
     if isinstance(rng, np.random.Generator):
         return rng
-    if rng is None or isinstance(rng, (np.random.SeedSequence, np.random.BitGenerator)):
-        return np.random.default_rng(rng)
+    if isinstance(rng, np.random.BitGenerator):
+        return np.random.Generator(rng)
+    if isinstance(rng, np.random.SeedSequence):
+        return rng
+    if rng is None:
+        return np.random.SeedSequence()
     if isinstance(rng, numbers.Integral) and not isinstance(rng, bool):
         if rng < 0:
             raise ValueError(f"'{name}' must be a non-negative integer seed, got {rng}")
-        return np.random.default_rng(int(rng))
+        return int(rng)
     raise TypeError(
         f"'{name}' must be None, an int, a numpy SeedSequence or a numpy Generator, got {type(rng).__name__}"
     )
