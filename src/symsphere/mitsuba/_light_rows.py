@@ -70,13 +70,18 @@ def triangles(shape: Any) -> tuple[np.ndarray, np.ndarray] | None:
     return tris, uvs
 
 
+def _facing(tris: np.ndarray) -> np.ndarray:
+    """Each triangle's class: the axis its normal is closest to, 2 * axis, + 1 where the normal points down it."""
+    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    axis = np.argmax(np.abs(normal), axis=1)
+    facing: np.ndarray = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
+    return facing
+
+
 def spatial_order(tris: np.ndarray) -> np.ndarray:
     """An order of the triangles by the axis their normal is closest to (and its sign), then along a
     Morton curve of their centroids: runs of it are compact, similarly oriented groups."""
-    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    axis = np.argmax(np.abs(normal), axis=1)
-    facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
-    centroid = tris.mean(axis=1)
+    facing, centroid = _facing(tris), tris.mean(axis=1)
     lo, hi = centroid.min(axis=0), centroid.max(axis=0)
     cells = ((centroid - lo) / np.where(hi > lo, hi - lo, 1.0) * 1023).astype(np.int64)
     code = np.zeros(len(tris), dtype=np.int64)
@@ -94,10 +99,7 @@ def tree_order(tris: np.ndarray) -> np.ndarray:
     to the unit cube (:func:`spatial_order`) ran through the dome of a nearly flat light as through its
     width, which left runs of 32 triangles with radii up to 4x their size (their importance a poor
     estimate of their light)."""
-    normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    axis = np.argmax(np.abs(normal), axis=1)
-    facing = 2 * axis + (normal[np.arange(len(normal)), axis] < 0)
-    centroid = tris.mean(axis=1)
+    facing, centroid = _facing(tris), tris.mean(axis=1)
     order: list[np.ndarray] = []
     stack = [np.flatnonzero(facing == f) for f in np.unique(facing)[::-1]]
     while stack:  # depth first, the first part first
