@@ -89,8 +89,10 @@ class Case:
             )
             if sampler != "independent":
                 self.label += f" + {sampler}"
+            # Mitsuba's own light sampling (area): this bench measures the strategies, not the light table
             self.integrator = mi.load_dict({"type": integrator, "strategy": strategy, "points": points,
-                                            "max_depth": max_depth, "rr_depth": RR_DEPTH})  # fmt: skip
+                                            "max_depth": max_depth, "rr_depth": RR_DEPTH,
+                                            "emitter_sampling": "area"})  # fmt: skip
         else:
             self.label = f"Mitsuba path · {sampler}"
             self.integrator = mi.load_dict({"type": "path", "max_depth": max_depth, "rr_depth": RR_DEPTH})

@@ -40,14 +40,16 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import cpu_name, cpu_snapshot, others_cpu
 
+# Mitsuba's own light sampling (area): this bench measures the strategies' gradients against prb's
+AREA = {"emitter_sampling": "area"}
 CASES = [
     ("prb", {"type": "prb"}),
-    ("bsdf", {"type": "symsphere_path", "strategy": "bsdf"}),
-    ("cosine · sobol", {"type": "symsphere_path", "strategy": "cosine", "points": "sobol"}),
-    ("symmetric · random", {"type": "symsphere_path", "strategy": "symmetric"}),
-    ("symmetric · sobol", {"type": "symsphere_path", "strategy": "symmetric", "points": "sobol"}),
-    ("symmetric_cosine · random", {"type": "symsphere_path", "strategy": "symmetric_cosine"}),
-    ("symmetric_cosine · sobol", {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol"}),
+    ("bsdf", {"type": "symsphere_path", **AREA, "strategy": "bsdf"}),
+    ("cosine · sobol", {"type": "symsphere_path", **AREA, "strategy": "cosine", "points": "sobol"}),
+    ("symmetric · random", {"type": "symsphere_path", **AREA, "strategy": "symmetric"}),
+    ("symmetric · sobol", {"type": "symsphere_path", **AREA, "strategy": "symmetric", "points": "sobol"}),
+    ("symmetric_cosine · random", {"type": "symsphere_path", **AREA, "strategy": "symmetric_cosine"}),
+    ("symmetric_cosine · sobol", {"type": "symsphere_path", **AREA, "strategy": "symmetric_cosine", "points": "sobol"}),
 ]
 PARAMETERS = {
     "cornell": {"reflectance": "white.reflectance.value", "radiance": "light.emitter.radiance.value"},

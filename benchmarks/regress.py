@@ -118,7 +118,11 @@ def _mitsuba_rows():
     import symsphere.mitsuba as sm
 
     scene = mi.load_file(str(sm.scene_path("cornell_box")), width=MITSUBA["width"], height=MITSUBA["height"])
-    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "symmetric", "points": "random"})
+    spec = {"type": "symsphere_path", "strategy": "symmetric", "points": "random"}
+    try:  # Mitsuba's own light sampling on every revision (before emitter_sampling, the only one)
+        integrator = mi.load_dict({**spec, "emitter_sampling": "area"})
+    except RuntimeError:  # a revision without the parameter: Mitsuba rejects the unreferenced property
+        integrator = mi.load_dict(spec)
     seeds = iter(range(1, 10**6))
 
     def run():

@@ -8,7 +8,7 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
 (Mitsuba's ``diffuse``, alone or as both sides of ``twosided``) depends on ``strategy``:
 
 ``bsdf``
-    Mitsuba's own sampling (the BSDF samples itself): ``path`` exactly, in distribution.
+    Mitsuba's own sampling (the BSDF samples itself): with ``emitter_sampling='area'``, ``path`` exactly.
 ``cosine``
     Cosine-weighted (Shirley-Chiu + Malley, ``mi.warp.square_to_cosine_hemisphere``).  With ``points``
     ``random`` this is exactly how Mitsuba's ``diffuse`` samples itself, from the same 2D sample (and
@@ -24,7 +24,7 @@ and ``hide_emitters`` as Mitsuba defines them (the camera ray passes through are
     The 8 z-keeping images (:data:`symsphere.warps.WEDGE_MAPS`) of a cosine-weighted base point of the
     wedge (:func:`symsphere.warps.square_to_cosine_wedge`).
 
-With ``emitter_sampling`` ``'solid_angle'``, ``'cosine'`` or ``'projected'`` (a light table,
+With ``emitter_sampling`` ``'solid_angle'`` (the default), ``'cosine'`` or ``'projected'`` (a light table,
 :mod:`._lights`) the MIS differs at diffuse vertices (BSDF flags diffuse only, no glossy or delta part):
 there the table's emitters are sampled by light sampling alone (weight 1), and a BSDF-sampled ray that finds
 one of them counts 0; other emitters keep the power heuristic (but where the table is one small light, as a
@@ -134,7 +134,7 @@ class _PathMethods:
                 "sampler's points; choose a QMC sampler there, or points='sobol' with another strategy"
             )
         emitter_sampling = check_choice(
-            props.get("emitter_sampling", "area"), "emitter_sampling", _lights.EMITTER_SAMPLINGS
+            props.get("emitter_sampling", "solid_angle"), "emitter_sampling", _lights.EMITTER_SAMPLINGS
         )
         # the variant's RBIntegrator (the class's only base): reads max_depth (default 6 there) and rr_depth
         # again, valid by now, and hide_emitters (the C++ base's property)
