@@ -641,6 +641,46 @@ def test_optimisation_example_recovers_the_reflectance(llvm):
     assert result["error_start"] > 0.4 and result["error_final"] < 0.1, result
 
 
+def test_the_collector_is_off_while_symsphere_path_traces_and_on_after(llvm, monkeypatch):
+    """Inside sample() (here from mi.render) Python's collector is off; after the render, and after an error
+    inside it, it is on again; a caller that turned it off keeps it off."""
+    import gc
+
+    import drjit as dr
+
+    from symsphere.mitsuba import _lights
+
+    mi = llvm
+    scene = mi.load_dict(scene_dict(mi, "cornell", 8))
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf"})
+    build, states = _lights.build, []
+
+    def recording(*args):
+        states.append(gc.isenabled())
+        return build(*args)
+
+    monkeypatch.setattr(_lights, "build", recording)
+    assert gc.isenabled()
+    dr.eval(mi.render(scene, integrator=integrator, spp=4))
+    assert states == [False] and gc.isenabled()
+
+    def failing(*args):
+        raise RuntimeError("inside the trace")
+
+    monkeypatch.setattr(_lights, "build", failing)
+    with pytest.raises(Exception):  # noqa: B017 - mi.render re-raises it as its own error
+        mi.render(scene, integrator=integrator, spp=4)
+    assert gc.isenabled()
+    monkeypatch.setattr(_lights, "build", recording)
+    gc.disable()
+    try:
+        dr.eval(mi.render(scene, integrator=integrator, spp=4))
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+    assert states == [False, False]
+
+
 # An earlier scene (a second live Emitter) becomes garbage in a reference cycle during render_backward's primal
 # pass, with automatic collection off, and the collector is set to run at every allocation at its adjoint pass:
 # Dr.Jit 1.5 aborted that process (the Cornell box's emitter's eval traced as a call of two instances, then of

@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import functools
 import gc
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -561,6 +562,8 @@ _CLASSES: dict[str, type] = {}
 # the methods that trace a render's kernels: Mitsuba's render, render_forward and render_backward (each traces
 # sample() and, the last two, a second pass of it into the same kernel), and sample() (called by aov, moment)
 _TRACING = ("render", "render_forward", "render_backward", "sample")
+_PAUSE: list[Any] = [0, False]  # [paused methods running, whether the collector was on before the first]
+_PAUSE_LOCK = threading.Lock()
 
 
 def _collector_paused(method: Callable[..., Any]) -> Callable[..., Any]:
@@ -576,13 +579,18 @@ def _collector_paused(method: Callable[..., Any]) -> Callable[..., Any]:
 
     @functools.wraps(method)
     def paused(*args: Any, **kwargs: Any) -> Any:
-        if not gc.isenabled():  # already off (a nested call, or the caller's choice)
-            return method(*args, **kwargs)
-        gc.disable()
+        with _PAUSE_LOCK:  # nested calls and other threads' renders: on again after the last one only
+            if not _PAUSE[0]:
+                _PAUSE[1] = gc.isenabled()  # off already: the caller's choice, kept
+                gc.disable()
+            _PAUSE[0] += 1
         try:
             return method(*args, **kwargs)
         finally:
-            gc.enable()
+            with _PAUSE_LOCK:
+                _PAUSE[0] -= 1
+                if not _PAUSE[0] and _PAUSE[1]:
+                    gc.enable()
 
     return paused
 
