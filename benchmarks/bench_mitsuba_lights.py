@@ -11,10 +11,17 @@ each --depths (max_depth 2: direct light only; 8: full paths; rr_depth 5).
 ``path`` with ``independent``.
 
 Per scene and depth: a reference (Mitsuba's ``path``, ``independent``, --ref-spp in two independent
-halves whose difference estimates the reference's own relMSE, which is subtracted), then --rounds
-interleaved rounds (alternating order) in which every case renders --spp samples per pixel with a new
-seed.  relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01) (as bench_mitsuba.py),
-the mean over the rounds; seconds = the median over the rounds.  Efficiency = 1 / (relMSE x seconds),
+halves), then --rounds interleaved rounds (alternating order) in which every case renders --spp samples per
+pixel with a new seed.  relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01) (as
+bench_mitsuba.py), the mean over the rounds; seconds = the median over the rounds.  The reference's own
+noise adds its variance to every case's squared error (x and ref are independent and unbiased), which
+would compress the ratios towards 1: the relMSE reported is bias-corrected, the raw one minus the
+reference's own relMSE, estimated from the halves a, b as the mean of ((a - b) / 2)^2 / (ref^2 + 0.01)
+(the variance of (a - b) / 2 is that of ref = (a + b) / 2); the raw value is recorded too.  A sampler that
+takes another sample count than --spp (multijitter: 35 for 32, stratified 36, ldsampler 64) renders that
+count: its relMSE and seconds are scaled to --spp (relMSE x taken / spp, seconds x spp / taken: Monte
+Carlo's 1/spp, exact for independent samples, a slight flattery of a QMC sampler that converges faster),
+so that "at equal spp" holds; the efficiency, their product, does not depend on the scaling.  Efficiency = 1 / (relMSE x seconds),
 which is the equal-time comparison (relMSE is inversely proportional to spp); reported as a ratio to
 Mitsuba's path in the same rounds, with the ratio of relMSE at equal spp and of paths/s.  The machine may
 be shared: the others' CPU share during the rounds is recorded, and each render's CPU time (this
@@ -54,11 +61,32 @@ COSINE = [  # after the others (the images' order): near the cosine at Lambertia
     ("symsphere_path symmetric_cosine sobol · cosine",
      {"type": "symsphere_path", "strategy": "symmetric_cosine", "points": "sobol", "emitter_sampling": "cosine"}),
 ]  # fmt: skip
+QMC = [  # after the others (the images' order): Owen-scrambled Sobol' cosine directions at Lambertian vertices
+    ("symsphere_path cosine sobol · solid_angle",
+     {"type": "symsphere_path", "strategy": "cosine", "points": "sobol", "emitter_sampling": "solid_angle"}),
+    ("symsphere_path cosine sobol · cosine",
+     {"type": "symsphere_path", "strategy": "cosine", "points": "sobol", "emitter_sampling": "cosine"}),
+]  # fmt: skip
 WITH_SAMPLER = CASES[0], CASES[2], COSINE[0]  # --samplers: these with the scene's sampler set to a better one
 
 
-def _rel_mse(image, reference):
+def rel_mse(image, reference):
+    """The relMSE of *image* against *reference*: the mean of (x - ref)^2 / (ref^2 + 0.01)."""
     return float(np.mean((image - reference) ** 2 / (reference**2 + 0.01)))
+
+
+def reference(a, b):
+    """(ref, its own relMSE) from two independent half-references *a*, *b*: ref = (a + b) / 2, and the
+    estimate of the relMSE its own noise adds to every image's, rel_mse((a - b) / 2 + ref, ref)."""
+    ref = 0.5 * (a + b)
+    return ref, rel_mse(ref + 0.5 * (a - b), ref)
+
+
+def _taken_spp(scene, spp):
+    """The sample count the scene's sampler renders when asked for *spp* (Mitsuba rounds some counts)."""
+    sampler = scene.sensors()[0].sampler().clone()
+    sampler.set_sample_count(spp)
+    return int(sampler.sample_count())
 
 
 def _render(mi, scene, integrator, spp, seed):
@@ -76,26 +104,31 @@ def run(args, mi, workdir):
             ref_integrator = mi.load_dict({"type": "path", **options})
             a = _render(mi, scene, ref_integrator, args.ref_spp // 2, 1000)[0]
             b = _render(mi, scene, ref_integrator, args.ref_spp // 2, 2000)[0]
-            ref = 0.5 * (a + b)
-            own = float(np.mean(((a - b) / 2) ** 2 / (ref**2 + 0.01)))
-            specs = [(label, spec, None) for label, spec in CASES + (PROJECTED if args.projected else []) + COSINE]
+            ref, own = reference(a, b)
+            specs = [
+                (label, spec, None) for label, spec in CASES + (PROJECTED if args.projected else []) + COSINE + QMC
+            ]
             scenes = {None: scene}
             for sampler in args.samplers:
                 scenes[sampler] = light_scene(mi, name, args.width, args.height, workdir, sampler)
                 specs += [(f"{label} + {sampler}", spec, sampler) for label, spec in WITH_SAMPLER]
             cases = [(label, mi.load_dict({**spec, **options}), sampler) for label, spec, sampler in specs]
+            taken = {sampler: _taken_spp(scenes[sampler], args.spp) for sampler in scenes}
             for _, integrator, sampler in cases:  # compile
                 _render(mi, scenes[sampler], integrator, args.spp, 0)
             errors = {label: [] for label, *_ in cases}
+            raw = {label: [] for label, *_ in cases}
             seconds = {label: [] for label, *_ in cases}
             cpu = {label: [] for label, *_ in cases}
             before, t0 = cpu_snapshot(), time.perf_counter()
             for r in range(args.rounds):
                 for label, integrator, sampler in cases if r % 2 == 0 else cases[::-1]:
                     image, s, c = _render(mi, scenes[sampler], integrator, args.spp, r + 1)
-                    errors[label].append(_rel_mse(image, ref) - own)
-                    seconds[label].append(s)
-                    cpu[label].append(c)
+                    scale = taken[sampler] / args.spp  # to --spp samples per pixel (see the module docstring)
+                    raw[label].append(rel_mse(image, ref) * scale)
+                    errors[label].append((rel_mse(image, ref) - own) * scale)
+                    seconds[label].append(s / scale)
+                    cpu[label].append(c / scale)
                     if r == args.rounds - 1:
                         images.setdefault((name, depth), [ref]).append(image)
             load = others_cpu(before, cpu_snapshot(), time.perf_counter() - t0)
@@ -109,6 +142,8 @@ def run(args, mi, workdir):
             for label, _, sampler in cases:
                 row = {
                     "scene": name, "max_depth": depth, "case": label, "spp": args.spp, "sampler": sampler or "independent",
+                    "spp_rendered": taken[sampler], "rel_mse_raw": float(np.mean(raw[label])),
+                    "rel_mse_ratio_raw": float(np.mean(raw[base]) / np.mean(raw[label])),
                     "rel_mse": float(np.mean(errors[label])), "seconds": statistics.median(seconds[label]),
                     "efficiency": eff[label], "efficiency_ratio": eff[label] / eff[base],
                     "rel_mse_ratio": float(np.mean(errors[base]) / np.mean(errors[label])),
@@ -120,7 +155,8 @@ def run(args, mi, workdir):
                     "others_cpu_share": None if load is None else load["share_of_all_cpus"],
                 }  # fmt: skip
                 rows.append(row)
-                print(f"  {label:<52} relMSE {row['rel_mse']:.4g} (x{row['rel_mse_ratio']:.2f} lower)  "
+                print(f"  {label:<52} relMSE {row['rel_mse']:.4g} (x{row['rel_mse_ratio']:.2f} lower; raw "
+                      f"x{row['rel_mse_ratio_raw']:.2f})  "
                       f"{row['seconds']:.3f} s (speed x{row['speed_ratio']:.2f})  efficiency x{row['efficiency_ratio']:.2f}  "
                       f"CPU: speed x{row['cpu_speed_ratio']:.2f}, efficiency x{row['cpu_efficiency_ratio']:.2f}",
                       flush=True)  # fmt: skip
