@@ -53,6 +53,14 @@ and of 1536 orbits, 0.15-0.9 MB: the slope between the two, without the calls' f
 touched ``out=`` (non-temporal stores, the kernels' rule) and fresh (``_blocks.empty_rows``, page faults
 included), beside the write limit's non-temporal fill (touched) and ``prange`` fill (fresh) of the same
 bytes (benchmarks/_write_limit.py).  Each timed call follows one of its own.
+
+    python benchmarks/kernel_cpu.py --pause 3 --rounds 5
+
+With ``--pause P`` (no base): fresh output (two threads, wall clock) timed right after a call of its own and
+after a pause of P seconds, for the write limit's ``prange`` fill and the samplers: a guest whose kernel
+reports free memory to its host (Linux's free page reporting, ``virtio_balloon``) gives the freed pages back
+after ~2 s, and the next first touch of them faults in the host too.  Printed beside the times: the kernel's
+``page_reporting_order`` (free blocks of at least 2**order pages are reported) if it has one.
 """
 
 from __future__ import annotations
@@ -82,7 +90,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
     parser.add_argument("--timeline", action="store_true", help="when each part of sample_sphere(out=) runs")
     parser.add_argument("--bound", action="store_true", help="per orbit: the stores alone, in the cache, out=, fresh")
+    parser.add_argument("--pause", type=float, default=0.0, help="fresh output after a call and after P seconds")
     args = parser.parse_args(argv)
+    if args.pause:
+        sys.path.insert(0, str(ROOT / "src"))
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        _pause(args.rounds, args.n, args.pause)
+        return 0
     if args.bound:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -281,6 +295,47 @@ def _stores(rounds: int, threads: int, n: int) -> None:
     print(f"kernel_cpu.py --stores: {what} over {rounds} interleaved rounds, n = {n}")
     for key in keys:
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}")
+
+
+def _pause(rounds: int, n: int, pause: float) -> None:
+    import os
+
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")  # the fills' prange threads, as symsphere starts them
+    import numpy as np
+    from _write_limit import fills  # type: ignore[import-not-found]  # benchmarks/ is on sys.path
+
+    import symsphere
+
+    rows: dict[str, Callable[[], object]] = {}
+    for dtype in (np.float64, np.float32):
+        name = np.dtype(dtype).name
+        rows[f"write limit: numba prange, fresh ({name})"] = fills(n, dtype)["numba prange", "fresh"]
+        rows[f"sample_hemisphere, fresh ({name})"] = partial(symsphere.sample_hemisphere, n, rng=1, dtype=dtype)
+        rows[f"normal=(1,1,1), fresh ({name})"] = partial(
+            symsphere.sample_hemisphere, n, rng=1, dtype=dtype, normal=(1.0, 1.0, 1.0)
+        )
+    for call in rows.values():
+        call()
+    times: dict[tuple[str, str], list[float]] = {(key, way): [] for key in rows for way in ("after", "paused")}
+    loads = []
+    for _ in range(rounds):
+        for key, call in rows.items():
+            for way in ("after", "paused"):
+                call()  # untimed: "after" follows it at once; "paused" after the pause
+                if way == "paused":
+                    time.sleep(pause)
+                start = time.perf_counter()
+                call()
+                times[key, way].append(time.perf_counter() - start)
+        loads.append(os.getloadavg()[0])
+    order = Path("/sys/module/page_reporting/parameters/page_reporting_order")
+    reporting = order.read_text().strip() if order.exists() else "none"
+    print(f"kernel_cpu.py --pause {pause:g}: two threads' wall ms (medians, min), {rounds} interleaved rounds, "
+          f"n = {n}; page_reporting_order {reporting}; load average {min(loads):.2f}-{max(loads):.2f}")  # fmt: skip
+    for key in rows:
+        after, paused = times[key, "after"], times[key, "paused"]
+        print(f"{key:44s} after a call {statistics.median(after) * 1e3:7.2f} ({min(after) * 1e3:6.2f})  "
+              f"after {pause:g} s {statistics.median(paused) * 1e3:8.2f} ({min(paused) * 1e3:7.2f})")  # fmt: skip
 
 
 def _repeat(kernel: Callable[..., object], arguments: tuple[object, ...]) -> None:
