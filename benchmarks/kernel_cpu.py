@@ -59,8 +59,9 @@ bytes (benchmarks/_write_limit.py).  Each timed call follows one of its own.
 With ``--pause P`` (no base): fresh output (two threads, wall clock) timed right after a call of its own and
 after a pause of P seconds, for the write limit's ``prange`` fill and the samplers: a guest whose kernel
 reports free memory to its host (Linux's free page reporting, ``virtio_balloon``) gives the freed pages back
-after ~2 s, and the next first touch of them faults in the host too.  Printed beside the times: the kernel's
-``page_reporting_order`` (free blocks of at least 2**order pages are reported) if it has one.
+after ~2 s, and the next first touch of them faults in the host too.  The pause is slept, and spun (the
+calling thread busy, so that a slower call after it is not the CPU waking up).  Printed beside the times: the
+kernel's ``page_reporting_order`` (free blocks of at least 2**order pages are reported) if it has one.
 """
 
 from __future__ import annotations
@@ -316,14 +317,19 @@ def _pause(rounds: int, n: int, pause: float) -> None:
         )
     for call in rows.values():
         call()
-    times: dict[tuple[str, str], list[float]] = {(key, way): [] for key in rows for way in ("after", "paused")}
+    ways = ("after", "slept", "spun")
+    times: dict[tuple[str, str], list[float]] = {(key, way): [] for key in rows for way in ways}
     loads = []
     for _ in range(rounds):
         for key, call in rows.items():
-            for way in ("after", "paused"):
-                call()  # untimed: "after" follows it at once; "paused" after the pause
-                if way == "paused":
+            for way in ways:
+                call()  # untimed: "after" follows it at once, the others after the pause
+                if way == "slept":
                     time.sleep(pause)
+                elif way == "spun":
+                    end = time.perf_counter() + pause
+                    while time.perf_counter() < end:
+                        pass
                 start = time.perf_counter()
                 call()
                 times[key, way].append(time.perf_counter() - start)
@@ -333,9 +339,10 @@ def _pause(rounds: int, n: int, pause: float) -> None:
     print(f"kernel_cpu.py --pause {pause:g}: two threads' wall ms (medians, min), {rounds} interleaved rounds, "
           f"n = {n}; page_reporting_order {reporting}; load average {min(loads):.2f}-{max(loads):.2f}")  # fmt: skip
     for key in rows:
-        after, paused = times[key, "after"], times[key, "paused"]
-        print(f"{key:44s} after a call {statistics.median(after) * 1e3:7.2f} ({min(after) * 1e3:6.2f})  "
-              f"after {pause:g} s {statistics.median(paused) * 1e3:8.2f} ({min(paused) * 1e3:7.2f})")  # fmt: skip
+        cells = [
+            f"{way} {statistics.median(times[key, way]) * 1e3:7.2f} ({min(times[key, way]) * 1e3:6.2f})" for way in ways
+        ]
+        print(f"{key:44s} " + "  ".join(cells))
 
 
 def _repeat(kernel: Callable[..., object], arguments: tuple[object, ...]) -> None:
