@@ -27,7 +27,7 @@ reported as 480 MiB) and not what non-temporal ones did, so a row after another 
 other's cache.  With ``--threads 2`` the clock is the wall clock
 (``time.perf_counter``), as two threads' CPU time says nothing about their waits for memory.
 
-    python benchmarks/kernel_cpu.py --timeline --rounds 21 [--n 196608]
+    python benchmarks/kernel_cpu.py --timeline --rounds 21 [--n 196608] [--swap]
 
 With ``--timeline`` (no base): when each part of this checkout's ``sample_sphere(out=)`` (two threads,
 float32 and float64) starts and ends in its thread, in us from the call's start (``time.perf_counter_ns``
@@ -35,6 +35,8 @@ stamps in a copy of ``symsphere._threads.run_parts``): the launch, part 0 in the
 on the pool, the caller back from its wait, the call's end; medians over rounds of each call's second run
 in a row, beside the write limit (the ``prange`` non-temporal fill) of the same rounds and the other
 processes' share of the CPUs (``/proc/stat``); per call, the pool's late start and the caller's wait.
+With ``--swap`` the calling thread runs part 1 (the second half of the rows) and the pool part 0: whether a
+slower part is the thread or the half of the buffer it writes.
 
     python benchmarks/kernel_cpu.py --asm
 
@@ -53,6 +55,15 @@ and of 1536 orbits, 0.15-0.9 MB: the slope between the two, without the calls' f
 touched ``out=`` (non-temporal stores, the kernels' rule) and fresh (``_blocks.empty_rows``, page faults
 included), beside the write limit's non-temporal fill (touched) and ``prange`` fill (fresh) of the same
 bytes (benchmarks/_write_limit.py).  Each timed call follows one of its own.
+
+    python benchmarks/kernel_cpu.py --pause 3 --rounds 5
+
+With ``--pause P`` (no base): fresh output (two threads, wall clock) timed right after a call of its own and
+after a pause of P seconds, for the write limit's ``prange`` fill and the samplers: a guest whose kernel
+reports free memory to its host (Linux's free page reporting, ``virtio_balloon``) gives the freed pages back
+after ~2 s, and the next first touch of them faults in the host too.  The pause is slept, and spun (the
+calling thread busy, so that a slower call after it is not the CPU waking up).  Printed beside the times: the
+kernel's ``page_reporting_order`` (free blocks of at least 2**order pages are reported) if it has one.
 """
 
 from __future__ import annotations
@@ -81,8 +92,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--n", type=int, default=N, help=f"directions per call (default: {N})")
     parser.add_argument("--asm", action="store_true", help="count the instructions of the kernel about a normal")
     parser.add_argument("--timeline", action="store_true", help="when each part of sample_sphere(out=) runs")
+    parser.add_argument("--swap", action="store_true", help="--timeline: the calling thread runs the last part")
     parser.add_argument("--bound", action="store_true", help="per orbit: the stores alone, in the cache, out=, fresh")
+    parser.add_argument("--pause", type=float, default=0.0, help="fresh output after a call and after P seconds")
     args = parser.parse_args(argv)
+    if args.pause:
+        sys.path.insert(0, str(ROOT / "src"))
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        _pause(args.rounds, args.n, args.pause)
+        return 0
     if args.bound:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -91,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.timeline:
         sys.path.insert(0, str(ROOT / "src"))
         sys.path.insert(0, str(ROOT / "benchmarks"))
-        _timeline(args.rounds, args.n)
+        _timeline(args.rounds, args.n, args.swap)
         return 0
     if args.asm:
         sys.path.insert(0, str(ROOT / "src"))
@@ -158,7 +176,7 @@ def _run(base: str, rounds: int, threads: int, fresh: bool) -> None:
               f"  of fill {fill / min(times[key]):.2f}")  # fmt: skip
 
 
-def _timeline(rounds: int, n: int) -> None:
+def _timeline(rounds: int, n: int, swap: bool = False) -> None:
     import os
     from concurrent.futures import wait
 
@@ -181,9 +199,10 @@ def _timeline(rounds: int, n: int) -> None:
             task(index)
             stamps[f"end {index}"] = clock()
 
-        futures = [_threads._executor().submit(part, index) for index in range(1, count)]
+        mine = count - 1 if swap else 0  # --swap: which half a thread writes, not which thread, if it matters
+        futures = [_threads._executor().submit(part, index) for index in range(count) if index != mine]
         try:
-            part(0)
+            part(mine)
         finally:
             wait(futures)
         stamps["back"] = clock()
@@ -196,7 +215,12 @@ def _timeline(rounds: int, n: int) -> None:
         jiffies = [int(x) for x in Path("/proc/stat").read_text().split("\n")[0].split()[1:]]
         return sum(jiffies) - jiffies[3] - jiffies[4], sum(jiffies)
 
-    print(f"kernel_cpu.py --timeline: us from the call's start, medians of {rounds} rounds, n = {n}")
+    who = (
+        "part 1 in the calling thread, part 0 on the pool"
+        if swap
+        else "part 0 in the calling thread, part 1 on the pool"
+    )
+    print(f"kernel_cpu.py --timeline: us from the call's start, medians of {rounds} rounds, n = {n}; {who}")
     for dtype in (np.float32, np.float64):
         out = np.full((n, 3), 0.5, dtype)
         rows: list[dict[str, float]] = []
@@ -218,14 +242,15 @@ def _timeline(rounds: int, n: int) -> None:
         others = max(0.0, (busy1 - busy0 - (mine1 - mine0) * os.sysconf("SC_CLK_TCK")) / (all1 - all0))
         median = {key: statistics.median(row[key] for row in rows) for key in rows[0]}
         fill = statistics.median(limit)
-        span = max(median["end 0"], median.get("end 1", 0.0)) - median["start 0"]
+        span = max(median["end 0"], median.get("end 1", 0.0)) - min(median["start 0"], median.get("start 1", 1e30))
         print(f"{np.dtype(dtype).name}: write limit {fill:.0f} us; others' share of the CPUs {others:.0%}")
         print("  " + "  ".join(f"{key} {value:.0f}" for key, value in median.items()))
         print(f"  call {fill / median['end']:.2f}x of the limit, the parts' span {fill / span:.2f}x")
         if "end 1" in median:  # per call, then the median: the pool's late start, the caller's wait after the last end
-            lag = statistics.median(row["start 1"] - row["start 0"] for row in rows)
+            caller, pool = (1, 0) if swap else (0, 1)
+            lag = statistics.median(row[f"start {pool}"] - row[f"start {caller}"] for row in rows)
             last = [row["back"] - max(row["end 0"], row["end 1"]) for row in rows]
-            pool_last = sum(row["end 1"] > row["end 0"] for row in rows)
+            pool_last = sum(row[f"end {pool}"] > row[f"end {caller}"] for row in rows)
             print(f"  pool's start after the caller's {lag:.0f} us; back after the last part's end {statistics.median(last):.0f} us "
                   f"(max {max(last):.0f}); the pool's part ended last in {pool_last} of {rounds} calls")  # fmt: skip
 
@@ -281,6 +306,53 @@ def _stores(rounds: int, threads: int, n: int) -> None:
     print(f"kernel_cpu.py --stores: {what} over {rounds} interleaved rounds, n = {n}")
     for key in keys:
         print(f"{key:50s} median {statistics.median(times[key]) * 1e3:7.2f}  min {min(times[key]) * 1e3:7.2f}")
+
+
+def _pause(rounds: int, n: int, pause: float) -> None:
+    import os
+
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")  # the fills' prange threads, as symsphere starts them
+    import numpy as np
+    from _write_limit import fills  # type: ignore[import-not-found]  # benchmarks/ is on sys.path
+
+    import symsphere
+
+    rows: dict[str, Callable[[], object]] = {}
+    for dtype in (np.float64, np.float32):
+        name = np.dtype(dtype).name
+        rows[f"write limit: numba prange, fresh ({name})"] = fills(n, dtype)["numba prange", "fresh"]
+        rows[f"sample_hemisphere, fresh ({name})"] = partial(symsphere.sample_hemisphere, n, rng=1, dtype=dtype)
+        rows[f"normal=(1,1,1), fresh ({name})"] = partial(
+            symsphere.sample_hemisphere, n, rng=1, dtype=dtype, normal=(1.0, 1.0, 1.0)
+        )
+    for call in rows.values():
+        call()
+    ways = ("after", "slept", "spun")
+    times: dict[tuple[str, str], list[float]] = {(key, way): [] for key in rows for way in ways}
+    loads = []
+    for _ in range(rounds):
+        for key, call in rows.items():
+            for way in ways:
+                call()  # untimed: "after" follows it at once, the others after the pause
+                if way == "slept":
+                    time.sleep(pause)
+                elif way == "spun":
+                    end = time.perf_counter() + pause
+                    while time.perf_counter() < end:
+                        pass
+                start = time.perf_counter()
+                call()
+                times[key, way].append(time.perf_counter() - start)
+        loads.append(os.getloadavg()[0])
+    order = Path("/sys/module/page_reporting/parameters/page_reporting_order")
+    reporting = order.read_text().strip() if order.exists() else "none"
+    print(f"kernel_cpu.py --pause {pause:g}: two threads' wall ms (medians, min), {rounds} interleaved rounds, "
+          f"n = {n}; page_reporting_order {reporting}; load average {min(loads):.2f}-{max(loads):.2f}")  # fmt: skip
+    for key in rows:
+        cells = [
+            f"{way} {statistics.median(times[key, way]) * 1e3:7.2f} ({min(times[key, way]) * 1e3:6.2f})" for way in ways
+        ]
+        print(f"{key:44s} " + "  ".join(cells))
 
 
 def _repeat(kernel: Callable[..., object], arguments: tuple[object, ...]) -> None:
