@@ -108,11 +108,26 @@ def source_hashes(root: Path = ROOT) -> dict[str, str]:
     return hashes
 
 
+# the parts of src a run leaves out by an option of its command: their changes do not make it stale
+LEFT_OUT = {"--no-mitsuba": SOURCE + "/mitsuba/", "--no-render": SOURCE + "/render/"}
+
+
+def _left_out(results: dict) -> tuple[str, ...]:
+    command = results.get("meta", results).get("command") or ""
+    return tuple(prefix for option, prefix in LEFT_OUT.items() if option in command.split())
+
+
 def _changed(measured: tuple[str, ...], results: dict, date: str | None) -> list[str] | None:
     """The measured files that differ from when *results* were made ([] if none; None if not known)."""
     current = source_hashes()
     recorded = results.get("sources") or results.get("meta", {}).get("sources")
-    inside = lambda p: any(p == m or (m.endswith("/") and p.startswith(m)) for m in measured)  # noqa: E731
+    skipped = _left_out(results)
+
+    def inside(path: str) -> bool:
+        return not path.startswith(skipped) and any(
+            path == m or (m.endswith("/") and path.startswith(m)) for m in measured
+        )
+
     if recorded:
         paths = sorted({p for p in (*current, *recorded) if inside(p)})
         return [p for p in paths if current.get(p) != recorded.get(p)]
@@ -124,7 +139,8 @@ def _changed(measured: tuple[str, ...], results: dict, date: str | None) -> list
                              capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
         if not rev:
             return None
-        diff = subprocess.run(["git", "-C", str(ROOT), "diff", "--name-only", rev, "--", *measured],
+        diff = subprocess.run(["git", "-C", str(ROOT), "diff", "--name-only", rev, "--", *measured,
+                               *(f":(exclude){p}" for p in skipped)],
                               capture_output=True, text=True, check=True).stdout  # fmt: skip
     except (OSError, subprocess.CalledProcessError):
         return None

@@ -110,3 +110,23 @@ print(table_text({"table": table}))
     text = run.stdout.split("\n", 1)[1]
     assert "| ceiling new / base |" in text and "| sample_sphere, out= (float64) | 10000.00 | 5000.00 | 2.00× |" in text
     assert "| write limit: b, out= (float64) — the limit |" in text and "6.67× |" in text
+
+
+def test_a_change_of_code_a_run_left_out_does_not_make_it_stale(tmp_path):
+    # a regress run with --no-mitsuba measured no file under src/symsphere/mitsuba/: a change there leaves its
+    # table as it is; a change elsewhere in src, or the same change for a run with the Mitsuba row, makes it stale
+    code = """
+import tables
+current = tables.source_hashes()
+mitsuba = next(p for p in current if p.startswith('src/symsphere/mitsuba/'))
+kernel = 'src/symsphere/_kernels.py'
+def changed(command, path):
+    sources = {**current, path: '0' * 40}
+    return tables._changed(('src/symsphere/',), {'command': command, 'sources': sources}, None)
+print(changed('python benchmarks/regress.py --no-mitsuba', mitsuba))
+print(changed('python benchmarks/regress.py', mitsuba) == [mitsuba])
+print(changed('python benchmarks/regress.py --no-mitsuba --no-render', kernel) == [kernel])
+"""
+    run = _benchmarks_run(code, tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ["[]", "True", "True"]
