@@ -265,7 +265,7 @@ PACKAGE_TESTS = {
     "test_architecture.py", "test_typing.py", "test_docs.py", "test_site.py", "test_gallery.py",
     "test_examples.py", "test_packaging.py", "test_benchmark_tables.py", "test_public_outputs.py",
     "test_properties.py", "test_properties_apps.py", "test_ux.py", "test_without_mitsuba.py",
-    "statistical/test_uniformity.py",
+    "statistical/test_uniformity.py", "mitsuba/test_bench_lights.py",
 }  # fmt: skip
 
 

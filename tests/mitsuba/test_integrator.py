@@ -648,7 +648,7 @@ def test_the_collector_is_off_while_symsphere_path_traces_and_on_after(llvm, mon
 
     import drjit as dr
 
-    from symsphere.mitsuba import _lights
+    from symsphere._testing import mitsuba_lights as _lights
 
     mi = llvm
     scene = mi.load_dict(scene_dict(mi, "cornell", 8))

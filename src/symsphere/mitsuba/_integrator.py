@@ -65,10 +65,6 @@ consecutive lanes instead, keyed from the scene's sampler.
 
 from __future__ import annotations
 
-import functools
-import gc
-import threading
-from collections.abc import Callable
 from typing import Any
 
 import drjit as dr
@@ -80,6 +76,7 @@ from .._validation import check_choice
 from ..warps import METHODS
 from . import _lights, _random
 from ._bsdfs import all_diffuse, all_lambertian, bsdf_ids, diffuse_only, lambertian_codes
+from ._collector import TRACING, collector_paused
 from ._warps import cosine_wedge_point, orbit_member, triangle_density, triangle_point
 
 __all__ = [
@@ -559,40 +556,6 @@ def _warn(message: str) -> None:
 
 
 _CLASSES: dict[str, type] = {}
-# the methods that trace a render's kernels: Mitsuba's render, render_forward and render_backward (each traces
-# sample() and, the last two, a second pass of it into the same kernel), and sample() (called by aov, moment)
-_TRACING = ("render", "render_forward", "render_backward", "sample")
-_PAUSE: list[Any] = [0, False]  # [paused methods running, whether the collector was on before the first]
-_PAUSE_LOCK = threading.Lock()
-
-
-def _collector_paused(method: Callable[..., Any]) -> Callable[..., Any]:
-    """*method* with Python's cyclic garbage collector off while it runs.
-
-    Dr.Jit 1.5's LLVM backend names a callable by the hash of its body, but keeps the callables of calls with
-    one instance apart from those of calls with more (``GlobalType`` in drjit-core's ``globals_map``): a kernel
-    in which one method body is traced into a call while its class has one live instance and into another
-    while it has more (an emitter of an earlier scene not yet freed) defines that function twice, and
-    ``jit_llvm_compile`` aborts the process ("invalid redefinition of function 'func_...'").  The collector
-    freeing an earlier scene between two such calls of one render does that (after many renders in one
-    process, with a scene of one emitter); with it off while a render traces, its instances stay put."""
-
-    @functools.wraps(method)
-    def paused(*args: Any, **kwargs: Any) -> Any:
-        with _PAUSE_LOCK:  # nested calls and other threads' renders: on again after the last one only
-            if not _PAUSE[0]:
-                _PAUSE[1] = gc.isenabled()  # off already: the caller's choice, kept
-                gc.disable()
-            _PAUSE[0] += 1
-        try:
-            return method(*args, **kwargs)
-        finally:
-            with _PAUSE_LOCK:
-                _PAUSE[0] -= 1
-                if not _PAUSE[0] and _PAUSE[1]:
-                    gc.enable()
-
-    return paused
 
 
 def integrator_class() -> type:
@@ -606,7 +569,7 @@ def integrator_class() -> type:
         common = getattr(mi.ad.integrators, "common", None)  # the variant's module (none in scalar variants)
         base = common.RBIntegrator if common is not None else mi.SamplingIntegrator
         methods = {k: v for k, v in vars(_PathMethods).items() if k not in ("__dict__", "__weakref__")}
-        methods.update({name: _collector_paused(methods[name]) for name in _TRACING})
+        methods.update({name: collector_paused(methods[name]) for name in TRACING})
         _CLASSES[variant] = type("SymspherePath", (base,), methods)  # nanobind: one base only
     return _CLASSES[variant]
 
