@@ -10,7 +10,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["alias_pick", "alias_rows", "area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share",
+__all__ = ["REACH", "alias_pick", "alias_rows", "area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share",
            "registry_ids", "shape_id", "small_sphere", "small_triangle", "spatial_order", "tree_order", "tree_spans", "triangle_weight",
            "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
 
@@ -208,9 +208,21 @@ class Level:
         w = importance(p, [dr.gather(mi.Float, col, node, active) for col in self.fields], self.soft, n)
         return dr.select(active, w, 0.0)
 
-    def weights(self, p: Any, first: Any, fanout: int, active: Any, n: Any = None) -> list[Any]:
-        """The importances at p of the groups [first, first + fanout) (0 past the last one)."""
-        return [self.weight(p, first + k, active & (first + k < self.count), n) for k in range(fanout)]
+    def weights(self, p: Any, first: Any, fanout: int, active: Any, n: Any = None, cone: Any = None) -> list[Any]:
+        """The importances at p of the groups [first, first + fanout) (0 past the last one); with *cone* (the
+        axis and spread of a group that holds them all) each takes that normal bound for its own, and its reach
+        from its radius: 6 gathers instead of 11 (a looser bound: the axis's spread over more normals)."""
+        if cone is None:
+            return [self.weight(p, first + k, active & (first + k < self.count), n) for k in range(fanout)]
+        weights = []
+        for k in range(fanout):
+            ok = active & (first + k < self.count)
+            cx, cy, cz, radius, offset, power = (
+                dr.gather(mi.Float, self.fields[j], first + k, ok) for j in (0, 1, 2, 3, 8, 9)
+            )
+            fields = [cx, cy, cz, radius, *cone, offset, power, REACH * radius]
+            weights.append(dr.select(ok, importance(p, fields, self.soft, n), 0.0))
+        return weights
 
 
 def triangle_weight(p: Any, a: Any, b: Any, c: Any, n: Any, lum: Any, receiver: Any = None) -> Any:
