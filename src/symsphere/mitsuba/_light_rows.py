@@ -12,7 +12,7 @@ import numpy as np
 
 __all__ = ["REACH", "alias_pick", "alias_rows", "area_direction", "branch", "column", "importance", "pick", "scalar_radiance", "share",
            "registry_ids", "shape_id", "small_sphere", "small_triangle", "spatial_order", "tree_order", "tree_spans", "triangle_weight",
-           "triangles", "uniform_rgb", "weight_sum", "Group", "Level"]  # fmt: skip
+           "triangles", "uniform_rgb", "unit_clip", "weight_sum", "Group", "Level"]  # fmt: skip
 
 
 def registry_ids(pointers: Any) -> Any:
@@ -167,10 +167,19 @@ def importance(p: Any, fields: list[Any], soft: float, n: Any = None) -> Any:
     inv = dr.rsqrt(q)
     d = q * inv  # >= |p - centre|: the bound below holds
     value = power * inv * inv
-    value *= dr.clip((dr.dot(e, mi.Vector3f(ax, ay, az)) + offset + spread * d) * inv, 0.0, 1.0)
+    value *= unit_clip((dr.dot(e, mi.Vector3f(ax, ay, az)) + offset + spread * d) * inv)
     if n is not None:  # the receiver's cosine, unsigned
-        value *= dr.clip((dr.abs(dr.dot(e, n)) + reach) * inv, 0.0, 1.0)
+        value *= unit_clip((dr.abs(dr.dot(e, n)) + reach) * inv)
     return dr.select(power > 0.0, value, 0.0)
+
+
+def unit_clip(x: Any) -> Any:
+    """``dr.clip(x, 0, 1)`` for finite x (bit for bit; NaN gives 0) by two comparisons: Dr.Jit's
+    ``dr.maximum`` and ``dr.minimum`` are LLVM's NaN-propagating ``maximum`` and ``minimum``, six AVX-512
+    instructions each, where a comparison and a select are one (vmaxps, vminps); the top of the light tree
+    evaluates four per run at every vertex."""
+    x = dr.select(x > 0.0, x, 0.0)
+    return dr.select(x < 1.0, x, 1.0)
 
 
 def tree_spans(count: int, exact_max: int, leaf: int, fanout: int, top: int) -> list[int]:
