@@ -7,8 +7,10 @@ most :data:`CLUSTER_ROWS` of an emitter's triangles is small as seen from p (:da
 group by its importance (:class:`._light_rows.Group`) and its triangle by power.  Above, a tree of fixed
 depth (:func:`._light_rows.tree_spans`) over compact runs (:func:`._light_rows.tree_order`): a top run by its
 importance, by power below it where it is small as seen from p (:data:`TOP_BELOW`), else through the levels
-below to a leaf and a triangle of it by a proxy of its weight.  :meth:`Choice.probability` is the
-probability of a row under the same rules (each deterministic in p, every triangle facing p kept choosable)."""
+below to a leaf and a triangle of it by its importance as a group of one, every node and triangle below a
+top run taking the run's normal bound (:meth:`Choice._cone`: fewer gathers, the descent's cost on Zen 4).
+:meth:`Choice.probability` is the probability of a row under the same rules (each deterministic in p, every
+triangle facing p kept choosable)."""
 
 from __future__ import annotations
 

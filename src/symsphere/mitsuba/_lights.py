@@ -20,8 +20,9 @@ shading point p:
    depth over a spatial order (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top
    (constants), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
    :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its bounds
-   (:class:`._light_rows.Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p), a
-   triangle of the leaf by a proxy of w_i (:meth:`._light_choice.Choice._member_weights`); but where the chosen top
+   (:class:`._light_rows.Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p;
+   below the top with the top run's normal bound), a triangle of the leaf by the same importance of its centroid
+   and power (:meth:`._light_choice.Choice._member_weights`); but where the chosen top
    run is small as seen from p (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels
    below (the choice: :class:`._light_choice.Choice`, the table's base);
 2. a direction uniform in the chosen triangle's solid angle (Arvo's map,
