@@ -121,12 +121,18 @@ class LightTable(Choice):
         shape_rows: dict[int, tuple[int, bool]] = {}  # shape id -> (first row, is a rectangle)
         in_table = [False] * len(emitters)
         starts: list[int] = []  # the first row of each shape
-        emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
+        # an emitter's index: its Python object is the list's (nanobind keeps one per C++ object); else by its
+        # Dr.Jit registry id, whose array read inside a render ran the render's scheduled variables (3 %)
+        emitter_index: dict[int, int] | None = None
         for shape in scene.shapes():
             emitter = shape.emitter()
             if emitter is None:
                 continue
-            index = emitter_index.get(int(registry_ids(mi.EmitterPtr(emitter))[0]))
+            index = next((i for i, e in enumerate(emitters) if e is emitter), None)
+            if index is None:
+                if emitter_index is None:
+                    emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
+                index = emitter_index.get(int(registry_ids(mi.EmitterPtr(emitter))[0]))
             if index is None or pmf[index] <= 0.0:
                 continue
             found = triangles(shape)
