@@ -673,6 +673,38 @@ def test_the_trees_runs_are_compact(llvm):
     np.testing.assert_array_equal(np.sort(lights.tree_order(soup)), np.arange(len(soup)))
 
 
+def test_a_table_of_the_same_lights_shares_its_choice_and_a_changed_one_does_not(llvm, tmp_path):
+    """The choice (groups, levels, alias tables) is built once per content: a second table of the same scene
+    shares it; after the light's radiance or its vertices change (``mi.traverse``) the table is built anew and
+    follows the change."""
+    mi = llvm
+    from symsphere._testing import mitsuba_lights as lights
+
+    scene = _scene(mi, "tree_light", tmp_path)  # a 320-triangle disk at height 1.2 (radiance 6, 6, 5), a panel
+    first = lights.LightTable(scene)
+    again = lights.LightTable(scene)
+    assert again._top is first._top and again.groups is first.groups
+    params = mi.traverse(scene)
+    params["light.emitter.radiance.value"] = mi.Color3f(12.0, 12.0, 10.0)
+    params.update()
+    brighter = lights.LightTable(scene)
+    assert brighter._top is not first._top
+    np.testing.assert_allclose(np.unique(first.lum), [7 / 3, 17 / 3], rtol=1e-6)
+    np.testing.assert_allclose(np.unique(brighter.lum), [7 / 3, 34 / 3], rtol=1e-6)
+    np.testing.assert_allclose(sum(g.power for g in brighter.groups), np.sum(brighter.area * brighter.lum), rtol=1e-9)
+    positions = np.array(params["light.vertex_positions"]).reshape(-1, 3)
+    positions[:, 1] -= 0.1  # the disk 0.1 lower
+    params["light.vertex_positions"] = mi.Float(positions.ravel())
+    params.update()
+    lower = lights.LightTable(scene)
+    assert lower._top is not brighter._top
+    assert (
+        np.sum(np.isclose(lower.tris[..., 1], 1.1, atol=1e-6))
+        == np.sum(np.isclose(first.tris[..., 1], 1.2, atol=1e-6))
+        == 960
+    )
+
+
 # ``symsphere_path`` with Owen-scrambled Sobol' cosine directions (``strategy='cosine'``, ``points='sobol'``)
 # and the light table (``emitter_sampling`` ``'solid_angle'`` or ``'cosine'``): unbiased.
 #

@@ -20,8 +20,9 @@ shading point p:
    depth over a spatial order (:func:`._light_rows.tree_spans`): at most :data:`TREE_TOP` runs at the top
    (constants), each of :data:`FANOUT` runs of the level below (gathered), down to leaves of
    :data:`TREE_LEAF` triangles; a run is chosen by an importance ``power cos cos_r / d^2`` of its bounds
-   (:class:`._light_rows.Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p), a
-   triangle of the leaf by a proxy of w_i (:meth:`._light_choice.Choice._member_weights`); but where the chosen top
+   (:class:`._light_rows.Group`, as pbrt-v4's ``LightBounds::Importance``: 0 only where none of its triangles faces p;
+   below the top with the top run's normal bound), a triangle of the leaf by the same importance of its centroid
+   and power (:meth:`._light_choice.Choice._member_weights`); but where the chosen top
    run is small as seen from p (:data:`TOP_BELOW`) its triangle by power (an alias table), skipping the levels
    below (the choice: :class:`._light_choice.Choice`, the table's base);
 2. a direction uniform in the chosen triangle's solid angle (Arvo's map,
@@ -120,12 +121,18 @@ class LightTable(Choice):
         shape_rows: dict[int, tuple[int, bool]] = {}  # shape id -> (first row, is a rectangle)
         in_table = [False] * len(emitters)
         starts: list[int] = []  # the first row of each shape
-        emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
+        # an emitter's index: its Python object is the list's (nanobind keeps one per C++ object); else by its
+        # Dr.Jit registry id, whose array read inside a render ran the render's scheduled variables (3 %)
+        emitter_index: dict[int, int] | None = None
         for shape in scene.shapes():
             emitter = shape.emitter()
             if emitter is None:
                 continue
-            index = emitter_index.get(int(registry_ids(mi.EmitterPtr(emitter))[0]))
+            index = next((i for i, e in enumerate(emitters) if e is emitter), None)
+            if index is None:
+                if emitter_index is None:
+                    emitter_index = {int(k): i for i, k in enumerate(registry_ids(scene.emitters_dr()))}
+                index = emitter_index.get(int(registry_ids(mi.EmitterPtr(emitter))[0]))
             if index is None or pmf[index] <= 0.0:
                 continue
             found = triangles(shape)
@@ -153,7 +160,7 @@ class LightTable(Choice):
         lum = np.asarray(radiance)
         emitter_of = np.asarray(emitter_rows, dtype=np.uint32)
         # the spatial order: the tree's runs, an exact table's runs of CLUSTER_ROWS within each emitter
-        order = tree_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
+        order = _tree_order(tris) if self.count > EXACT_MAX else np.arange(self.count)
         if TINY_MAX < self.count <= EXACT_MAX:
             stops = [*starts[1:], self.count]
             order = np.concatenate([a + spatial_order(tris[a:b]) for a, b in zip(starts, stops, strict=True)])
@@ -566,6 +573,19 @@ class LightTable(Choice):
         by_area = mi.Float64(2.0 * dist * dist * dist / dr.select(height > 0.0, height, 1.0))
         pdf = dr.select(small, dr.select(front & (height > 0.0), probability * by_area, 0.0), pdf)
         return dr.select(ours, mi.Float(pdf) * self.p_table, mitsuba_pdf)
+
+
+_ORDERS: dict[bytes, np.ndarray] = {}
+
+
+def _tree_order(tris: np.ndarray) -> np.ndarray:
+    """:func:`._light_rows.tree_order`, once per set of triangles (8 ms for 1026 triangles, at every render)."""
+    key = tris.tobytes()
+    if key not in _ORDERS:
+        while len(_ORDERS) >= 4:
+            _ORDERS.pop(next(iter(_ORDERS)))
+        _ORDERS[key] = tree_order(tris)
+    return _ORDERS[key]
 
 
 def build(scene: Any, emitter_sampling: str) -> LightTable | None:
