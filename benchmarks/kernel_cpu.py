@@ -96,30 +96,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--bound", action="store_true", help="per orbit: the stores alone, in the cache, out=, fresh")
     parser.add_argument("--pause", type=float, default=0.0, help="fresh output after a call and after P seconds")
     args = parser.parse_args(argv)
-    if args.pause:
-        sys.path.insert(0, str(ROOT / "src"))
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        _pause(args.rounds, args.n, args.pause)
-        return 0
-    if args.bound:
-        sys.path.insert(0, str(ROOT / "src"))
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        _bound(args.rounds, args.n)
-        return 0
-    if args.timeline:
-        sys.path.insert(0, str(ROOT / "src"))
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        _timeline(args.rounds, args.n, args.swap)
-        return 0
-    if args.asm:
-        sys.path.insert(0, str(ROOT / "src"))
-        _asm()
-        return 0
-    if args.stores:
-        sys.path.insert(0, str(ROOT / "src"))
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        _stores(args.rounds, args.threads, args.n)
-        return 0
+    modes = [  # each measures this checkout only, from its src (and the benchmarks' helpers)
+        (args.pause, lambda: _pause(args.rounds, args.n, args.pause)),
+        (args.bound, lambda: _bound(args.rounds, args.n)),
+        (args.timeline, lambda: _timeline(args.rounds, args.n, args.swap)),
+        (args.asm, _asm),
+        (args.stores, lambda: _stores(args.rounds, args.threads, args.n)),
+    ]
+    for chosen, measure in modes:
+        if chosen:
+            sys.path[:0] = [str(ROOT / "benchmarks"), str(ROOT / "src")]
+            measure()
+            return 0
     with tempfile.TemporaryDirectory() as folder:
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.base, "src/symsphere"], check=True,
                                  capture_output=True).stdout  # fmt: skip
