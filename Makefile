@@ -26,7 +26,11 @@ demo: $(STAMP)
 # before: .venv/bin/python -m pytest tests/test_x.py
 # OPENBLAS_NUM_THREADS=1 unless set: each worker has its core, and numpy's BLAS threads beside the other
 # worker only wait for a core (docs/results/test-times.md: CPU time of the suite's files with one and two).
+# compileall: src/'s bytecode written once before the run (an editable install has none).  Where
+# PYTHONDONTWRITEBYTECODE is set (it is on the machines the suite is timed on), Python caches none, and each
+# process the suite starts (the docs' pages, the CLI, Dask workers) would compile the package's source again.
 test: $(STAMP) mitsuba-setup
+	$(BIN)/python -m compileall -q src
 	OPENBLAS_NUM_THREADS=$${OPENBLAS_NUM_THREADS:-1} $(BIN)/python -m pytest -n auto --dist loadgroup --durations=20
 
 # The Mitsuba 3 tests (tests/mitsuba) need the extra "mitsuba" and, for the LLVM variants, libLLVM >= 16
