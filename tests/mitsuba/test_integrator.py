@@ -827,9 +827,9 @@ def _gradients_of_the_scene(mi, spec, scene_name):
 
 # One worker runs the cases (Makefile: --dist loadgroup): prb's gradients, the reference of the five cases, are
 # rendered once, not by both workers.  One render per seed gives both parameters of its scene (one backward
-# pass, half the renders and kernels); the two comparisons of a case then share its renders, which the
-# Sidak correction allows: for two-sided tests of jointly normal statistics it is conservative under any
-# correlation (Sidak's inequality), so the family-wise significance stays <= 0.01.
+# pass: half the renders and kernels of one per parameter, whose renders at the same seeds traced the same
+# paths); the Sidak correction holds for such dependent comparisons: for two-sided tests of jointly normal
+# statistics it is conservative under any correlation (Sidak's inequality).
 @pytest.mark.xdist_group("gradients_against_prb")
 @pytest.mark.statistical
 @pytest.mark.parametrize("parameter", sorted(PARAMETERS))
