@@ -26,14 +26,16 @@ BSDF derivative) and the light's radiance (an emitter parameter: emission and ne
 a rectangle light and a constant sky: one checker colour (a texture parameter) and the sky's radiance
 (an environment emitter).  The quantity is the derivative of the image mean with respect to the
 parameter scaled in all three channels (the sum of its RGB gradient), by ``mi.render`` +
-``dr.backward`` (reverse mode), and by ``dr.forward`` (forward mode).
+``dr.backward`` (reverse mode; the statistical tests call the integrator's ``render_backward`` as
+``mi.render``'s backward pass does, without its primal render), and by ``dr.forward`` (forward mode).
 
 Statistics (fixed seeds): each case is K independent renders (seeds); Welch's t-test of its mean against
 the reference's (``prb``'s gradients; central finite differences of Mitsuba's ``path`` images with common
 random numbers and no Russian roulette, so that the difference is smooth), two-sided, family-wise
-significance 0.01 with a Sidak correction over all the comparisons of this file (GRADIENT_TESTS).
-Measured power on ``cornell`` (the gradients scaled by 1.01 ... 1.1 and the test rerun): a 10 % error is
-rejected in every case, 5 % in three of the five reflectance cases.
+significance 0.01 with a Sidak correction over all the comparisons of this file (GRADIENT_TESTS).  One
+render per seed gives both parameters of its scene.  Measured power on ``cornell`` (the gradients scaled
+by 1.01 ... 1.1 and the test rerun): a 10 % error is rejected in every case, 5 % in three of the five
+reflectance cases; on ``textured`` 5 % of the checker's gradient and 2 % of the sky's in every case.
 """
 
 from __future__ import annotations
@@ -465,6 +467,10 @@ def test_aov_nests_bsdf_strategy_as_it_nests_path(llvm):
     assert np.max(np.abs(images[1][..., :3] - images[0][..., :3])) <= 1e-4 * np.max(images[0][..., :3])
 
 
+_PLUGIN_REFERENCE: dict[str, np.ndarray] = {}  # Mitsuba path's per-seed image means, shared by the cases of a test
+
+
+@pytest.mark.xdist_group("aov_reference")
 @pytest.mark.statistical
 @pytest.mark.parametrize("strategy", NESTED)
 def test_aov_nests_the_symmetric_strategies_unbiased(llvm, strategy):
@@ -480,7 +486,9 @@ def test_aov_nests_the_symmetric_strategies_unbiased(llvm, strategy):
         return np.array([image[..., :3].mean() for image in images])
 
     ours = means({"type": "symsphere_path", "strategy": strategy, **DEPTH})
-    ref = means({"type": "path", **DEPTH})
+    if "aov" not in _PLUGIN_REFERENCE:  # the two strategies share path's
+        _PLUGIN_REFERENCE["aov"] = means({"type": "path", **DEPTH})
+    ref = _PLUGIN_REFERENCE["aov"]
     assert _welch_p(ours, ref) > THRESHOLD, (ours.mean(), ref.mean())
 
 
@@ -729,14 +737,14 @@ def test_an_earlier_scene_freed_during_a_gradient_does_not_abort(llvm):
     assert "gradient [[" in done.stdout, done.stdout
 
 
+# each with emitter_sampling's default, 'solid_angle' (strategy 'bsdf' with 'area' is prb's own gradient at the
+# same seed: test_bsdf_strategy_gradient_is_prbs_at_the_same_seed)
 CASES = [
     {"strategy": "bsdf"},
     {"strategy": "cosine", "points": "sobol"},
     {"strategy": "symmetric"},
     {"strategy": "symmetric", "points": "sobol"},
     {"strategy": "symmetric_cosine"},
-    {"strategy": "bsdf", "emitter_sampling": "solid_angle"},
-    {"strategy": "symmetric_cosine", "emitter_sampling": "solid_angle"},
 ]
 PARAMETERS = {
     "cornell-reflectance": "white.reflectance.value",
@@ -778,30 +786,73 @@ def _gradient_scene(mi, name="cornell"):
     })  # fmt: skip
 
 
-def _gradient(mi, scene, integrator, key, seed, spp=GRADIENT_SPP):
-    """d mean(image) / d (parameter scaled in R, G and B alike), reverse mode through mi.render."""
+def _gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP):
+    """d mean(image) / d (each parameter of *keys* scaled in R, G and B alike), reverse mode through mi.render:
+    one render and one backward pass give the derivatives with respect to all of them."""
     import drjit as dr
 
     params = mi.traverse(scene)
-    dr.enable_grad(params[key])
+    for key in keys:
+        dr.enable_grad(params[key])
     params.update()
     image = mi.render(scene, params=params, integrator=integrator, spp=spp, seed=seed, seed_grad=seed + 1000)
     dr.backward(dr.mean(image, axis=None))
-    grad = float(np.sum(np.array(dr.grad(params[key]))))
-    dr.disable_grad(params[key])
+    grads = np.array([float(np.sum(np.array(dr.grad(params[key])))) for key in keys])
+    for key in keys:
+        dr.disable_grad(params[key])
     params.update()
-    return grad
+    return grads
 
 
-def _gradients(mi, scene, integrator, key, seeds=GRADIENT_SEEDS):
-    return np.array([_gradient(mi, scene, integrator, key, seed) for seed in range(seeds)])
+def _backward_gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP):
+    """_gradient's derivatives by the call that mi.render's backward pass makes, integrator.render_backward at
+    seed_grad with the image mean's gradient, without mi.render's primal render (its image is not needed):
+    the same gradients up to float32 summation order (test_forward_mode_equals_reverse_mode), for a third
+    less time."""
+    import drjit as dr
+
+    params = mi.traverse(scene)
+    for key in keys:
+        dr.enable_grad(params[key])
+    params.update()
+    film = scene.sensors()[0].film()
+    shape = (film.crop_size()[1], film.crop_size()[0], film.base_channels_count())
+    grad_in = dr.full(mi.TensorXf, 1.0 / (shape[0] * shape[1] * shape[2]), shape)  # d mean(image) / d image
+    integrator.render_backward(scene, params, grad_in, seed=seed + 1000, spp=spp)
+    grads = np.array([float(np.sum(np.array(dr.grad(params[key])))) for key in keys])
+    for key in keys:
+        dr.disable_grad(params[key])
+    params.update()
+    return grads
 
 
-_PRB: dict[str, np.ndarray] = {}
+def _gradients(mi, scene, integrator, keys, seeds=GRADIENT_SEEDS):
+    """Per seed (rows) the derivatives with respect to each of *keys* (columns)."""
+    return np.array([_backward_gradient(mi, scene, integrator, keys, seed) for seed in range(seeds)])
 
 
-# One worker runs the cases (Makefile: --dist loadgroup): prb's gradients of each parameter, the reference
-# of seven cases, are rendered once, not by both workers.
+def _scene_parameters(scene_name):
+    return [name for name in sorted(PARAMETERS) if name.startswith(scene_name + "-")]
+
+
+# (integrator spec, scene name): {parameter: gradients}; both parameters of a scene from the same renders
+_BOTH: dict[tuple[str, str], dict[str, np.ndarray]] = {}
+
+
+def _gradients_of_the_scene(mi, spec, scene_name):
+    cache_key = (repr(sorted(spec.items())), scene_name)
+    if cache_key not in _BOTH:
+        names = _scene_parameters(scene_name)
+        grads = _gradients(mi, _gradient_scene(mi, scene_name), mi.load_dict(spec), [PARAMETERS[n] for n in names])
+        _BOTH[cache_key] = dict(zip(names, grads.T, strict=True))
+    return _BOTH[cache_key]
+
+
+# One worker runs the cases (Makefile: --dist loadgroup): prb's gradients, the reference of the five cases, are
+# rendered once, not by both workers.  One render per seed gives both parameters of its scene (one backward
+# pass: half the renders and kernels of one per parameter, whose renders at the same seeds traced the same
+# paths); the Sidak correction holds for such dependent comparisons: for two-sided tests of jointly normal
+# statistics it is conservative under any correlation (Sidak's inequality).
 @pytest.mark.xdist_group("gradients_against_prb")
 @pytest.mark.statistical
 @pytest.mark.parametrize("parameter", sorted(PARAMETERS))
@@ -810,16 +861,15 @@ def test_gradient_agrees_with_prb(llvm, parameter, case):
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
-    scene = _gradient_scene(mi, parameter.split("-")[0])
-    key = PARAMETERS[parameter]
-    if parameter not in _PRB:
-        _PRB[parameter] = _gradients(mi, scene, mi.load_dict({"type": "prb", **DEPTH}), key)
-    ours = _gradients(mi, scene, mi.load_dict({"type": "symsphere_path", **case, **DEPTH}), key)
+    scene_name = parameter.split("-")[0]
+    ref = _gradients_of_the_scene(mi, {"type": "prb", **DEPTH}, scene_name)[parameter]
+    ours = _gradients_of_the_scene(mi, {"type": "symsphere_path", **case, **DEPTH}, scene_name)[parameter]
     assert np.all(np.isfinite(ours)) and np.all(ours > 0)
-    p = _welch_p(ours, _PRB[parameter])
-    assert p > GRADIENT_THRESHOLD, (p, ours.mean(), _PRB[parameter].mean())
+    p = _welch_p(ours, ref)
+    assert p > GRADIENT_THRESHOLD, (p, ours.mean(), ref.mean())
 
 
+@pytest.mark.xdist_group("gradients_against_finite_differences")  # one worker: symsphere_path's gradients shared
 @pytest.mark.statistical
 @pytest.mark.parametrize("parameter", FINITE_DIFFERENCES)
 def test_gradient_agrees_with_finite_differences(llvm, parameter):
@@ -846,7 +896,7 @@ def test_gradient_agrees_with_finite_differences(llvm, parameter):
         diffs.append((means[0] - means[1]) / (2 * h))
     params[key] = base
     params.update()
-    ours = _gradients(mi, scene, mi.load_dict({"type": "symsphere_path", **depth}), key)
+    ours = _gradients_of_the_scene(mi, {"type": "symsphere_path", **depth}, "cornell")[parameter]
     p = _welch_p(ours, np.array(diffs))
     assert p > GRADIENT_THRESHOLD, (p, ours.mean(), np.mean(diffs))
 
@@ -854,7 +904,8 @@ def test_gradient_agrees_with_finite_differences(llvm, parameter):
 @pytest.mark.parametrize("case", [CASES[0], CASES[2]], ids=_ids)
 def test_forward_mode_equals_reverse_mode(llvm, case):
     """Forward mode (RBIntegrator.render_forward: the gradient image) and reverse mode replay the same paths
-    at the same seed: the image mean of the one is the other's gradient, up to float32 summation order."""
+    at the same seed: the image mean of the one is the other's gradient, up to float32 summation order; and
+    reverse mode through mi.render is render_backward's gradient (_backward_gradient) within 1e-5."""
     mi = llvm
     import drjit as dr
 
@@ -863,7 +914,10 @@ def test_forward_mode_equals_reverse_mode(llvm, case):
     scene = _gradient_scene(mi)
     integrator = mi.load_dict({"type": "symsphere_path", **case, **DEPTH})
     key = PARAMETERS["cornell-reflectance"]
-    reverse = _gradient(mi, scene, integrator, key, seed=3)
+    reverse = _gradient(mi, scene, integrator, [key], seed=3)[0]
+    # the statistical tests' shortcut to it: render_backward alone, as mi.render's backward pass calls it
+    direct = _backward_gradient(mi, scene, integrator, [key], seed=3)[0]
+    assert abs(direct - reverse) <= 1e-5 * reverse, (direct, reverse)
     params = mi.traverse(scene)
     dr.enable_grad(params[key])
     params.update()
@@ -877,22 +931,18 @@ def test_forward_mode_equals_reverse_mode(llvm, case):
 
 
 @pytest.mark.parametrize("hide_emitters", [False, True])
-@pytest.mark.parametrize("parameter", ["cornell-reflectance", "cornell-radiance"])
-def test_bsdf_strategy_gradient_is_prbs_at_the_same_seed(llvm, parameter, hide_emitters):
+def test_bsdf_strategy_gradient_is_prbs_at_the_same_seed(llvm, hide_emitters):
     """On the Cornell box (one-sided diffuse walls) strategy='bsdf' draws the sampler's numbers in prb's order
-    and replays the same paths: the same gradient at the same seeds, up to float32 rounding of operations the
-    two compile differently (bound 1e-4 relative; measured 8e-6 with hidden emitters)."""
+    and replays the same paths: the same gradients (the walls' reflectance and the light's radiance, from one
+    backward pass) at the same seeds, up to float32 rounding of operations the two compile differently (bound
+    1e-4 relative; measured 8e-6 with hidden emitters)."""
     mi = llvm
     import symsphere.mitsuba  # noqa: F401
 
     scene = _gradient_scene(mi)
     options = {**DEPTH, "hide_emitters": hide_emitters}
-    ours = _gradient(
-        mi,
-        scene,
-        mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", **AREA, **options}),
-        PARAMETERS[parameter],
-        4,
-    )
-    ref = _gradient(mi, scene, mi.load_dict({"type": "prb", **options}), PARAMETERS[parameter], 4)
-    assert ref > 0 and abs(ours - ref) <= 1e-4 * ref, (ours, ref)
+    keys = [PARAMETERS[name] for name in _scene_parameters("cornell")]
+    integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", **AREA, **options})
+    ours = _gradient(mi, scene, integrator, keys, 4)
+    ref = _gradient(mi, scene, mi.load_dict({"type": "prb", **options}), keys, 4)
+    assert np.all(ref > 0) and np.all(np.abs(ours - ref) <= 1e-4 * ref), (ours, ref)

@@ -377,6 +377,10 @@ def _renders(mi, scene, integrator):
     )
 
 
+_REFERENCE: dict[tuple[str, int], np.ndarray] = {}  # (scene, max_depth): Mitsuba path's blocks
+
+
+@pytest.mark.xdist_group("lights_path_references")  # one worker: the references shared
 @pytest.mark.statistical
 @pytest.mark.parametrize(("scene_name", "max_depth", "sampling"), UNBIASED_CASES)
 def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, sampling, tmp_path):
@@ -385,7 +389,9 @@ def test_mean_image_agrees_with_mitsubas_path(llvm, scene_name, max_depth, sampl
 
     scene = _scene(mi, scene_name, tmp_path)
     depth = {"max_depth": max_depth, "rr_depth": 3}
-    ref = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
+    if (scene_name, max_depth) not in _REFERENCE:  # two cases (solid_angle, projected) share a scene and depth
+        _REFERENCE[scene_name, max_depth] = _blocks(_renders(mi, scene, mi.load_dict({"type": "path", **depth})))
+    ref = _REFERENCE[scene_name, max_depth]
     integrator = mi.load_dict({"type": "symsphere_path", "strategy": "bsdf", "emitter_sampling": sampling, **depth})
     ours = _blocks(_renders(mi, scene, integrator))
     assert np.all(np.isfinite(ours))
@@ -749,6 +755,10 @@ def _qmc_blocks(mi, scene, integrator):
     return lum.mean(axis=(2, 4)).reshape(QMC_SEEDS, -1)
 
 
+_QMC_REFERENCE: dict[str, np.ndarray] = {}  # scene: Mitsuba path's blocks
+
+
+@pytest.mark.xdist_group("qmc_path_references")  # one worker: the references shared
 @pytest.mark.statistical
 @pytest.mark.parametrize(("scene_name", "sampling"), QMC_CASES)
 def test_sobol_cosine_directions_with_the_light_table_agree_with_mitsubas_path(llvm, tmp_path, scene_name, sampling):
@@ -757,7 +767,9 @@ def test_sobol_cosine_directions_with_the_light_table_agree_with_mitsubas_path(l
 
     scene = _qmc_scene(mi, scene_name, tmp_path)
     depth = {"max_depth": 3, "rr_depth": 2}
-    ref = _qmc_blocks(mi, scene, mi.load_dict({"type": "path", **depth}))
+    if scene_name not in _QMC_REFERENCE:  # the two samplings of a scene share its reference
+        _QMC_REFERENCE[scene_name] = _qmc_blocks(mi, scene, mi.load_dict({"type": "path", **depth}))
+    ref = _QMC_REFERENCE[scene_name]
     spec = {"type": "symsphere_path", "strategy": "cosine", "points": "sobol", "emitter_sampling": sampling}
     ours = _qmc_blocks(mi, scene, mi.load_dict({**spec, **depth}))
     assert np.all(np.isfinite(ours)) and ours.mean() > 0.0
