@@ -34,7 +34,7 @@ the reference's (``prb``'s gradients; central finite differences of Mitsuba's ``
 random numbers and no Russian roulette, so that the difference is smooth), two-sided, family-wise
 significance 0.01 with a Sidak correction over all the comparisons of this file (GRADIENT_TESTS).  One
 render per seed gives both parameters of its scene.  Measured power on ``cornell`` (the gradients scaled
-by 1.01 ... 1.1 and the test rerun): a 10 % error is rejected in every case, 5 % in three of the five
+by 1.01 ... 1.1 and the test rerun): a 10 % error is rejected in every case, 5 % in four of the six
 reflectance cases; on ``textured`` 5 % of the checker's gradient and 2 % of the sky's in every case.
 """
 
@@ -745,6 +745,7 @@ CASES = [
     {"strategy": "symmetric"},
     {"strategy": "symmetric", "points": "sobol"},
     {"strategy": "symmetric_cosine"},
+    {"strategy": "symmetric_cosine", "emitter_sampling": "area"},  # Mitsuba's light sampling beside the default
 ]
 PARAMETERS = {
     "cornell-reflectance": "white.reflectance.value",
@@ -848,7 +849,7 @@ def _gradients_of_the_scene(mi, spec, scene_name):
     return _BOTH[cache_key]
 
 
-# One worker runs the cases (Makefile: --dist loadgroup): prb's gradients, the reference of the five cases, are
+# One worker runs the cases (Makefile: --dist loadgroup): prb's gradients, the reference of the six cases, are
 # rendered once, not by both workers.  One render per seed gives both parameters of its scene (one backward
 # pass: half the renders and kernels of one per parameter, whose renders at the same seeds traced the same
 # paths); the Sidak correction holds for such dependent comparisons: for two-sided tests of jointly normal
