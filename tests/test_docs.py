@@ -20,7 +20,6 @@ runs ``make docs`` after ``make test`` (a test would build the docs a second tim
 from __future__ import annotations
 
 import ast
-import atexit
 import functools
 import importlib
 import importlib.util
@@ -31,12 +30,10 @@ import pathlib
 import pkgutil
 import re
 import shlex
-import signal
 import subprocess
 import sys
-import tempfile
-import threading
 
+import fresh_processes
 import pytest
 
 import symsphere
@@ -361,107 +358,9 @@ def _run_blocks(runnable, folder):
     return _run_fresh(["-c", _RUNNER, str(script)], folder)
 
 
-# Each page, and each command of a console block, runs in a new process, as a reader's would.  Starting
-# Python and importing numpy, scipy, numba and symsphere cost about a CPU-second per process, the larger part
-# of a short page: a server process imports them once and forks a child per run (the child is a new process
-# that has imported nothing else and ran no kernel; its namespace is the page's own), where os.fork exists.
-_FORK_SERVER = r"""
-import json, os, runpy, sys, traceback, types
-import numpy, scipy.stats, numba, symsphere, symsphere.stats  # the imports of the pages, before any fork
-
-
-def run(argv, folder, outputs):
-    os.chdir(folder)
-    null = os.open(os.devnull, os.O_RDONLY)
-    os.dup2(null, 0)
-    for fd, path in enumerate(outputs, start=1):
-        os.dup2(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC), fd)
-    sys.stdin = open(0, closefd=False)
-    sys.stdout = open(1, "w", closefd=False)
-    sys.stderr = open(2, "w", buffering=1, closefd=False)
-    code = 0
-    try:
-        if argv[0] == "-c":  # python -c CODE ARGS: sys.path[0] is the working folder
-            sys.argv = argv[:1] + argv[2:]
-            sys.path[0] = ""
-            main = sys.modules["__main__"] = types.ModuleType("__main__")
-            exec(compile(argv[1], "<string>", "exec"), main.__dict__)
-        elif argv[0] == "-m":  # python -m MODULE ARGS
-            sys.argv = argv[1:]
-            sys.path[0] = os.getcwd()
-            runpy.run_module(argv[1], run_name="__main__", alter_sys=True)
-        else:  # python SCRIPT ARGS: sys.path[0] is the script's folder
-            sys.argv = list(argv)
-            sys.path[0] = os.path.dirname(os.path.abspath(argv[0]))
-            runpy.run_path(argv[0], run_name="__main__")
-    except SystemExit as stop:  # as the interpreter exits: None 0, an int itself, anything else printed and 1
-        if stop.code is None or isinstance(stop.code, int):
-            code = stop.code or 0
-        else:
-            print(stop.code, file=sys.stderr)
-            code = 1
-    except BaseException:
-        traceback.print_exc()
-        code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
-
-
-for line in sys.stdin:
-    request = json.loads(line)
-    pid = os.fork()
-    if pid == 0:
-        try:
-            run(request["argv"], request["folder"], request["outputs"])
-        finally:
-            os._exit(1)
-    print(pid, flush=True)
-    _, status = os.waitpid(pid, 0)
-    print(os.waitstatus_to_exitcode(status), flush=True)
-"""
-
-
-@functools.cache
-def _fork_server():
-    server = subprocess.Popen(
-        [sys.executable, "-c", _FORK_SERVER], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT
-    )
-    atexit.register(_stop, server)
-    return server
-
-
-def _stop(server):
-    server.stdin.close()
-    server.wait(timeout=60)
-
-
 def _run_fresh(argv, folder):
-    """``python *argv`` in *folder*, a new process: exit status, stdout and stderr (a CompletedProcess)."""
-    if not hasattr(os, "fork"):
-        return subprocess.run([sys.executable, *argv], cwd=folder, capture_output=True, text=True, timeout=600)
-    server = _fork_server()
-    outputs = []
-    for name in ("stdout", "stderr"):
-        fd, path = tempfile.mkstemp(prefix=f"page-{name}-")
-        os.close(fd)
-        outputs.append(path)
-    server.stdin.write(json.dumps({"argv": argv, "folder": str(folder), "outputs": outputs}) + "\n")
-    server.stdin.flush()
-    pid = int(server.stdout.readline())
-    answer = []
-    reader = threading.Thread(target=lambda: answer.append(server.stdout.readline()), daemon=True)
-    reader.start()
-    reader.join(600)
-    if reader.is_alive():  # as subprocess.run's timeout: end the child, then fail
-        os.kill(pid, signal.SIGKILL)
-        reader.join()
-        pytest.fail(f"python {shlex.join(argv)[:200]} ran for more than 600 s")
-    assert answer[0], f"the fork server ended (exit status {server.poll()})"
-    out, err = (pathlib.Path(path).read_text(encoding="utf-8") for path in outputs)
-    for path in outputs:
-        os.unlink(path)
-    return subprocess.CompletedProcess([sys.executable, *argv], int(answer[0]), out, err)
+    """``python *argv`` in *folder*: a new process, as a reader's, without a new interpreter's imports."""
+    return fresh_processes.run(argv, folder)
 
 
 def test_runner_checks_what_the_page_says_it_prints(tmp_path):

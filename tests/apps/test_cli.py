@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 
+import fresh_processes
 import numpy as np
 import pytest
 from references import catches, inject_sigint, one_line_error, scaled_for_load, writing_in
@@ -600,8 +601,12 @@ def test_late_sigint_at_many_times(tmp_path):
 
     def run(fraction=None, window=0.0):
         np.save(out, np.zeros((1, 3), np.float32))
-        process = subprocess.Popen(CLI + ["sample", "--n", str(n), "--dtype", "float32", "--seed", "2", "--out", str(out)],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+        # python -m symsphere, forked from a process that imported the library (tests/fresh_processes.py): the
+        # signals land after the imports (the temporary appears later), so a new interpreter's start adds nothing
+        process = fresh_processes.Child(
+            ["-m", "symsphere", "sample", "--n", str(n), "--dtype", "float32", "--seed", "2", "--out", str(out)],
+            tmp_path,
+        )
         deadline = time.monotonic() + 120
         while process.poll() is None and time.monotonic() < deadline:
             if writing_in(process.pid, tmp_path):
