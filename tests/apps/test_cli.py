@@ -295,7 +295,7 @@ def _unshare_available() -> bool:
 
 
 def _start_and_terminate(args, tmp_path, wait_for):
-    process = subprocess.Popen(CLI + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = fresh_processes.Child(["-m", "symsphere", *args], tmp_path)  # python -m symsphere, forked
     deadline = time.monotonic() + 120
     while not wait_for(process) and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)
@@ -509,8 +509,8 @@ def test_render_scene_fifo_says_what_it_is(tmp_path):
     os.mkfifo(tmp_path / "f.json")
     (tmp_path / "z.json").symlink_to("/dev/zero")
     for name, kind in (("f.json", "a FIFO"), ("z.json", "a character device")):
-        run = subprocess.run(CLI + ["render", "--scene", str(tmp_path / name), "--out", str(tmp_path / "x.png")],
-                             capture_output=True, text=True, timeout=120)  # fmt: skip
+        run = fresh_processes.run(["-m", "symsphere", "render", "--scene", str(tmp_path / name), "--out",
+                                   str(tmp_path / "x.png")], tmp_path, timeout=120)  # fmt: skip
         line = one_line_error(run.stderr)
         assert run.returncode == 2 and kind in line and "does not exist" not in line, line
 
@@ -652,13 +652,14 @@ def test_render_out_errors_name_the_path_before_rendering(tmp_path, capsys, monk
 
 def test_sigkill_during_a_write_leaves_nothing_and_stale_temporaries_are_removed(tmp_path):
     out = tmp_path / "big.npy"
-    process = subprocess.Popen(CLI + ["sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", str(out)],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    process = fresh_processes.Child(
+        ["-m", "symsphere", "sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", str(out)], tmp_path
+    )
     deadline = time.monotonic() + 120
     while not writing_in(process.pid, tmp_path, min_size=1) and time.monotonic() < deadline:
         time.sleep(0.01)
     process.kill()
-    process.wait(timeout=60)
+    process.communicate(timeout=60)
     if hasattr(os, "O_TMPFILE"):  # Linux: the temporary was unnamed; SIGKILL leaves nothing at all
         assert _listing(tmp_path) == []
     # What a killed process leaves where files cannot be unnamed (or in the instant of the rename): a
@@ -675,8 +676,8 @@ def test_sigkill_during_a_write_leaves_nothing_and_stale_temporaries_are_removed
         os.utime(live, (old, old))
         (tmp_path / ".big.npy.notours.tmp").write_text("another pattern")
         os.utime(tmp_path / ".big.npy.notours.tmp", (old, old))
-        run = subprocess.run(CLI + ["sample", "--n", "96", "--seed", "1", "--out", str(out)], capture_output=True,
-                             text=True, timeout=120)  # fmt: skip
+        run = fresh_processes.run(["-m", "symsphere", "sample", "--n", "96", "--seed", "1", "--out", str(out)], tmp_path,
+                                  timeout=120)  # fmt: skip
         assert run.returncode == 0, run.stderr
         assert _listing(tmp_path) == [".big.npy.0123abcd.tmp", ".big.npy.notours.tmp", "big.npy"]
         assert "note: removed 1 temporary that a killed run left beside big.npy (.big.npy.4194305-0123abcd.tmp)" in (
