@@ -56,11 +56,9 @@ def slow_exp_dot(w):
     return np.exp(w @ A)
 
 
-@pytest.fixture(scope="module")
-def client():
-    client = ss_distributed.local_client(2)
-    yield client
-    ss_distributed.close_client(client)
+@pytest.fixture
+def client(dask_client):
+    return dask_client  # the session's cluster of 2 workers (tests/conftest.py)
 
 
 def _same(a, b):
@@ -364,12 +362,11 @@ def _run_while_killing(client, marker, work):
 
 
 @pytest.fixture
-def warm_client():
-    """A fresh cluster per test (one of its workers is killed), every worker compiled."""
-    client = ss_distributed.local_client(2)
-    client.run(_warm_up)  # every worker compiles before the run: the first task starts soon
-    yield client
-    ss_distributed.close_client(client)
+def warm_client(dask_client):
+    """The session's cluster, every worker compiled (one of them is killed: the nanny replaces it, and the test
+    waits for that, so the next test finds 2 workers again, the new one not yet compiled)."""
+    dask_client.run(_warm_up)  # every worker compiles before the run: the first task starts soon
+    return dask_client
 
 
 @pytest.mark.slow

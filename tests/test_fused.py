@@ -192,22 +192,17 @@ def test_compiled_f_errors():
 
 @pytest.mark.slow
 @pytest.mark.xdist_group("dask")  # a local Dask cluster: with the other cluster tests (Makefile: --dist loadgroup)
-def test_distributed_ships_the_fused_kernel():
+def test_distributed_ships_the_fused_kernel(dask_client):
     """distributed.integrate with a compiled f: bit for bit the single-process fused result."""
-    pytest.importorskip("distributed")
     from symsphere import distributed
 
     kwargs = dict(n=48 * (3 * BLOCK + 5), rng=8)
     single = integrate(exp_xyz, **kwargs)
-    client = distributed.local_client(1)
-    try:
-        for chunk_blocks in (1, 2):
-            result = distributed.integrate(exp_xyz, client=client, chunk_blocks=chunk_blocks, **kwargs)
-            assert result == single
-        result = distributed.integrate(INTEGRANDS["exp"], client=client, **kwargs)
-        assert result == integrate(INTEGRANDS["exp"], **kwargs)
-    finally:
-        distributed.close_client(client)
+    for chunk_blocks in (1, 2):
+        result = distributed.integrate(exp_xyz, client=dask_client, chunk_blocks=chunk_blocks, **kwargs)
+        assert result == single
+    result = distributed.integrate(INTEGRANDS["exp"], client=dask_client, **kwargs)
+    assert result == integrate(INTEGRANDS["exp"], **kwargs)
 
 
 @pytest.mark.parametrize("name, points", [("exp", "random"), ("cap", "sobol"), ("exp_hemisphere", "stratified")])

@@ -6,9 +6,9 @@ library (a renamed function or a new warp domain would break it) and that each f
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
+
+import fresh_processes
 
 from symsphere.warps import WARPS
 
@@ -18,10 +18,8 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 def test_gallery_script_writes_every_picture(tmp_path):
     out = tmp_path / "gallery"
-    run = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "gallery.py"), "--small", "--out", str(out)],
-        capture_output=True, text=True, timeout=600,
-    )  # fmt: skip
+    # python scripts/gallery.py, forked from a process that imported the library (tests/fresh_processes.py)
+    run = fresh_processes.run([str(ROOT / "scripts" / "gallery.py"), "--small", "--out", str(out)], tmp_path)
     assert run.returncode == 0, run.stderr
     expected = {"triangles", "orbit", "convergence_integrate", "convergence_render", "renders"}
     expected |= {f"warp_{name}" for name, warp in WARPS.items() if warp.domain != "disk"}

@@ -254,13 +254,10 @@ def test_orbit_average_of_values_near_the_largest_float_is_their_mean():
         assert orbit_average(huge, [0.3, 0.2, 0.9]) == pytest.approx(1e308)
 
 
-def test_distributed_integrate_overflow_names_f():
-    client = distributed.local_client(1)
-    try:
-        with pytest.raises(ValueError, match="'f' returned .*overflows float64"):
-            distributed.integrate(huge, client=client, n=96, rng=1)
-    finally:
-        distributed.close_client(client)
+@pytest.mark.xdist_group("dask")  # on the session's cluster, with the other cluster tests (Makefile: --dist loadgroup)
+def test_distributed_integrate_overflow_names_f(dask_client):
+    with pytest.raises(ValueError, match="'f' returned .*overflows float64"):
+        distributed.integrate(huge, client=dask_client, n=96, rng=1)
 
 
 @pytest.mark.parametrize("rtol", [1e-300, 1e-17, -1e-3])

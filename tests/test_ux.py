@@ -195,34 +195,8 @@ def test_errors_end_with_what_to_do(capsys, tmp_path):
         assert ending in line, line
 
 
-@pytest.mark.slow
-def test_study_slope_labels_stay_inside_the_figure(tmp_path, monkeypatch):
-    from matplotlib.figure import Figure
-
-    from symsphere.apps.study import StudyConfig, run_study
-
-    outside = []
-    savefig = Figure.savefig
-
-    def checking_savefig(self, *args, **kwargs):
-        self.canvas.draw()
-        box = self.bbox
-        for axes in self.axes:
-            for text in axes.texts:
-                extent = text.get_window_extent()
-                if extent.x1 > box.x1 + 1 or extent.x0 < box.x0 - 1 or extent.y1 > box.y1 + 1 or extent.y0 < box.y0 - 1:
-                    outside.append(text.get_text())
-        return savefig(self, *args, **kwargs)
-
-    monkeypatch.setattr(Figure, "savefig", checking_savefig)
-    config = StudyConfig(
-        name="tiny", k_min=1, k_max=3, repetitions=2, integrands=("exp",),
-        scheme_methods=("equal_area",), scheme_points=("random",), sphere_peers=(("classic", "random"),),
-        hemisphere_peers=(), discrepancy_k_max=1, discrepancy_repetitions=1, chi2_samples=1000,
-        density_samples=4800, warp_samples=1000,
-    )  # fmt: skip
-    run_study(tmp_path / "tiny", config=config, progress=False)
-    assert outside == []
+# The study's figures keep their texts (the slope guides' labels) inside: tests/apps/test_study.py, in its tiny
+# study of exp.
 
 
 # --- notebooks ------------------------------------------------------------------------------------------

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 
+import fresh_processes
 import numpy as np
 import pytest
 from references import catches, inject_sigint, one_line_error, scaled_for_load, writing_in
@@ -207,13 +208,14 @@ def test_integrate_on_local_cluster_is_identical(capsys):
 
 
 @pytest.mark.xdist_group("dask")
-def test_integrate_to_tolerance_on_local_cluster_is_identical(capsys):
-    """--rtol with --workers: the stages' blocks as tasks, the in-process result (the fused path)."""
-    pytest.importorskip("distributed")
+def test_integrate_to_tolerance_on_a_running_cluster_is_identical(capsys, dask_client):
+    """--rtol with --scheduler: the stages' blocks as tasks, the in-process result (the fused path).  The
+    running cluster is the session's (tests/conftest.py); --rtol with --workers is the command that
+    docs/tutorials/scale-out.md shows, and tests/test_docs.py runs it."""
     args = ["integrate", "--integrand", "exp", "--rtol", "1e-4", "--seed", "4"]
     assert main(args) == 0
     single = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line or "tolerance" in line]
-    assert main(args + ["--workers", "2"]) == 0
+    assert main(args + ["--scheduler", dask_client.scheduler.address]) == 0
     clustered = [line for line in capsys.readouterr().out.splitlines() if "estimate" in line or "tolerance" in line]
     assert single == clustered and len(single) == 2
 
@@ -293,7 +295,7 @@ def _unshare_available() -> bool:
 
 
 def _start_and_terminate(args, tmp_path, wait_for):
-    process = subprocess.Popen(CLI + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = fresh_processes.Child(["-m", "symsphere", *args], tmp_path)  # python -m symsphere, forked
     deadline = time.monotonic() + 120
     while not wait_for(process) and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)
@@ -507,8 +509,8 @@ def test_render_scene_fifo_says_what_it_is(tmp_path):
     os.mkfifo(tmp_path / "f.json")
     (tmp_path / "z.json").symlink_to("/dev/zero")
     for name, kind in (("f.json", "a FIFO"), ("z.json", "a character device")):
-        run = subprocess.run(CLI + ["render", "--scene", str(tmp_path / name), "--out", str(tmp_path / "x.png")],
-                             capture_output=True, text=True, timeout=120)  # fmt: skip
+        run = fresh_processes.run(["-m", "symsphere", "render", "--scene", str(tmp_path / name), "--out",
+                                   str(tmp_path / "x.png")], tmp_path, timeout=120)  # fmt: skip
         line = one_line_error(run.stderr)
         assert run.returncode == 2 and kind in line and "does not exist" not in line, line
 
@@ -599,8 +601,12 @@ def test_late_sigint_at_many_times(tmp_path):
 
     def run(fraction=None, window=0.0):
         np.save(out, np.zeros((1, 3), np.float32))
-        process = subprocess.Popen(CLI + ["sample", "--n", str(n), "--dtype", "float32", "--seed", "2", "--out", str(out)],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+        # python -m symsphere, forked from a process that imported the library (tests/fresh_processes.py): the
+        # signals land after the imports (the temporary appears later), so a new interpreter's start adds nothing
+        process = fresh_processes.Child(
+            ["-m", "symsphere", "sample", "--n", str(n), "--dtype", "float32", "--seed", "2", "--out", str(out)],
+            tmp_path,
+        )
         deadline = time.monotonic() + 120
         while process.poll() is None and time.monotonic() < deadline:
             if writing_in(process.pid, tmp_path):
@@ -646,13 +652,14 @@ def test_render_out_errors_name_the_path_before_rendering(tmp_path, capsys, monk
 
 def test_sigkill_during_a_write_leaves_nothing_and_stale_temporaries_are_removed(tmp_path):
     out = tmp_path / "big.npy"
-    process = subprocess.Popen(CLI + ["sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", str(out)],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    process = fresh_processes.Child(
+        ["-m", "symsphere", "sample", "--n", str(48 * 2**22), "--chunk", str(48 * 2**12), "--out", str(out)], tmp_path
+    )
     deadline = time.monotonic() + 120
     while not writing_in(process.pid, tmp_path, min_size=1) and time.monotonic() < deadline:
         time.sleep(0.01)
     process.kill()
-    process.wait(timeout=60)
+    process.communicate(timeout=60)
     if hasattr(os, "O_TMPFILE"):  # Linux: the temporary was unnamed; SIGKILL leaves nothing at all
         assert _listing(tmp_path) == []
     # What a killed process leaves where files cannot be unnamed (or in the instant of the rename): a
@@ -669,8 +676,8 @@ def test_sigkill_during_a_write_leaves_nothing_and_stale_temporaries_are_removed
         os.utime(live, (old, old))
         (tmp_path / ".big.npy.notours.tmp").write_text("another pattern")
         os.utime(tmp_path / ".big.npy.notours.tmp", (old, old))
-        run = subprocess.run(CLI + ["sample", "--n", "96", "--seed", "1", "--out", str(out)], capture_output=True,
-                             text=True, timeout=120)  # fmt: skip
+        run = fresh_processes.run(["-m", "symsphere", "sample", "--n", "96", "--seed", "1", "--out", str(out)], tmp_path,
+                                  timeout=120)  # fmt: skip
         assert run.returncode == 0, run.stderr
         assert _listing(tmp_path) == [".big.npy.0123abcd.tmp", ".big.npy.notours.tmp", "big.npy"]
         assert "note: removed 1 temporary that a killed run left beside big.npy (.big.npy.4194305-0123abcd.tmp)" in (

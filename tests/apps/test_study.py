@@ -210,7 +210,7 @@ def test_small_study_end_to_end(tmp_path, capsys):
     assert page.startswith("<!DOCTYPE html>") and "<table>" in page and 'src="discrepancy.png"' in page
 
 
-def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
+def test_tiny_study_flags_exact_cells_replaces_its_own_folder_and_keeps_texts_inside_the_figures(tmp_path, monkeypatch):
     # shifted_sh2_1 = 1 + Y_21 is integrated exactly by every orbit: RMSE at rounding level.
     config = StudyConfig(
         name="tiny",
@@ -230,7 +230,6 @@ def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
     )
     out = tmp_path / "tiny"
     run_study(out, config=config, progress=False)
-    run_study(out, config=config, progress=False)  # an earlier study's folder is replaced
     _, summary = _read_csv(out / "summary.csv")
     by_sampler = {r["sampler"]: r for r in summary}
     assert by_sampler["symsphere_equal_area"]["status"] == "exact"
@@ -239,6 +238,32 @@ def test_tiny_study_flags_exact_cells_and_replaces_its_own_folder(tmp_path):
     _, rows = _read_csv(out / "convergence.csv")
     assert all(r["rounding_level"] == "true" for r in rows if r["sampler"] == "symsphere_equal_area")
     assert "∞ (exact)" in (out / "report.md").read_text(encoding="utf-8")
+
+    # An earlier study's folder is replaced, here by the same study of exp (fitted slopes, not exact), whose
+    # figures keep every text (the slope guides' labels) inside the figure: drawn before each save, each
+    # text's extent is checked against the figure's box (this was tests/test_ux.py's own tiny study).
+    from matplotlib.figure import Figure
+
+    outside = []
+    savefig = Figure.savefig
+
+    def checking_savefig(self, *args, **kwargs):
+        self.canvas.draw()
+        box = self.bbox
+        for axes in self.axes:
+            for text in axes.texts:
+                extent = text.get_window_extent()
+                if extent.x1 > box.x1 + 1 or extent.x0 < box.x0 - 1 or extent.y1 > box.y1 + 1 or extent.y0 < box.y0 - 1:
+                    outside.append(text.get_text())
+        return savefig(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", checking_savefig)
+    config = config.replace(integrands=("exp",))
+    run_study(out, config=config, progress=False)
+    assert outside == []
+    assert sorted(p.name for p in out.iterdir()) == sorted(study_files(config))  # none of the first study's left
+    _, summary = _read_csv(out / "summary.csv")
+    assert {r["integrand"] for r in summary} == {"exp"} and all(r["status"] == "ok" for r in summary)
 
     (out / "notes.txt").write_text("mine")
     with pytest.raises(FileExistsError, match="notes.txt"):
