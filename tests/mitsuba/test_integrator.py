@@ -787,39 +787,27 @@ def _gradient_scene(mi, name="cornell"):
     })  # fmt: skip
 
 
-def _gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP):
+def _gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP, backward_only=False):
     """d mean(image) / d (each parameter of *keys* scaled in R, G and B alike), reverse mode through mi.render:
-    one render and one backward pass give the derivatives with respect to all of them."""
+    one render and one backward pass give the derivatives with respect to all of them.
+
+    *backward_only*: by the call that mi.render's backward pass makes, integrator.render_backward at seed_grad
+    with the image mean's gradient, without mi.render's primal render (its image is not needed): the same
+    gradients up to float32 summation order (test_forward_mode_equals_reverse_mode), for a third less time."""
     import drjit as dr
 
     params = mi.traverse(scene)
     for key in keys:
         dr.enable_grad(params[key])
     params.update()
-    image = mi.render(scene, params=params, integrator=integrator, spp=spp, seed=seed, seed_grad=seed + 1000)
-    dr.backward(dr.mean(image, axis=None))
-    grads = np.array([float(np.sum(np.array(dr.grad(params[key])))) for key in keys])
-    for key in keys:
-        dr.disable_grad(params[key])
-    params.update()
-    return grads
-
-
-def _backward_gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP):
-    """_gradient's derivatives by the call that mi.render's backward pass makes, integrator.render_backward at
-    seed_grad with the image mean's gradient, without mi.render's primal render (its image is not needed):
-    the same gradients up to float32 summation order (test_forward_mode_equals_reverse_mode), for a third
-    less time."""
-    import drjit as dr
-
-    params = mi.traverse(scene)
-    for key in keys:
-        dr.enable_grad(params[key])
-    params.update()
-    film = scene.sensors()[0].film()
-    shape = (film.crop_size()[1], film.crop_size()[0], film.base_channels_count())
-    grad_in = dr.full(mi.TensorXf, 1.0 / (shape[0] * shape[1] * shape[2]), shape)  # d mean(image) / d image
-    integrator.render_backward(scene, params, grad_in, seed=seed + 1000, spp=spp)
+    if backward_only:
+        film = scene.sensors()[0].film()
+        shape = (film.crop_size()[1], film.crop_size()[0], film.base_channels_count())
+        grad_in = dr.full(mi.TensorXf, 1.0 / (shape[0] * shape[1] * shape[2]), shape)  # d mean(image) / d image
+        integrator.render_backward(scene, params, grad_in, seed=seed + 1000, spp=spp)
+    else:
+        image = mi.render(scene, params=params, integrator=integrator, spp=spp, seed=seed, seed_grad=seed + 1000)
+        dr.backward(dr.mean(image, axis=None))
     grads = np.array([float(np.sum(np.array(dr.grad(params[key])))) for key in keys])
     for key in keys:
         dr.disable_grad(params[key])
@@ -829,7 +817,7 @@ def _backward_gradient(mi, scene, integrator, keys, seed, spp=GRADIENT_SPP):
 
 def _gradients(mi, scene, integrator, keys, seeds=GRADIENT_SEEDS):
     """Per seed (rows) the derivatives with respect to each of *keys* (columns)."""
-    return np.array([_backward_gradient(mi, scene, integrator, keys, seed) for seed in range(seeds)])
+    return np.array([_gradient(mi, scene, integrator, keys, seed, backward_only=True) for seed in range(seeds)])
 
 
 def _scene_parameters(scene_name):
@@ -906,7 +894,7 @@ def test_gradient_agrees_with_finite_differences(llvm, parameter):
 def test_forward_mode_equals_reverse_mode(llvm, case):
     """Forward mode (RBIntegrator.render_forward: the gradient image) and reverse mode replay the same paths
     at the same seed: the image mean of the one is the other's gradient, up to float32 summation order; and
-    reverse mode through mi.render is render_backward's gradient (_backward_gradient) within 1e-5."""
+    reverse mode through mi.render is render_backward's gradient (_gradient's backward_only) within 1e-5."""
     mi = llvm
     import drjit as dr
 
@@ -917,7 +905,7 @@ def test_forward_mode_equals_reverse_mode(llvm, case):
     key = PARAMETERS["cornell-reflectance"]
     reverse = _gradient(mi, scene, integrator, [key], seed=3)[0]
     # the statistical tests' shortcut to it: render_backward alone, as mi.render's backward pass calls it
-    direct = _backward_gradient(mi, scene, integrator, [key], seed=3)[0]
+    direct = _gradient(mi, scene, integrator, [key], seed=3, backward_only=True)[0]
     assert abs(direct - reverse) <= 1e-5 * reverse, (direct, reverse)
     params = mi.traverse(scene)
     dr.enable_grad(params[key])
