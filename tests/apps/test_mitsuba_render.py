@@ -214,6 +214,55 @@ def test_width_alone_keeps_the_aspect_ratio_and_threads_are_honoured(cornell, ca
     assert dr.thread_count() == threads  # and the process's pool is as it was
 
 
+_ONE_THREAD = """
+import sys
+from pathlib import Path
+
+import drjit as dr
+import numpy as np
+
+from symsphere.apps.cli import main
+from symsphere.render import save_image
+
+folder = Path(sys.argv[1])
+dr.set_thread_count(1)  # as on a one-CPU machine
+save_image(folder / "sky.exr", np.full((4, 8, 3), 0.5))
+(folder / "sky.xml").write_text(
+    '<scene version="3.0.0"><emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>'
+    '<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+    '<integer name="height" value="6"/></film></sensor></scene>'
+)
+arguments = ["render", "--scene", str(folder / "sky.xml"), "--spp", "4", "--threads", "1"]
+status = main([*arguments, "--out", str(folder / "out.png"), "--no-progress"])
+print(status, dr.thread_count())
+"""
+
+
+def test_exr_is_read_and_written_with_one_thread_in_drjits_pool(tmp_path):
+    # Mitsuba's OpenEXR codec waits forever with one thread in Dr.Jit's pool (a one-CPU machine): with
+    # one there, an .exr is written (save_image), a scene file with an .exr environment map is loaded and
+    # rendered on one thread, its .exr written, and the pool has one thread again after.  A new process
+    # (its pool is its own; a hang is a timeout, not a stuck worker).
+    from references import scaled_for_load
+
+    try:
+        run = subprocess.run([sys.executable, "-c", _ONE_THREAD, str(tmp_path)], capture_output=True, text=True,
+                             timeout=scaled_for_load(120))  # fmt: skip
+    except subprocess.TimeoutExpired:
+        pytest.fail("reading or writing .exr with one thread in Dr.Jit's pool hung")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split()[-2:] == ["0", "1"], run.stdout + run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "out.exr",
+        "out.npy",
+        "out.pfm",
+        "out.png",
+        "sky.exr",
+        "sky.xml",
+    ]
+    assert np.load(tmp_path / "out.npy").mean() > 0  # the environment map was read: it lights the film
+
+
 def test_a_film_of_fixed_size_refuses_width(cornell, capsys):
     text = cornell.read_text().replace('value="$width"', 'value="64"').replace('value="$height"', 'value="48"')
     text = re.sub(r'<default name="(width|height)"[^>]*/>', "", text)

@@ -36,6 +36,7 @@ from xml.parsers import expat
 
 import numpy as np
 
+from .._exr_threads import exr_threads
 from .._signals import deferred as deferred_signals
 from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import MAX_PATHS, check_count, memory_pixel_limit, read_regular_file
@@ -300,7 +301,7 @@ def render_scene_file(
     try:
         return _render(mi, path, params, spp, (strategy, points), method, seed, variant, check_duration, progress,
                        between_passes, report)  # fmt: skip
-    finally:  # the process's Dr.Jit pool as it was (Mitsuba's EXR writer hangs with one thread)
+    finally:  # the process's Dr.Jit pool as it was
         if threads is not None:
             dr.set_thread_count(previous)
 
@@ -323,7 +324,8 @@ def _render(
 
     where = f"scene file {str(path)!r}"
     try:
-        scene = wait_interruptibly(lambda: mi.load_file(str(path), **params))
+        with exr_threads():  # the scene's .exr textures: Mitsuba's OpenEXR reader hangs with one thread
+            scene = wait_interruptibly(lambda: mi.load_file(str(path), **params))
     except Exception as error:
         raise ValueError(f"{where}: {_last_line(error)}") from None
     if not scene.sensors():

@@ -80,9 +80,12 @@ def _encode_exr(image: FloatArray) -> bytes:
         import mitsuba as mi  # function-level and optional: only EXR output needs it
     except ImportError as error:
         raise ValueError(f"'.exr' output needs Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})") from None
+    from .._exr_threads import exr_threads  # function-level: imports Dr.Jit when called
+
     bitmap = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
     stream = mi.MemoryStream()
-    bitmap.write(stream, mi.Bitmap.FileFormat.OpenEXR)
+    with exr_threads():  # Mitsuba's OpenEXR writer hangs with one thread in Dr.Jit's pool
+        bitmap.write(stream, mi.Bitmap.FileFormat.OpenEXR)
     stream.seek(0)
     return bytes(stream.read(stream.size()))
 
