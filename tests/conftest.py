@@ -1,8 +1,23 @@
 """Fixtures shared by test files of several modules."""
 
+import os
 import signal
+import sys
 
 import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _drjit_pool_per_worker():
+    """Under pytest-xdist, each worker's Dr.Jit pool gets its share of the CPUs (at least one), as the Makefile
+    gives OpenBLAS one thread: with a full pool in every worker the Mitsuba tests took 13-25 % more CPU time
+    for the same work (docs/results/test-times.md).  Dr.Jit is imported by the Mitsuba tests' probes at
+    collection; a worker that did not import it is left alone.  A file run alone keeps Dr.Jit's default."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+    drjit = sys.modules.get("drjit")
+    if workers > 1 and drjit is not None:
+        drjit.set_thread_count(max(1, len(os.sched_getaffinity(0)) // workers))
+    yield
 
 
 @pytest.fixture

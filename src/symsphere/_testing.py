@@ -16,6 +16,7 @@ from . import _auto as auto
 from . import _blocks as blocks
 from . import _compile_ahead as compile_ahead
 from . import _compiled_peers as compiled_peers
+from . import _exr_threads as exr_threads
 from . import _fused as fused
 from . import _integrand_kernels as integrand_kernels
 from . import _kernels as kernels
@@ -35,6 +36,7 @@ __all__ = [
     "blocks",
     "compile_ahead",
     "compiled_peers",
+    "exr_threads",
     "fused",
     "hashes",
     "integrand_kernels",
