@@ -110,11 +110,18 @@ def source_hashes(root: Path = ROOT) -> dict[str, str]:
 
 # the parts of src a run leaves out by an option of its command: their changes do not make it stale
 LEFT_OUT = {"--no-mitsuba": SOURCE + "/mitsuba/", "--no-render": SOURCE + "/render/"}
+# never measured by any benchmark: the tests' door (nothing in the library imports it: tests/test_architecture.py)
+NEVER_MEASURED = (SOURCE + "/_testing.py",)
+# what regress.py runs is the library's (no command line, demo or study): its results do not measure apps/
+LIBRARY_ONLY = (SOURCE + "/apps/",)
 
 
 def _left_out(results: dict) -> tuple[str, ...]:
+    """The parts of src (path prefixes) that the run of *results* did not measure."""
     command = results.get("meta", results).get("command") or ""
-    return tuple(prefix for option, prefix in LEFT_OUT.items() if option in command.split())
+    options = tuple(prefix for option, prefix in LEFT_OUT.items() if option in command.split())
+    library_only = LIBRARY_ONLY if "regress.py" in command else ()
+    return options + library_only + NEVER_MEASURED
 
 
 def _changed(measured: tuple[str, ...], results: dict, date: str | None) -> list[str] | None:

@@ -16,7 +16,6 @@ from . import _auto as auto
 from . import _blocks as blocks
 from . import _compile_ahead as compile_ahead
 from . import _compiled_peers as compiled_peers
-from . import _exr_threads as exr_threads
 from . import _fused as fused
 from . import _integrand_kernels as integrand_kernels
 from . import _kernels as kernels
@@ -27,6 +26,7 @@ from . import _validation as validation
 from ._random import hashes, owen_sobol, pcg64, seed_sequence, splitmix
 from .render import _directions as render_directions
 from .render import _emitters as render_emitters
+from .render import _exr_threads as exr_threads
 from .render import _integrator as render_integrator
 from .render import _probes as render_probes
 from .warps import _triangle as warps_triangle

@@ -36,10 +36,10 @@ from xml.parsers import expat
 
 import numpy as np
 
-from .._exr_threads import exr_threads
 from .._signals import deferred as deferred_signals
 from .._strategies import SAMPLING_STRATEGIES, words
 from .._validation import MAX_PATHS, check_count, memory_pixel_limit, read_regular_file
+from ..render._exr_threads import exr_threads
 from ._process import wait_interruptibly
 
 __all__ = [

@@ -80,7 +80,7 @@ def _encode_exr(image: FloatArray) -> bytes:
         import mitsuba as mi  # function-level and optional: only EXR output needs it
     except ImportError as error:
         raise ValueError(f"'.exr' output needs Mitsuba 3: pip install 'symsphere[mitsuba]' ({error})") from None
-    from .._exr_threads import exr_threads  # function-level: imports Dr.Jit when called
+    from ._exr_threads import exr_threads  # function-level: imports Dr.Jit when called
 
     bitmap = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
     stream = mi.MemoryStream()
