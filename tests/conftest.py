@@ -10,9 +10,10 @@ import pytest
 @pytest.fixture(scope="session", autouse=True)
 def _drjit_pool_per_worker():
     """Under pytest-xdist, each worker's Dr.Jit pool gets its share of the CPUs (at least one), as the Makefile
-    gives OpenBLAS one thread: with a full pool in every worker the Mitsuba tests took 13-25 % more CPU time
-    for the same work (docs/results/test-times.md).  Dr.Jit is imported by the Mitsuba tests' probes at
-    collection; a worker that did not import it is left alone.  A file run alone keeps Dr.Jit's default."""
+    gives OpenBLAS one thread: a full pool in every worker puts more threads than CPUs on the Mitsuba tests,
+    which then take more CPU time for the same work (docs/results/test-times.md).  Dr.Jit is imported by the
+    Mitsuba tests' probes at collection; a worker that did not import it is left alone.  A file run alone
+    keeps Dr.Jit's default."""
     workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
     drjit = sys.modules.get("drjit")
     if workers > 1 and drjit is not None:
