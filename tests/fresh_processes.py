@@ -16,6 +16,7 @@ import functools
 import json
 import os
 import select
+import signal
 import subprocess
 import sys
 import tempfile
@@ -166,7 +167,7 @@ class Child:
             os.kill(self.pid, signum)
 
     def kill(self):
-        self.send_signal(9)
+        self.send_signal(signal.SIGKILL)
 
     def communicate(self, timeout=None):
         if self._popen is not None:  # pragma: no cover

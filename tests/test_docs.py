@@ -355,12 +355,7 @@ def test_every_code_block_of_the_page_runs(page, tmp_path):
 def _run_blocks(runnable, folder):
     script = folder / "blocks.json"
     script.write_text(json.dumps(runnable), encoding="utf-8")
-    return _run_fresh(["-c", _RUNNER, str(script)], folder)
-
-
-def _run_fresh(argv, folder):
-    """``python *argv`` in *folder*: a new process, as a reader's, without a new interpreter's imports."""
-    return fresh_processes.run(argv, folder)
+    return fresh_processes.run(["-c", _RUNNER, str(script)], folder)  # a new process, as a reader's
 
 
 def test_runner_checks_what_the_page_says_it_prints(tmp_path):
@@ -382,7 +377,7 @@ def _run_console(code, where, folder):
         words = shlex.split(line[2:], comments=True)
         assert words and words[0] in CONSOLE_COMMANDS, f"{where}: {words[0]!r} is not run here; mark the block"
         argv = ["-m", "symsphere", *words[1:]] if words[0] == "symsphere" else words[1:]
-        run = _run_fresh(argv, folder)
+        run = fresh_processes.run(argv, folder)
         assert run.returncode == 0, f"{where}: {line}\n{run.stdout[-2000:]}\n{run.stderr[-2000:]}"
 
 

@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 import pytest
+from references import scaled_for_load
 
 from symsphere._testing import exr_threads
 from symsphere.apps.cli import main
@@ -245,8 +246,6 @@ def test_exr_is_read_and_written_with_one_thread_in_drjits_pool(tmp_path):
     # one there, an .exr is written (save_image), a scene file with an .exr environment map is loaded and
     # rendered on one thread, its .exr written, and the pool has one thread again after.  A new process
     # (its pool is its own; a hang is a timeout, not a stuck worker).
-    from references import scaled_for_load
-
     try:
         run = subprocess.run([sys.executable, "-c", _ONE_THREAD, str(tmp_path)], capture_output=True, text=True,
                              timeout=scaled_for_load(120))  # fmt: skip
